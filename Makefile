@@ -1,0 +1,41 @@
+# Two entry points: `make demo` and `make test`; each bootstraps .venv on a fresh machine.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP_DEMO := $(VENV)/.installed-demo
+STAMP_TEST := $(VENV)/.installed-test
+
+.PHONY: demo test lint typecheck check-specs bench clean
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+
+$(STAMP_DEMO): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[plot]'
+	touch $@
+
+$(STAMP_TEST): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[test,plot]'
+	touch $@
+
+demo: $(STAMP_DEMO)
+	$(BIN)/python -m hybrid.demo
+
+lint: $(STAMP_TEST)
+	$(BIN)/ruff check hybrid uvms_model tests bench
+
+typecheck: $(STAMP_TEST)
+	$(BIN)/mypy hybrid uvms_model
+
+check-specs: $(STAMP_TEST)
+	$(BIN)/hybrid validate specs/*.yaml
+
+test: lint typecheck check-specs
+	$(BIN)/python -m pytest -q
+
+bench: $(STAMP_TEST)
+	$(BIN)/python -m bench
+
+clean:
+	rm -rf $(VENV) out .pytest_cache .mypy_cache .ruff_cache

@@ -1,0 +1,158 @@
+"""The ``hybrid`` command line: validate, check, simulate, graph, schema.
+
+Exit codes: 0 success; 1 findings (check) or a run that ended before t-end
+(simulate); 2 an invalid spec or invalid usage. Errors go to stderr as
+``file:line:column: message``; a user never sees a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+
+from hybrid.errors import SimulationError, SpecError
+
+__all__ = ["main"]
+
+EXIT_OK, EXIT_FINDINGS, EXIT_INVALID = 0, 1, 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that exits with code 2 and a one-line message (its default too)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.print_usage(sys.stderr)
+        sys.stderr.write(f"hybrid: error: {message}\n")
+        raise SystemExit(EXIT_INVALID)
+
+
+def _param(text: str) -> tuple[str, float]:
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(f"expected name=value, got '{text}'")
+    key, value = text.split("=", 1)
+    try:
+        return key.strip(), float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"value of '{key}' must be a number, got '{value}'"
+        ) from None
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got '{text}'") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+    return value
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="hybrid", description="Hybrid automata: validate, check, simulate.")
+    parser.add_argument("--version", action="version", version="hybrid 0.1.0")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    p = sub.add_parser("validate", help="parse and check the spec language only")
+    p.add_argument("files", nargs="+", metavar="FILE")
+
+    p = sub.add_parser("check", help="graph and property checks")
+    p.add_argument("files", nargs="+", metavar="FILE")
+    p.add_argument("--format", choices=["text", "json", "github", "junit", "sarif"], default="text")
+    p.add_argument("--strict", action="store_true", help="warnings fail too (exit 1)")
+
+    p = sub.add_parser("simulate", help="simulate a spec")
+    p.add_argument("file", metavar="FILE")
+    p.add_argument("--t-end", type=_positive, required=True, help="end time")
+    p.add_argument("--max-jumps", type=_count, default=10_000)
+    p.add_argument("--rtol", type=_positive, default=1e-6)
+    p.add_argument("--atol", type=_positive, default=1e-9)
+    p.add_argument(
+        "--max-step",
+        type=_positive,
+        default=None,
+        help="largest solver step; lower it to catch narrow guard windows",
+    )
+    p.add_argument(
+        "--method", default="RK45", choices=["RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA"]
+    )
+    p.add_argument("--param", type=_param, action="append", default=[], metavar="NAME=VALUE")
+    p.add_argument("--dt", type=_positive, default=None, help="write points on a uniform grid")
+    p.add_argument("--out", help="trajectory file (.csv or .npz)")
+    p.add_argument("--events", help="events JSON file")
+    p.add_argument("--plot", help="figure file (needs the 'plot' extra)")
+
+    p = sub.add_parser("graph", help="print the location graph")
+    p.add_argument("file", metavar="FILE")
+    p.add_argument("--format", choices=["dot", "mermaid"], default="dot")
+
+    sub.add_parser("schema", help="print the JSON Schema of spec files")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit code."""
+    args = build_parser().parse_args(argv)
+    try:
+        if args.command == "validate":
+            return _validate(args.files)
+        if args.command == "schema":
+            from hybrid.spec.jsonschema import spec_schema
+
+            print(json.dumps(spec_schema(), indent=2))
+            return EXIT_OK
+        if args.command == "check":
+            from hybrid.analysis.command import run_check
+
+            return run_check(args.files, fmt=args.format, strict=args.strict)
+        if args.command == "graph":
+            from hybrid.analysis.command import run_graph
+
+            return run_graph(args.file, fmt=args.format)
+        if args.command == "simulate":
+            from hybrid.simulate.command import run_simulate
+
+            return run_simulate(args)
+    except SpecError as exc:
+        print(str(exc), file=sys.stderr)
+        return EXIT_INVALID
+    except SimulationError as exc:
+        print(f"{getattr(args, 'file', 'hybrid')}: {exc}", file=sys.stderr)
+        return EXIT_INVALID
+    except KeyboardInterrupt:
+        print("hybrid: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return EXIT_OK
+    return EXIT_INVALID
+
+
+def _validate(files: Sequence[str]) -> int:
+    from hybrid.spec.loader import load
+
+    status = EXIT_OK
+    for file in files:
+        try:
+            load(file)
+        except SpecError as exc:
+            print(str(exc), file=sys.stderr)
+            status = EXIT_INVALID
+        else:
+            print(f"{file}: ok")
+    return status
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,456 @@
+"""Parallel composition, and the per-mode view the simulator and analysis share.
+
+A :class:`System` puts automata side by side: state spaces concatenated (a name
+used by two components is an error naming both places), each input bound to
+the one other component that defines a signal of that name. Edges whose label
+is declared by several components fire together, one edge from each; the
+others fire alone.
+
+A *mode* is one location per component. :func:`mode_of` gives its flows,
+signals, invariants and outgoing transitions (synchronised ones included) with
+parameters already bound, so that a single automaton and a system look the
+same to the simulator (an automaton is a system of one component).
+
+Examples
+--------
+>>> import hybrid
+>>> a = hybrid.load_text("automaton: a\\nstate: {x: {}}\\nlocations: {l: {flow: {x: 1}}}\\n")
+>>> b = hybrid.load_text("automaton: b\\nstate: {y: {}}\\nlocations: {m: {flow: {y: 2}}}\\n")
+>>> s = compose(a, b)
+>>> s.state_names, mode_name(s, initial_mode(s))
+(('x', 'y'), 'a.l|b.m')
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+
+from hybrid.errors import Position, SpecError
+from hybrid.expr import ir
+from hybrid.expr.transform import bind_parameters
+from hybrid.model import Automaton, Edge, Properties, StateVar
+
+__all__ = [
+    "Component",
+    "ModeView",
+    "System",
+    "TransitionView",
+    "as_system",
+    "build_system",
+    "compose",
+    "initial_mode",
+    "mode_name",
+    "mode_of",
+    "transitions_of",
+]
+
+Mode = tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Component:
+    """One automaton inside a system, under its component name."""
+
+    name: str
+    automaton: Automaton
+    position: Position = field(default_factory=lambda: Position("<spec>"))
+
+
+@dataclass(frozen=True)
+class System:
+    """Automata composed in parallel (frozen).
+
+    ``single`` marks the one-component system that stands for a plain
+    automaton: its locations are shown unqualified.
+    """
+
+    name: str
+    components: tuple[Component, ...]
+    properties: Properties = field(default_factory=Properties)
+    description: str = ""
+    file: str = "<spec>"
+    position: Position = field(default_factory=lambda: Position("<spec>"))
+    single: bool = False
+
+    @property
+    def states(self) -> tuple[StateVar, ...]:
+        return tuple(s for c in self.components for s in c.automaton.states)
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.states)
+
+    @property
+    def signal_names(self) -> tuple[str, ...]:
+        return tuple(n for c in self.components for n in c.automaton.signal_names)
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        seen: dict[str, None] = {}
+        for c in self.components:
+            seen.update(dict.fromkeys(c.automaton.labels))
+        return tuple(seen)
+
+    def component(self, name: str) -> Component:
+        for c in self.components:
+            if c.name == name:
+                return c
+        raise KeyError(name)
+
+    def initial_vector(self) -> list[float]:
+        return [x for c in self.components for x in c.automaton.initial_vector()]
+
+    def with_parameters(self, overrides: Mapping[str, float] | None) -> System:
+        """A copy with parameters replaced: ``comp.name``, or ``name`` if only one has it."""
+        if not overrides:
+            return self
+        per: dict[str, dict[str, float]] = {c.name: {} for c in self.components}
+        for key, value in overrides.items():
+            comp, pname = _resolve_parameter(self, key)
+            per[comp][pname] = value
+        parts = tuple(
+            Component(c.name, c.automaton.with_parameters(per[c.name]), c.position)
+            for c in self.components
+        )
+        return _replace_components(self, parts)
+
+
+def _replace_components(system: System, parts: tuple[Component, ...]) -> System:
+    return System(
+        system.name,
+        parts,
+        system.properties,
+        system.description,
+        system.file,
+        system.position,
+        system.single,
+    )
+
+
+def _resolve_parameter(system: System, key: str) -> tuple[str, str]:
+    if "." in key:
+        comp, pname = key.split(".", 1)
+        names = [c.name for c in system.components]
+        if comp not in names:
+            from hybrid.spec.messages import closest
+
+            raise SpecError(
+                f"unknown component '{comp}' in parameter '{key}'{closest(comp, names)}",
+                system.position,
+            )
+        if pname not in system.component(comp).automaton.parameters:
+            from hybrid.spec.messages import closest
+
+            params = list(system.component(comp).automaton.parameters)
+            raise SpecError(
+                f"component '{comp}' has no parameter '{pname}'{closest(pname, params)}",
+                system.position,
+            )
+        return comp, pname
+    owners = [c.name for c in system.components if key in c.automaton.parameters]
+    if len(owners) == 1:
+        return owners[0], key
+    if not owners:
+        raise SpecError(f"no component has a parameter '{key}'", system.position)
+    raise SpecError(
+        f"parameter '{key}' is ambiguous: write one of {', '.join(f'{o}.{key}' for o in owners)}",
+        system.position,
+    )
+
+
+def as_system(model: Automaton | System) -> System:
+    """The system view of a model (an automaton is a system of one)."""
+    if isinstance(model, System):
+        return model
+    return System(
+        model.name,
+        (Component(model.name, model, model.position),),
+        model.properties,
+        model.description,
+        model.file,
+        model.position,
+        single=True,
+    )
+
+
+def compose(
+    *automata: Automaton, name: str | None = None, names: Sequence[str] | None = None
+) -> System:
+    """Compose automata in parallel; component names default to the automata's names."""
+    if not automata:
+        raise SpecError("compose() needs at least one automaton")
+    comp_names = list(names) if names is not None else [a.name for a in automata]
+    parts = tuple(Component(n, a, a.position) for n, a in zip(comp_names, automata, strict=True))
+    system = System(name or "_".join(comp_names), parts)
+    check_system(system)
+    return system
+
+
+def check_system(system: System) -> None:
+    """Clashing names, unbound or ambiguous inputs: one :class:`SpecError` naming the places."""
+    problems: list[tuple[Position, str]] = []
+    seen_comp: dict[str, Position] = {}
+    for c in system.components:
+        if c.name in seen_comp:
+            problems.append(
+                (
+                    c.position,
+                    f"component name '{c.name}' is used twice (also at line {seen_comp[c.name].line})",
+                )
+            )
+        seen_comp[c.name] = c.position
+    owner: dict[str, tuple[str, str, Position]] = {}
+    for c in system.components:
+        a = c.automaton
+        declared = [(s.name, "state variable", s.position) for s in a.states]
+        declared += [(n, "signal", a.signal_positions.get(n, a.position)) for n in a.signal_names]
+        for name, kind, pos in declared:
+            if name in owner:
+                other_comp, other_kind, other_pos = owner[name]
+                problems.append(
+                    (
+                        pos,
+                        f"'{name}' ({kind} of component '{c.name}') clashes with the {other_kind} "
+                        f"of component '{other_comp}' at {other_pos}",
+                    )
+                )
+            else:
+                owner[name] = (c.name, kind, pos)
+    for c in system.components:
+        a = c.automaton
+        for name in a.inputs:
+            pos = a.input_positions.get(name, a.position)
+            providers = [
+                d.name for d in system.components if d is not c and name in d.automaton.signal_names
+            ]
+            if not providers:
+                problems.append(
+                    (
+                        pos,
+                        f"input '{name}' of component '{c.name}' is not a signal of any other component",
+                    )
+                )
+            elif len(providers) > 1:
+                problems.append(
+                    (
+                        pos,
+                        f"input '{name}' of component '{c.name}' is defined by several components: {', '.join(providers)}",
+                    )
+                )
+    if problems:
+        raise SpecError.many(problems)
+
+
+def build_system(
+    spec: object,
+    positions: object,
+    base_dir: Path,
+    parameters: Mapping[str, float] | None,
+    *,
+    _stack: tuple[str, ...] = (),
+) -> System:
+    """Load a system file's components and compose them."""
+    from hybrid.spec.build import build_properties
+    from hybrid.spec.loader import load_document
+    from hybrid.spec.schema import SystemSpec
+    from hybrid.spec.yamlpos import PositionMap, read_yaml_file
+
+    assert isinstance(spec, SystemSpec) and isinstance(positions, PositionMap)
+    parts: list[Component] = []
+    problems: list[tuple[Position, str]] = []
+    for i, comp in enumerate(spec.components):
+        where = positions.value(("components", i, "spec"))
+        path = (base_dir / comp.spec).resolve()
+        if str(path) in _stack:
+            problems.append((where, f"component spec '{comp.spec}' includes itself"))
+            continue
+        if not path.is_file():
+            problems.append(
+                (where, f"component spec '{comp.spec}' not found (looked in {base_dir})")
+            )
+            continue
+        try:
+            doc = read_yaml_file(path)
+            model = load_document(doc, path.parent, None, _stack=(*_stack, str(path)))
+        except SpecError as exc:
+            problems.extend(exc.problems)
+            continue
+        if not isinstance(model, Automaton):
+            problems.append(
+                (where, f"component spec '{comp.spec}' is a system; components must be automata")
+            )
+            continue
+        try:
+            model = model.with_parameters(comp.parameters)
+            if comp.initial is not None:
+                model = model.with_initial(comp.initial.location, comp.initial.state)
+        except SpecError as exc:
+            problems.append((positions.value(("components", i)), exc.message))
+            continue
+        parts.append(Component(comp.name or model.name, model, positions.value(("components", i))))
+    if problems:
+        raise SpecError.many(problems)
+    qualified = [f"{c.name}.{loc}" for c in parts for loc in c.automaton.locations]
+    properties = build_properties(spec.properties, positions, problems, qualified)
+    if problems:
+        raise SpecError.many(problems)
+    system = System(
+        spec.system, tuple(parts), properties, spec.description, positions.file, positions.value(())
+    )
+    check_system(system)
+    return system.with_parameters(parameters) if parameters else system
+
+
+# --- the per-mode view -------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class TransitionView:
+    """An outgoing transition of a mode: one edge, or one edge per synchronising component."""
+
+    name: str
+    label: str | None
+    edges: tuple[tuple[int, Edge], ...]
+    guard: ir.Expr
+    reset: Mapping[str, ir.Expr]
+    priority: int
+    order: tuple[int, ...]
+    target: Mode
+
+
+@dataclass(frozen=True)
+class ModeView:
+    """Everything in force in one mode, parameters bound."""
+
+    key: Mode
+    name: str
+    flow: Mapping[str, ir.Expr]
+    signals: Mapping[str, ir.Expr]
+    vectors: Mapping[str, ir.Call]
+    invariants: tuple[tuple[str, ir.Expr], ...]
+    transitions: tuple[TransitionView, ...]
+
+
+def initial_mode(system: System) -> Mode:
+    return tuple(c.automaton.initial_location for c in system.components)
+
+
+def mode_name(system: System, key: Mode) -> str:
+    """``loc`` for a plain automaton, ``comp.loc|comp.loc`` for a system."""
+    if system.single:
+        return key[0]
+    return "|".join(f"{c.name}.{loc}" for c, loc in zip(system.components, key, strict=True))
+
+
+def _owners(system: System) -> dict[str, list[int]]:
+    owners: dict[str, list[int]] = {}
+    for i, c in enumerate(system.components):
+        for label in c.automaton.labels:
+            owners.setdefault(label, []).append(i)
+    return owners
+
+
+def transitions_of(system: System, key: Mode, *, bind: bool = True) -> tuple[TransitionView, ...]:
+    """The transitions leaving mode ``key``, in priority-then-file order of their edges."""
+    owners = _owners(system)
+    result: list[TransitionView] = []
+    shared: dict[str, list[list[Edge]]] = {}
+    for i, (c, loc) in enumerate(zip(system.components, key, strict=True)):
+        for edge in c.automaton.outgoing(loc):
+            if edge.label is None or len(owners.get(edge.label, [])) <= 1:
+                result.append(_single(system, key, i, edge, bind))
+            else:
+                shared.setdefault(edge.label, [[] for _ in owners[edge.label]])
+                slot = owners[edge.label].index(i)
+                shared[edge.label][slot].append(edge)
+    for label, per_comp in shared.items():
+        comps = owners[label]
+        for combo in itertools.product(*per_comp):
+            result.append(
+                _synchronised(system, key, label, list(zip(comps, combo, strict=True)), bind)
+            )
+    result.sort(key=lambda tr: tr.order)
+    return tuple(result)
+
+
+def _bound(system: System, i: int, node: ir.Expr, bind: bool) -> ir.Expr:
+    return bind_parameters(node, system.components[i].automaton.parameters) if bind else node
+
+
+def _edge_name(system: System, i: int, edge: Edge) -> str:
+    return edge.name if system.single else f"{system.components[i].name}.{edge.name}"
+
+
+def _single(system: System, key: Mode, i: int, edge: Edge, bind: bool) -> TransitionView:
+    target = list(key)
+    target[i] = edge.target
+    return TransitionView(
+        name=_edge_name(system, i, edge),
+        label=edge.label,
+        edges=((i, edge),),
+        guard=_bound(system, i, edge.guard, bind),
+        reset=MappingProxyType({k: _bound(system, i, v, bind) for k, v in edge.reset.items()}),
+        priority=edge.priority,
+        order=(i, edge.index),
+        target=tuple(target),
+    )
+
+
+def _synchronised(
+    system: System, key: Mode, label: str, parts: list[tuple[int, Edge]], bind: bool
+) -> TransitionView:
+    target = list(key)
+    reset: dict[str, ir.Expr] = {}
+    guards: list[ir.Expr] = []
+    for i, edge in parts:
+        target[i] = edge.target
+        guards.append(_bound(system, i, edge.guard, bind))
+        reset.update({k: _bound(system, i, v, bind) for k, v in edge.reset.items()})
+    return TransitionView(
+        name="+".join(_edge_name(system, i, e) for i, e in parts),
+        label=label,
+        edges=tuple(parts),
+        guard=guards[0] if len(guards) == 1 else ir.BoolOp("and", tuple(guards)),
+        reset=MappingProxyType(reset),
+        priority=max(e.priority for _, e in parts),
+        order=tuple(x for i, e in parts for x in (i, e.index)),
+        target=tuple(target),
+    )
+
+
+def mode_of(system: System, key: Mode) -> ModeView:
+    """Flows, signals, invariants and transitions of mode ``key``, parameters bound."""
+    flow: dict[str, ir.Expr] = {}
+    signals: dict[str, ir.Expr] = {}
+    vectors: dict[str, ir.Call] = {}
+    invariants: list[tuple[str, ir.Expr]] = []
+    for i, (c, loc_name) in enumerate(zip(system.components, key, strict=True)):
+        a = c.automaton
+        loc = a.locations[loc_name]
+        for name in a.signal_names:
+            if name in loc.signals:
+                signals[name] = _bound(system, i, loc.signals[name], True)
+            elif name in loc.vectors:
+                vectors[name] = _bound(system, i, loc.vectors[name], True)  # type: ignore[assignment]
+            elif name in a.signals:
+                signals[name] = _bound(system, i, a.signals[name], True)
+            else:
+                vectors[name] = _bound(system, i, a.vectors[name], True)  # type: ignore[assignment]
+        for var, expr in loc.flow.items():
+            flow[var] = _bound(system, i, expr, True)
+        if not (isinstance(loc.invariant, ir.BoolConst) and loc.invariant.value):
+            label = loc_name if system.single else f"{c.name}.{loc_name}"
+            invariants.append((label, _bound(system, i, loc.invariant, True)))
+    return ModeView(
+        key=key,
+        name=mode_name(system, key),
+        flow=MappingProxyType(flow),
+        signals=MappingProxyType(signals),
+        vectors=MappingProxyType(vectors),
+        invariants=tuple(invariants),
+        transitions=transitions_of(system, key),
+    )

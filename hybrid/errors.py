@@ -1,0 +1,121 @@
+"""User-facing errors: every mistake a user can make ends in one of these.
+
+``SpecError`` carries a place in the user's file (``file:line:column``);
+``SimulationError`` carries a place in hybrid time (``t`` and ``j``).
+Anything else escaping the public API is a bug in ``hybrid``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["Position", "SimulationError", "SpecError"]
+
+
+@dataclass(frozen=True, slots=True)
+class Position:
+    """A place in a spec file; ``line`` and ``column`` count from 1.
+
+    Examples
+    --------
+    >>> str(Position("ball.yaml", 3, 5))
+    'ball.yaml:3:5'
+    """
+
+    file: str
+    line: int = 1
+    column: int = 1
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.column}"
+
+    def shifted(self, offset: int) -> Position:
+        """The position ``offset`` characters further along the same line."""
+        return Position(self.file, self.line, self.column + offset)
+
+
+class SpecError(Exception):
+    """A spec that cannot be accepted, with the place of each problem.
+
+    ``message`` is the first problem; ``problems`` lists all of them as
+    ``(position, message)`` pairs, sorted by place. ``str()`` gives one
+    ``file:line:column: message`` line per problem.
+
+    Examples
+    --------
+    >>> err = SpecError("unknown key 'flwo'", Position("a.yaml", 4, 5))
+    >>> str(err)
+    "a.yaml:4:5: unknown key 'flwo'"
+    >>> (err.file, err.line, err.column)
+    ('a.yaml', 4, 5)
+    """
+
+    def __init__(self, message: str, position: Position | None = None) -> None:
+        self.problems: list[tuple[Position, str]] = [(position or Position("<spec>"), message)]
+        super().__init__(str(self))
+
+    @classmethod
+    def many(cls, problems: list[tuple[Position, str]]) -> SpecError:
+        """One error holding several problems (at least one), sorted by place."""
+        ordered = sorted(problems, key=lambda p: (p[0].file, p[0].line, p[0].column))
+        err = cls(ordered[0][1], ordered[0][0])
+        err.problems = ordered
+        err.args = (str(err),)
+        return err
+
+    @property
+    def message(self) -> str:
+        return self.problems[0][1]
+
+    @property
+    def position(self) -> Position:
+        return self.problems[0][0]
+
+    @property
+    def file(self) -> str:
+        return self.position.file
+
+    @property
+    def line(self) -> int:
+        return self.position.line
+
+    @property
+    def column(self) -> int:
+        return self.position.column
+
+    def __str__(self) -> str:
+        return "\n".join(f"{pos}: {msg}" for pos, msg in self.problems)
+
+
+class SimulationError(Exception):
+    """A simulation that cannot start or go on, with its place in hybrid time.
+
+    Examples
+    --------
+    >>> str(SimulationError("t_end must be > 0", t=0.0, j=0))
+    't=0 j=0: t_end must be > 0'
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        t: float | None = None,
+        j: int | None = None,
+        location: str | None = None,
+    ) -> None:
+        self.message = message
+        self.t = t
+        self.j = j
+        self.location = location
+        super().__init__(str(self))
+
+    def __str__(self) -> str:
+        where = []
+        if self.t is not None:
+            where.append(f"t={self.t:.12g}")
+        if self.j is not None:
+            where.append(f"j={self.j}")
+        if self.location is not None:
+            where.append(f"location {self.location}")
+        return f"{' '.join(where)}: {self.message}" if where else self.message

@@ -1,0 +1,248 @@
+"""Compile IR into Python functions of ``(t, x)``: no ``eval`` of user text.
+
+The generated source is built only from checked IR nodes: numbers become float
+literals, names become prefixed local variables, calls go to functions bound in
+the generated module's globals. Parameters are inlined as constants. Each
+function computes the signals it needs in dependency order, then its outputs.
+
+Examples
+--------
+>>> from hybrid.expr.parse import Scope, parse_expression
+>>> scope = Scope({"h": "state", "v": "state", "g": "param"})
+>>> flow = [parse_expression(s, scope) for s in ("v", "-g")]
+>>> ctx = CodeContext(states=("h", "v"), params={"g": 9.81})
+>>> rhs = compile_function("rhs", flow, ctx, shape="list")
+>>> rhs(0.0, [10.0, 0.0])
+[0.0, -9.81]
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from hybrid.expr import ir
+from hybrid.expr.functions import BUILTINS, Function
+
+__all__ = ["CodeContext", "EvalFailure", "compile_function", "signal_order", "to_source"]
+
+_PREC = {"or": 1, "and": 2, "not": 3, "cmp": 4, "+": 5, "-": 5, "*": 6, "/": 6, "neg": 7, "**": 8}
+_ERRORS = (ArithmeticError, ValueError, TypeError)
+
+
+@dataclass
+class EvalFailure:
+    """Where evaluation last failed (math domain error, overflow, ...), if anywhere."""
+
+    error: BaseException | None = None
+    t: float | None = None
+    where: str = ""
+
+    def record(self, error: BaseException, t: float, where: str) -> None:
+        if self.error is None:
+            self.error, self.t, self.where = error, t, where
+
+    def clear(self) -> None:
+        self.error, self.t, self.where = None, None, ""
+
+
+@dataclass
+class CodeContext:
+    """Everything names in an expression can refer to when compiled.
+
+    ``signals`` and ``vectors`` are the signal definitions in force (scalar and
+    vector-valued); ``inputs`` gives external inputs as callables of ``t``.
+    """
+
+    states: Sequence[str]
+    params: Mapping[str, float] = field(default_factory=dict)
+    signals: Mapping[str, ir.Expr] = field(default_factory=dict)
+    vectors: Mapping[str, ir.Call] = field(default_factory=dict)
+    inputs: Mapping[str, Callable[[float], float]] = field(default_factory=dict)
+    functions: Mapping[str, Function] = field(default_factory=dict)
+    failure: EvalFailure = field(default_factory=EvalFailure)
+
+
+def to_source(node: ir.Expr, names: Mapping[str, str], consts: list[float] | None = None) -> str:
+    """Python source for ``node``; ``names`` maps each variable to its local name."""
+    return _Printer(names, consts if consts is not None else []).emit(node)[0]
+
+
+class _Printer:
+    def __init__(self, names: Mapping[str, str], consts: list[float]) -> None:
+        self.names = names
+        self.consts = consts
+
+    def number(self, value: float) -> str:
+        if math.isfinite(value):
+            text = repr(float(value))
+            return f"({text})" if text.startswith("-") else text
+        self.consts.append(value)
+        return f"_K[{len(self.consts) - 1}]"
+
+    def emit(self, node: ir.Expr) -> tuple[str, int]:
+        if isinstance(node, ir.Num):
+            return self.number(node.value), 9
+        if isinstance(node, ir.BoolConst):
+            return ("True" if node.value else "False"), 9
+        if isinstance(node, ir.Var):
+            if node.kind == ir.TIME:
+                return "t", 9
+            return self.names[node.name], 9
+        if isinstance(node, ir.Index):
+            return f"{self.names[node.name]}[{node.index}]", 9
+        if isinstance(node, ir.Call):
+            args = ", ".join(self.emit(a)[0] for a in node.args)
+            return f"_{node.func}({args})", 9
+        if isinstance(node, ir.Unary):
+            return f"-{self.wrap(node.operand, _PREC['neg'] + 1)}", _PREC["neg"]
+        if isinstance(node, ir.Bin):
+            p = _PREC[node.op]
+            if node.op == "**":
+                exponent = node.right
+                if isinstance(exponent, ir.Num) and exponent.value in (2.0, 3.0):
+                    base = self.wrap(node.left, 9)
+                    return f"{base} ** {int(exponent.value)}", p
+                return f"_pow({self.emit(node.left)[0]}, {self.emit(node.right)[0]})", 9
+            left = self.wrap(node.left, p)
+            right = self.wrap(node.right, p + 1)
+            return f"{left} {node.op} {right}", p
+        if isinstance(node, ir.Cmp):
+            parts = [self.wrap(node.operands[0], _PREC["cmp"] + 1)]
+            for op, operand in zip(node.ops, node.operands[1:], strict=True):
+                parts.append(f"{op} {self.wrap(operand, _PREC['cmp'] + 1)}")
+            return " ".join(parts), _PREC["cmp"]
+        if isinstance(node, ir.BoolOp):
+            p = _PREC[node.op]
+            return f" {node.op} ".join(self.wrap(v, p + 1) for v in node.values), p
+        if isinstance(node, ir.Not):
+            return f"not {self.wrap(node.operand, _PREC['not'])}", _PREC["not"]
+        raise TypeError(f"unknown IR node {node!r}")
+
+    def wrap(self, node: ir.Expr, min_prec: int) -> str:
+        text, prec = self.emit(node)
+        return f"({text})" if prec < min_prec else text
+
+
+def signal_order(
+    needed: set[str],
+    signals: Mapping[str, ir.Expr],
+    vectors: Mapping[str, ir.Call],
+) -> list[str]:
+    """The signals ``needed`` (and those they use), dependencies first."""
+    order: list[str] = []
+    done: set[str] = set()
+    stack: list[tuple[str, bool]] = [(name, False) for name in sorted(needed, reverse=True)]
+    while stack:
+        name, expanded = stack.pop()
+        if name in done:
+            continue
+        definition = signals.get(name) or vectors.get(name)
+        if definition is None:
+            done.add(name)
+            continue
+        if expanded:
+            done.add(name)
+            order.append(name)
+            continue
+        stack.append((name, True))
+        deps = ir.names_in(definition, ir.SIGNAL)
+        stack.extend((d, False) for d in sorted(deps, reverse=True) if d not in done)
+    return order
+
+
+def compile_function(
+    name: str,
+    outputs: Sequence[ir.Expr],
+    ctx: CodeContext,
+    *,
+    shape: str = "list",
+    reset_of: Sequence[ir.Expr | None] | None = None,
+) -> Callable[..., Any]:
+    """Compile ``outputs`` into one function ``f(t, x)``.
+
+    ``shape`` is ``"scalar"`` (one value), ``"list"`` or ``"tuple"``. With
+    ``reset_of``, output ``i`` is ``reset_of[i]`` if given, else ``x[i]``
+    unchanged. On a math error the function records it in ``ctx.failure`` and
+    returns NaN values (or ``False`` for conditions), so the solver stops and
+    the simulator can say what failed and where.
+    """
+    exprs = list(outputs)
+    if reset_of is not None:
+        exprs = [e for e in reset_of if e is not None]
+    names: dict[str, str] = {s: f"x_{s}" for s in ctx.states}
+    names.update({s: f"s_{s}" for s in (*ctx.signals, *ctx.vectors)})
+    names.update({s: f"u_{s}" for s in ctx.inputs})
+    consts: list[float] = []
+    printer = _Printer(names, consts)
+    for pname, value in ctx.params.items():
+        names[pname] = printer.number(float(value))
+
+    used: set[str] = set()
+    for e in exprs:
+        used |= ir.names_in(e)
+    sig_needed = {n for n in used if n in ctx.signals or n in ctx.vectors}
+    order = signal_order(sig_needed, ctx.signals, ctx.vectors)
+    all_used = set(used)
+    for s in order:
+        all_used |= ir.names_in(ctx.signals.get(s) or ctx.vectors[s])
+
+    body: list[str] = []
+    if ctx.states:
+        targets = ", ".join(names[s] for s in ctx.states)
+        body.append(f"{targets}, = x.tolist() if hasattr(x, 'tolist') else x")
+    for u in sorted(n for n in all_used if n in ctx.inputs):
+        body.append(f"{names[u]} = _in_{u}(t)")
+    for s in order:
+        definition = ctx.signals.get(s) or ctx.vectors[s]
+        body.append(f"{names[s]} = {printer.emit(definition)[0]}")
+
+    failed: str
+    if reset_of is not None:
+        items = [
+            printer.emit(e)[0] if e is not None else names[ctx.states[i]]
+            for i, e in enumerate(reset_of)
+        ]
+        body.append(f"return [{', '.join(items)}]")
+        failed = f"[_nan] * {len(reset_of)}"
+    elif shape == "scalar":
+        body.append(f"return {printer.emit(exprs[0])[0]}")
+        failed = "_nan"
+    else:
+        items = [printer.emit(e)[0] for e in exprs]
+        open_, close = ("[", "]") if shape == "list" else ("(", ",)" if len(items) == 1 else ")")
+        body.append(f"return {open_}{', '.join(items)}{close}")
+        failed = f"[_nan] * {len(items)}" if shape == "list" else f"({'_nan, ' * len(items)})"
+
+    lines = [f"def {name}(t, x):", "    try:"]
+    lines += [f"        {line}" for line in body]
+    lines += [
+        "    except _ERRORS as _e:",
+        f"        _failure.record(_e, t, {name!r})",
+        f"        return {failed}",
+    ]
+    source = "\n".join(lines) + "\n"
+
+    scope: dict[str, Any] = {
+        "__builtins__": {},
+        "_ERRORS": _ERRORS,
+        "_failure": ctx.failure,
+        "_nan": math.nan,
+        "_K": tuple(consts),
+        "_pow": math.pow,
+        "hasattr": hasattr,
+    }
+    for fname, func in BUILTINS.items():
+        scope[f"_{fname}"] = func.fn
+    scope["_min"], scope["_max"] = min, max
+    for fname, func in ctx.functions.items():
+        scope[f"_{fname}"] = func.fn
+    for u, fn in ctx.inputs.items():
+        scope[f"_in_{u}"] = fn
+    code = compile(source, f"<hybrid:{name}>", "exec")
+    exec(code, scope)
+    compiled: Callable[..., Any] = scope[name]
+    compiled.__doc__ = source
+    return compiled

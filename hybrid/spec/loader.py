@@ -1,0 +1,98 @@
+"""Load spec files (automaton or system) into frozen models.
+
+Examples
+--------
+>>> import hybrid
+>>> m = hybrid.load_text("automaton: a\\nlocations: {only: {}}\\n")
+>>> m.name, list(m.locations)
+('a', ['only'])
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from pydantic import ValidationError
+
+from hybrid.errors import SpecError
+from hybrid.model import Automaton
+from hybrid.spec.build import build_automaton
+from hybrid.spec.messages import closest, validation_problems
+from hybrid.spec.schema import AutomatonSpec, SystemSpec
+from hybrid.spec.yamlpos import YamlDocument, read_yaml_file, read_yaml_text
+
+if TYPE_CHECKING:
+    from hybrid.compose import System
+
+__all__ = ["load", "load_document", "load_text"]
+
+
+def load(path: str | Path, parameters: Mapping[str, float] | None = None) -> Automaton | System:
+    """Load an automaton or system spec file.
+
+    ``parameters`` overrides declared parameters (``comp.name`` in a system, or
+    the plain name where only one component declares it).
+    """
+    doc = read_yaml_file(path)
+    return load_document(doc, Path(path).parent, parameters)
+
+
+def load_text(
+    text: str,
+    parameters: Mapping[str, float] | None = None,
+    *,
+    file: str = "<string>",
+    base_dir: str | Path = ".",
+) -> Automaton | System:
+    """Load a spec from a string; system component paths resolve from ``base_dir``."""
+    doc = read_yaml_text(text, file)
+    return load_document(doc, Path(base_dir), parameters)
+
+
+def load_document(
+    doc: YamlDocument,
+    base_dir: Path,
+    parameters: Mapping[str, float] | None = None,
+    *,
+    _stack: tuple[str, ...] = (),
+) -> Automaton | System:
+    """Validate a parsed YAML document and build its model."""
+    data: Any = doc.data
+    where = doc.positions.value(())
+    if not isinstance(data, dict):
+        raise SpecError(
+            f"a spec must be a mapping starting with 'automaton:' or 'system:', got {_kind(data)}",
+            where,
+        )
+    if "automaton" in data:
+        spec = _validate(AutomatonSpec, doc)
+        model = build_automaton(spec, doc.positions)
+        return model.with_parameters(parameters) if parameters else model
+    if "system" in data:
+        from hybrid.compose import build_system
+
+        system_spec = _validate(SystemSpec, doc)
+        return build_system(system_spec, doc.positions, base_dir, parameters, _stack=_stack)
+    keys = [str(k) for k in data]
+    hint = next(
+        (closest(k, ["automaton", "system"]) for k in keys if closest(k, ["automaton", "system"])),
+        "",
+    )
+    raise SpecError(f"a spec must have an 'automaton:' or a 'system:' key at the top{hint}", where)
+
+
+def _validate(model: type[Any], doc: YamlDocument) -> Any:
+    try:
+        return model.model_validate(doc.data)
+    except ValidationError as exc:
+        raise SpecError.many(validation_problems(exc, model, doc.positions, doc.data)) from None
+
+
+def _kind(data: Any) -> str:
+    if isinstance(data, list):
+        return "a list"
+    if data is None:
+        return "nothing"
+    return f"a {type(data).__name__} value"

@@ -1,0 +1,264 @@
+"""Safe YAML reading that remembers where every key and value came from.
+
+Only plain data is accepted: mappings, sequences and scalars. Anchors and
+aliases, explicit tags, duplicate keys, non-UTF-8 bytes and files over
+:data:`MAX_FILE_BYTES` are refused with a position. Booleans follow YAML 1.2
+(``true``/``false`` only), so a location named ``on`` or ``off`` stays a string.
+
+Examples
+--------
+>>> doc = read_yaml_text("a: 1\\nb: [x, y]\\n", "f.yaml")
+>>> doc.data
+{'a': 1, 'b': ['x', 'y']}
+>>> str(doc.positions.value(("b", 1)))
+'f.yaml:2:8'
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from hybrid.errors import Position, SpecError
+
+__all__ = ["MAX_FILE_BYTES", "PositionMap", "YamlDocument", "read_yaml_file", "read_yaml_text"]
+
+MAX_FILE_BYTES = 16 * 1024 * 1024
+"""Largest spec file accepted (16 MiB): beyond it, a spec is refused unread."""
+
+_PLAIN_TAGS = {
+    "tag:yaml.org,2002:str",
+    "tag:yaml.org,2002:int",
+    "tag:yaml.org,2002:float",
+    "tag:yaml.org,2002:bool",
+    "tag:yaml.org,2002:null",
+    "tag:yaml.org,2002:map",
+    "tag:yaml.org,2002:seq",
+}
+
+Path_ = tuple[str | int, ...]
+
+
+class _Resolver(yaml.resolver.Resolver):
+    """YAML 1.1 resolution minus its surprises: 1.2 booleans, no timestamps."""
+
+
+_Resolver.yaml_implicit_resolvers = {
+    first: [
+        (tag, regexp)
+        for tag, regexp in resolvers
+        if tag not in ("tag:yaml.org,2002:bool", "tag:yaml.org,2002:timestamp")
+    ]
+    for first, resolvers in yaml.resolver.Resolver.yaml_implicit_resolvers.items()
+}
+_Resolver.add_implicit_resolver(
+    "tag:yaml.org,2002:bool",
+    re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"),
+    list("tTfF"),
+)
+
+
+class _Loader(
+    yaml.reader.Reader,
+    yaml.scanner.Scanner,
+    yaml.parser.Parser,
+    yaml.composer.Composer,
+    _Resolver,
+):
+    def __init__(self, stream: str) -> None:
+        yaml.reader.Reader.__init__(self, stream)
+        yaml.scanner.Scanner.__init__(self)
+        yaml.parser.Parser.__init__(self)
+        yaml.composer.Composer.__init__(self)
+        _Resolver.__init__(self)
+
+    def compose_node(self, parent: Any, index: Any) -> Any:
+        event = self.peek_event()  # type: ignore[no-untyped-call]
+        if isinstance(event, yaml.AliasEvent):
+            raise _Refused("YAML aliases (*name) are not allowed in specs", event.start_mark)
+        anchor = getattr(event, "anchor", None)
+        if anchor is not None:
+            raise _Refused("YAML anchors (&name) are not allowed in specs", event.start_mark)
+        tag = getattr(event, "tag", None)
+        if tag is not None and tag != "!":
+            raise _Refused(f"YAML tags ({tag}) are not allowed in specs", event.start_mark)
+        return super().compose_node(parent, index)
+
+
+class _Refused(Exception):
+    def __init__(self, message: str, mark: Any) -> None:
+        super().__init__(message)
+        self.message = message
+        self.mark = mark
+
+
+@dataclass
+class PositionMap:
+    """Where each node of a document starts, by path of keys and indices."""
+
+    file: str
+    keys: dict[Path_, Position] = field(default_factory=dict)
+    values: dict[Path_, Position] = field(default_factory=dict)
+
+    def value(self, path: Path_) -> Position:
+        """Position of the value at ``path``, or of its nearest recorded ancestor."""
+        return self._nearest(self.values, path)
+
+    def key(self, path: Path_) -> Position:
+        """Position of the key that ends ``path`` (falls back to the value's)."""
+        if path in self.keys:
+            return self.keys[path]
+        return self.value(path)
+
+    def _nearest(self, table: dict[Path_, Position], path: Path_) -> Position:
+        for end in range(len(path), -1, -1):
+            pos = table.get(path[:end])
+            if pos is not None:
+                return pos
+        return Position(self.file)
+
+
+@dataclass
+class YamlDocument:
+    """Plain data read from YAML, with the position of every node."""
+
+    data: Any
+    positions: PositionMap
+
+
+def _position(file: str, mark: Any) -> Position:
+    return Position(file, mark.line + 1, mark.column + 1)
+
+
+def read_yaml_file(path: str | Path, *, max_bytes: int = MAX_FILE_BYTES) -> YamlDocument:
+    """Read a spec file safely; every refusal is a :class:`SpecError` with a place."""
+    name = str(path)
+    p = Path(path)
+    try:
+        size = p.stat().st_size
+    except OSError as exc:
+        raise SpecError(f"cannot read file: {exc.strerror or exc}", Position(name)) from None
+    if size > max_bytes:
+        raise SpecError(
+            f"file is {size} bytes, over the limit of {max_bytes} bytes for a spec",
+            Position(name),
+        )
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise SpecError(f"cannot read file: {exc.strerror or exc}", Position(name)) from None
+    return read_yaml_bytes(raw, name, max_bytes=max_bytes)
+
+
+def read_yaml_bytes(raw: bytes, file: str, *, max_bytes: int = MAX_FILE_BYTES) -> YamlDocument:
+    """Decode UTF-8 strictly, then read as :func:`read_yaml_text`."""
+    if len(raw) > max_bytes:
+        raise SpecError(
+            f"spec is {len(raw)} bytes, over the limit of {max_bytes} bytes", Position(file)
+        )
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        before = raw[: exc.start]
+        line = before.count(b"\n") + 1
+        column = len(before) - (before.rfind(b"\n") + 1) + 1
+        raise SpecError(
+            f"file is not valid UTF-8: byte 0x{raw[exc.start]:02x} cannot be decoded",
+            Position(file, line, column),
+        ) from None
+    return read_yaml_text(text, file, max_bytes=max_bytes)
+
+
+def read_yaml_text(
+    text: str, file: str = "<string>", *, max_bytes: int = MAX_FILE_BYTES
+) -> YamlDocument:
+    """Parse YAML text into plain data plus a :class:`PositionMap`."""
+    if len(text) > max_bytes:
+        raise SpecError(
+            f"spec is {len(text)} characters, over the limit of {max_bytes}", Position(file)
+        )
+    if text.startswith("\ufeff"):
+        text = text[1:]
+    loader = _Loader(text)
+    try:
+        node = loader.get_single_node()
+    except _Refused as exc:
+        raise SpecError(exc.message, _position(file, exc.mark)) from None
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        problem = exc.problem or exc.context or "invalid YAML"
+        pos = _position(file, mark) if mark is not None else Position(file)
+        raise SpecError(f"invalid YAML: {problem}", pos) from None
+    except yaml.YAMLError as exc:
+        raise SpecError(f"invalid YAML: {exc}", Position(file)) from None
+    finally:
+        loader.dispose()
+    if node is None:
+        raise SpecError(
+            "file is empty: a spec is a mapping starting with 'automaton:' or 'system:'",
+            Position(file),
+        )
+    positions = PositionMap(file)
+    data = _convert(node, (), positions)
+    return YamlDocument(data, positions)
+
+
+def _convert(node: Any, path: Path_, positions: PositionMap) -> Any:
+    file = positions.file
+    start = _position(file, node.start_mark)
+    quoted = isinstance(node, yaml.ScalarNode) and node.style in ("'", '"')
+    positions.values[path] = start.shifted(1) if quoted else start
+    if node.tag not in _PLAIN_TAGS:
+        raise SpecError(
+            f"YAML tag {node.tag} is not allowed in specs", _position(file, node.start_mark)
+        )
+    if isinstance(node, yaml.MappingNode):
+        result: dict[Any, Any] = {}
+        seen: dict[Any, Position] = {}
+        for key_node, value_node in node.value:
+            if not isinstance(key_node, yaml.ScalarNode):
+                raise SpecError(
+                    "mapping keys must be plain names, not lists or mappings",
+                    _position(file, key_node.start_mark),
+                )
+            key = _scalar(key_node, file)
+            key_pos = _position(file, key_node.start_mark)
+            if isinstance(key, (int, float, bool)) or key is None:
+                key = key_node.value
+            if key in seen:
+                first = seen[key]
+                raise SpecError(
+                    f"duplicate key '{key}': first defined at line {first.line}, "
+                    f"again at line {key_pos.line}",
+                    key_pos,
+                )
+            seen[key] = key_pos
+            positions.keys[(*path, key)] = key_pos
+            result[key] = _convert(value_node, (*path, key), positions)
+        return result
+    if isinstance(node, yaml.SequenceNode):
+        return [_convert(item, (*path, i), positions) for i, item in enumerate(node.value)]
+    return _scalar(node, file)
+
+
+def _scalar(node: Any, file: str) -> Any:
+    tag, value = node.tag, node.value
+    try:
+        if tag == "tag:yaml.org,2002:null":
+            return None
+        if tag == "tag:yaml.org,2002:bool":
+            return value.lower() == "true"
+        if tag == "tag:yaml.org,2002:int":
+            return yaml.constructor.SafeConstructor.construct_yaml_int(_CONSTRUCTOR, node)
+        if tag == "tag:yaml.org,2002:float":
+            return float(yaml.constructor.SafeConstructor.construct_yaml_float(_CONSTRUCTOR, node))
+    except (ValueError, yaml.YAMLError):
+        raise SpecError(f"cannot read number {value!r}", _position(file, node.start_mark)) from None
+    return str(value)
+
+
+_CONSTRUCTOR = yaml.constructor.SafeConstructor()

@@ -1,0 +1,387 @@
+r"""Planar UVMS kinematic chain, network matrix and Davies' partition solve.
+
+Geometry (world frame, :math:`e(t) = (\cos t, \sin t)`, :math:`Rot` the planar rotation):
+
+.. math::
+
+    P_0 = (x, y),\quad P_1 = P_0 + Rot(\phi)\, b,\quad
+    t_1 = \phi + q_1,\ t_2 = t_1 + q_2,\ t_3 = t_2 + q_3,
+
+    P_2 = P_1 + a_1 e(t_1),\quad P_3 = P_2 + a_2 e(t_2),\quad E = P_3 + a_3 e(t_3),
+
+    (x_e, y_e) = E,\quad \phi_e = t_3.
+
+One circuit, nine joints: vehicle as a virtual P-P-R chain :math:`(x, y, \phi)`, the arm's
+revolutes :math:`(q_1, q_2, q_3)` and the virtual closing chain :math:`(x_e, y_e, \phi_e)`
+(the paper's PPPS reduced to P-P-R in the plane), counted against the loop:
+
+.. math::
+
+    N = [\$_x\ \$_y\ \$_\phi\ \$_{q1}\ \$_{q2}\ \$_{q3}\ -\$_{xe}\ -\$_{ye}\ -\$_{\phi e}]
+    \in \mathbb{R}^{3\times 9},
+
+    \$_x = \$_{xe} = [0,1,0],\ \$_y = \$_{ye} = [0,0,1],\ \$_\phi = \$_R(P_0),\
+    \$_{qk} = \$_R(P_k),\ \$_{\phi e} = \$_R(E).
+
+Magnitudes :math:`\Psi = [\dot x, \dot y, \dot\phi, \dot q_1, \dot q_2, \dot q_3, \dot x_e,
+\dot y_e, \dot\phi_e]` satisfy :math:`N\Psi = 0` (Kirchhoff circulation law). With three
+secondary (unknown) magnitudes :math:`\Psi_s` and six primary (known) :math:`\Psi_p`:
+
+.. math::
+
+    N_s \Psi_s = -N_p \Psi_p,\qquad \Psi_s = -N_s^{-1} N_p \Psi_p.
+
+Named partitions and their determinants (secondary columns in the order listed):
+
+* location q0, secondary :math:`(q_1, q_2, q_3)`:
+  :math:`\det N_s = (P_2 - P_1)\times(P_3 - P_1) = a_1 a_2 \sin q_2`;
+* kinematic state 3 (location q1), secondary :math:`(x, y, q_2)`:
+  :math:`\det N_s = \det[[0,0,1],[1,0,P_{2y}],[0,1,-P_{2x}]] = +1`;
+* forward kinematics, secondary :math:`(x_e, y_e, \phi_e)`: :math:`\det N_s = -1`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+import numpy.typing as npt
+
+from uvms_model.screws import prismatic, revolute
+
+__all__ = [
+    "EE_SECONDARY",
+    "MAGNITUDE_NAMES",
+    "PHI",
+    "PHIE",
+    "Q0_SECONDARY",
+    "Q1",
+    "Q2",
+    "Q3",
+    "STATE3_SECONDARY",
+    "XE",
+    "YE",
+    "Chain",
+    "ChainPose",
+    "Config",
+    "Vector",
+    "X",
+    "Y",
+    "det_ns",
+    "end_effector_pose",
+    "forward_kinematics",
+    "network_matrix",
+    "primary_indices",
+    "solve_partition",
+    "solve_q0",
+    "solve_state3",
+]
+
+FloatArray = npt.NDArray[np.float64]
+Config = Sequence[float] | FloatArray
+"""Configuration ``(x, y, phi, q1, q2, q3)``."""
+Vector = Sequence[float] | FloatArray
+"""A short vector of floats (rates), list, tuple or array."""
+
+X, Y, PHI, Q1, Q2, Q3, XE, YE, PHIE = range(9)
+MAGNITUDE_NAMES: tuple[str, ...] = ("x", "y", "phi", "q1", "q2", "q3", "xe", "ye", "phie")
+
+Q0_SECONDARY: tuple[int, int, int] = (Q1, Q2, Q3)
+"""Secondary magnitudes of location q0 (arm joints); primary: x, y, phi, xe, ye, phie."""
+STATE3_SECONDARY: tuple[int, int, int] = (X, Y, Q2)
+"""Secondary magnitudes of kinematic state 3 (location q1); primary: phi, q1, q3, xe, ye, phie."""
+EE_SECONDARY: tuple[int, int, int] = (XE, YE, PHIE)
+"""Secondary magnitudes of forward kinematics (end-effector twist from joint rates)."""
+
+_X_AXIS = prismatic((1.0, 0.0))
+_Y_AXIS = prismatic((0.0, 1.0))
+
+
+@dataclass(frozen=True)
+class Chain:
+    """Geometry of the planar UVMS (all values our choice; the paper gives none).
+
+    Parameters
+    ----------
+    a1, a2, a3 : float
+        Link lengths in m (defaults 1.0, 1.0, 0.25: a 2 m arm with a short wrist).
+    b : tuple of float
+        Arm base offset from the vehicle point P0 in the vehicle frame, m
+        (default (0.5, 0.0): mounted on the fore-aft axis, at the bow).
+    """
+
+    a1: float = 1.0
+    a2: float = 1.0
+    a3: float = 0.25
+    b: tuple[float, float] = (0.5, 0.0)
+
+    def __post_init__(self) -> None:
+        if min(self.a1, self.a2, self.a3) <= 0.0:
+            raise ValueError("link lengths a1, a2, a3 must be positive")
+        if len(self.b) != 2:
+            raise ValueError("arm base offset b must be a 2-vector")
+
+
+class ChainPose(NamedTuple):
+    """Joint points and end-effector pose from :func:`forward_kinematics`."""
+
+    p0: tuple[float, float]
+    p1: tuple[float, float]
+    p2: tuple[float, float]
+    p3: tuple[float, float]
+    e: tuple[float, float]
+    xe: float
+    ye: float
+    phie: float
+
+
+def _unpack(config: Config) -> tuple[float, float, float, float, float, float]:
+    if len(config) != 6:
+        raise ValueError("config must be (x, y, phi, q1, q2, q3)")
+    x, y, phi, q1, q2, q3 = (float(v) for v in config)
+    return x, y, phi, q1, q2, q3
+
+
+def forward_kinematics(chain: Chain, config: Config) -> ChainPose:
+    """Points P0..P3, E and the end-effector pose (plain ``math``, per-step safe).
+
+    Parameters
+    ----------
+    chain : Chain
+        Geometry.
+    config : Config
+        ``(x, y, phi, q1, q2, q3)``.
+
+    Returns
+    -------
+    ChainPose
+        Points and ``(xe, ye, phie)`` with ``phie = phi + q1 + q2 + q3``.
+    """
+    x, y, phi, q1, q2, q3 = _unpack(config)
+    c, s = math.cos(phi), math.sin(phi)
+    bx, by = chain.b
+    p1x, p1y = x + c * bx - s * by, y + s * bx + c * by
+    t1 = phi + q1
+    t2 = t1 + q2
+    t3 = t2 + q3
+    p2x, p2y = p1x + chain.a1 * math.cos(t1), p1y + chain.a1 * math.sin(t1)
+    p3x, p3y = p2x + chain.a2 * math.cos(t2), p2y + chain.a2 * math.sin(t2)
+    ex, ey = p3x + chain.a3 * math.cos(t3), p3y + chain.a3 * math.sin(t3)
+    return ChainPose((x, y), (p1x, p1y), (p2x, p2y), (p3x, p3y), (ex, ey), ex, ey, t3)
+
+
+def end_effector_pose(chain: Chain, config: Config) -> tuple[float, float, float]:
+    """End-effector pose ``(xe, ye, phie)``.
+
+    Parameters
+    ----------
+    chain : Chain
+        Geometry.
+    config : Config
+        ``(x, y, phi, q1, q2, q3)``.
+
+    Returns
+    -------
+    tuple of float
+        ``(xe, ye, phie)``.
+    """
+    pose = forward_kinematics(chain, config)
+    return pose.xe, pose.ye, pose.phie
+
+
+def network_matrix(chain: Chain, config: Config) -> FloatArray:
+    """Network matrix N (3 x 9), magnitude order ``MAGNITUDE_NAMES``.
+
+    Parameters
+    ----------
+    chain : Chain
+        Geometry.
+    config : Config
+        ``(x, y, phi, q1, q2, q3)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``N`` with the closing chain (xe, ye, phie) counted negatively.
+    """
+    pose = forward_kinematics(chain, config)
+    cols = (
+        _X_AXIS,
+        _Y_AXIS,
+        revolute(pose.p0),
+        revolute(pose.p1),
+        revolute(pose.p2),
+        revolute(pose.p3),
+        tuple(-v for v in _X_AXIS),
+        tuple(-v for v in _Y_AXIS),
+        tuple(-v for v in revolute(pose.e)),
+    )
+    return np.array(cols, dtype=np.float64).T
+
+
+def _check_secondary(n_rows: int, n_cols: int, secondary: Sequence[int]) -> tuple[int, ...]:
+    sec = tuple(int(i) for i in secondary)
+    if len(sec) != n_rows:
+        raise ValueError(f"need exactly {n_rows} secondary indices, got {len(sec)}")
+    if len(set(sec)) != len(sec) or min(sec) < 0 or max(sec) >= n_cols:
+        raise ValueError(f"secondary indices must be distinct and in [0, {n_cols}): {sec}")
+    return sec
+
+
+def primary_indices(secondary: Sequence[int], n_magnitudes: int = 9) -> tuple[int, ...]:
+    """Primary indices: the complement of ``secondary``, in ascending order.
+
+    Parameters
+    ----------
+    secondary : sequence of int
+        Secondary magnitude indices.
+    n_magnitudes : int
+        Length of the magnitude vector (default 9).
+
+    Returns
+    -------
+    tuple of int
+        Ascending indices not in ``secondary``.
+    """
+    sec = set(int(i) for i in secondary)
+    return tuple(i for i in range(n_magnitudes) if i not in sec)
+
+
+def solve_partition(
+    n_matrix: FloatArray,
+    secondary_indices: Sequence[int],
+    primary_values: Vector,
+    tol: float = 1e-9,
+) -> FloatArray:
+    """Full magnitude vector from Davies' partition, ``Psi_s = -Ns^-1 Np Psi_p``.
+
+    Parameters
+    ----------
+    n_matrix : numpy.ndarray
+        Network matrix N (d x F).
+    secondary_indices : sequence of int
+        The d secondary (unknown) magnitude indices; their order sets the column order of Ns.
+    primary_values : sequence of float
+        The F - d primary magnitudes, ordered as ``primary_indices(secondary_indices, F)``
+        (ascending magnitude index).
+    tol : float
+        Ns is declared singular when ``|det Ns| < tol``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Psi (length F) with ``N @ Psi = 0``.
+
+    Raises
+    ------
+    ValueError
+        If the partition is malformed or Ns is singular.
+    """
+    n_mat = np.asarray(n_matrix, dtype=np.float64)
+    d, f = n_mat.shape
+    sec = _check_secondary(d, f, secondary_indices)
+    prim = primary_indices(sec, f)
+    psi_p = np.asarray(primary_values, dtype=np.float64)
+    if psi_p.shape != (len(prim),):
+        raise ValueError(f"need {len(prim)} primary values, got shape {psi_p.shape}")
+    ns = n_mat[:, sec]
+    det = float(np.linalg.det(ns))
+    if not abs(det) >= tol:
+        names = [MAGNITUDE_NAMES[i] if f == 9 else str(i) for i in sec]
+        raise ValueError(
+            f"secondary matrix Ns is singular for secondary {names}: "
+            f"|det Ns| = {abs(det):.3e} < tol = {tol:.1e}"
+        )
+    psi = np.zeros(f, dtype=np.float64)
+    psi[list(prim)] = psi_p
+    psi[list(sec)] = np.linalg.solve(ns, -(n_mat[:, list(prim)] @ psi_p))
+    return psi
+
+
+def det_ns(chain: Chain, config: Config, secondary: Sequence[int] = Q0_SECONDARY) -> float:
+    """Determinant of the secondary network sub-matrix Ns.
+
+    Parameters
+    ----------
+    chain : Chain
+        Geometry.
+    config : Config
+        ``(x, y, phi, q1, q2, q3)``.
+    secondary : sequence of int
+        Secondary magnitude indices, in column order (default ``Q0_SECONDARY``).
+
+    Returns
+    -------
+    float
+        ``det N[:, secondary]``; ``a1 a2 sin q2`` for q0, ``+1`` for kinematic state 3.
+    """
+    n_mat = network_matrix(chain, config)
+    sec = _check_secondary(3, 9, secondary)
+    return float(np.linalg.det(n_mat[:, sec]))
+
+
+def solve_q0(
+    chain: Chain,
+    config: Config,
+    vehicle_rates: Vector,
+    ee_rates: Vector,
+    tol: float = 1e-9,
+) -> FloatArray:
+    """Location q0: arm joint rates from vehicle and end-effector rates.
+
+    Parameters
+    ----------
+    chain : Chain
+        Geometry.
+    config : Config
+        ``(x, y, phi, q1, q2, q3)``.
+    vehicle_rates : sequence of float
+        ``(xd, yd, phid)``.
+    ee_rates : sequence of float
+        ``(xed, yed, phied)``.
+    tol : float
+        Singularity tolerance on ``|det Ns|``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Full Psi (9,).
+    """
+    primary = [*vehicle_rates, *ee_rates]
+    return solve_partition(network_matrix(chain, config), Q0_SECONDARY, primary, tol)
+
+
+def solve_state3(
+    chain: Chain,
+    config: Config,
+    ee_rates: Vector,
+    phid: float,
+    q1d: float,
+    q3d: float,
+    tol: float = 1e-9,
+) -> FloatArray:
+    """Kinematic state 3 (location q1): ``(xd, yd, q2d)`` from the other six rates.
+
+    Parameters
+    ----------
+    chain : Chain
+        Geometry.
+    config : Config
+        ``(x, y, phi, q1, q2, q3)``.
+    ee_rates : sequence of float
+        ``(xed, yed, phied)``.
+    phid, q1d, q3d : float
+        Primary vehicle heading rate and arm joint rates.
+    tol : float
+        Singularity tolerance on ``|det Ns|`` (here always 1).
+
+    Returns
+    -------
+    numpy.ndarray
+        Full Psi (9,).
+    """
+    primary = [phid, q1d, q3d, *ee_rates]
+    return solve_partition(network_matrix(chain, config), STATE3_SECONDARY, primary, tol)

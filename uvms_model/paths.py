@@ -1,0 +1,271 @@
+r"""End-effector mission paths of the case study: "deformed circles" timed over 60 s.
+
+The paper gives only: mission 1 travels :math:`2\pi r` on a deformed circle whose centre is
+1.25 m right of and 0.5 m above the end effector's start; mission 2 travels :math:`3\pi r`
+with the centre 1.25 m right; both last 60 s. Everything else here is our choice.
+
+Shape (our choice, an oval): a polar curve about the centre :math:`C`,
+
+.. math::
+
+    \rho(\theta) = R\,[1 + \varepsilon \cos 2(\theta - \theta_a)],\qquad
+    p(\theta) = C + \rho(\theta)\,(\cos\theta, \sin\theta),
+
+elongated along the axis angle :math:`\theta_a` (default 0: horizontal) with
+:math:`\varepsilon = 0.1`. :math:`R` is fixed by passing through the start point :math:`S`:
+:math:`R = |S - C| / [1 + \varepsilon\cos 2(\theta_s - \theta_a)]`, :math:`\theta_s` the polar
+angle of :math:`S` about :math:`C`.
+
+The paper's :math:`r` (our definition): the equivalent radius, perimeter / :math:`2\pi`,
+
+.. math::
+
+    r = \frac{1}{2\pi}\int_0^{2\pi}\sqrt{\rho^2 + \rho'^2}\,d\theta,
+
+(:math:`r = |S - C|` for :math:`\varepsilon = 0`). The integrand has period :math:`\pi`, so
+every half lap has length :math:`\pi r`: ``turns = 1`` (mission 1, a closed lap) travels
+exactly :math:`2\pi r` and ``turns = 1.5`` (mission 2) exactly :math:`3\pi r`.
+
+Timing (our choice): the polar angle follows a quintic smoothstep in time,
+
+.. math::
+
+    \theta(t) = \theta_s + \delta\,2\pi n\,\sigma(\tau),\quad
+    \sigma(\tau) = 10\tau^3 - 15\tau^4 + 6\tau^5,\quad \tau = (t - t_0)/T \in [0, 1],
+
+:math:`\delta = \pm 1` the direction (default +1, counter-clockwise), :math:`n` the turns,
+so the commanded velocity and acceleration start and end at zero. Velocity
+:math:`\dot p = [\rho'(\theta)(\cos\theta, \sin\theta) + \rho(\theta)(-\sin\theta,
+\cos\theta)]\,\dot\theta`. Outside :math:`[t_0, t_0 + T]` the path holds its end point.
+
+Heading (our choice): the end-effector heading is held constant at ``heading``
+(rate 0); pass the initial :math:`\phi_e` of the chain.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+__all__ = [
+    "MISSION1_CENTRE_OFFSET",
+    "MISSION2_CENTRE_OFFSET",
+    "DeformedCircle",
+    "PathState",
+    "mission1_path",
+    "mission2_path",
+    "smoothstep5",
+]
+
+MISSION1_CENTRE_OFFSET: tuple[float, float] = (1.25, 0.5)
+"""Centre minus start for mission 1, m (paper)."""
+MISSION2_CENTRE_OFFSET: tuple[float, float] = (1.25, 0.0)
+"""Centre minus start for mission 2, m (paper)."""
+
+_PERIMETER_NODES = 4096
+
+
+class PathState(NamedTuple):
+    """Commanded end-effector pose and twist magnitudes at one instant."""
+
+    xe: float
+    ye: float
+    phie: float
+    vxe: float
+    vye: float
+    wphie: float
+
+
+def smoothstep5(tau: float) -> tuple[float, float]:
+    """Quintic smoothstep and its derivative, clamped to ``[0, 1]``.
+
+    Parameters
+    ----------
+    tau : float
+        Normalised time.
+
+    Returns
+    -------
+    tuple of float
+        ``(sigma, dsigma/dtau)`` with ``sigma = 10 tau^3 - 15 tau^4 + 6 tau^5``.
+    """
+    if tau <= 0.0:
+        return 0.0, 0.0
+    if tau >= 1.0:
+        return 1.0, 0.0
+    t2 = tau * tau
+    return t2 * tau * (10.0 + tau * (-15.0 + 6.0 * tau)), 30.0 * t2 * (1.0 - tau) ** 2
+
+
+@dataclass(frozen=True)
+class DeformedCircle:
+    """Oval end-effector path through ``start``, timed by a quintic smoothstep.
+
+    Parameters
+    ----------
+    start : tuple of float
+        End-effector start point S, m.
+    centre_offset : tuple of float
+        Centre minus start, m (non-zero).
+    turns : float
+        Laps travelled, a positive multiple of 0.5 (length ``2 pi r turns``).
+    duration : float
+        Travel time T, s (default 60).
+    epsilon : float
+        Radial deformation, ``|epsilon| < 1`` (default 0.1, our choice).
+    axis_angle : float
+        Direction of the oval's long axis, rad (default 0).
+    direction : int
+        +1 counter-clockwise (default), -1 clockwise.
+    heading : float
+        Constant end-effector heading, rad.
+    t_start : float
+        Start time t0, s.
+    """
+
+    start: tuple[float, float]
+    centre_offset: tuple[float, float]
+    turns: float
+    duration: float = 60.0
+    epsilon: float = 0.1
+    axis_angle: float = 0.0
+    direction: int = 1
+    heading: float = 0.0
+    t_start: float = 0.0
+    centre: tuple[float, float] = field(init=False)
+    theta_start: float = field(init=False)
+    base_radius: float = field(init=False)
+    r: float = field(init=False)
+    length: float = field(init=False)
+
+    def __post_init__(self) -> None:
+        if not self.duration > 0.0:
+            raise ValueError("duration must be positive")
+        if not abs(self.epsilon) < 1.0:
+            raise ValueError("|epsilon| must be below 1")
+        if self.direction not in (1, -1):
+            raise ValueError("direction must be +1 or -1")
+        half_laps = 2.0 * self.turns
+        if not (self.turns > 0.0 and abs(half_laps - round(half_laps)) < 1e-12):
+            raise ValueError("turns must be a positive multiple of 0.5")
+        dx, dy = float(self.centre_offset[0]), float(self.centre_offset[1])
+        dist = math.hypot(dx, dy)
+        if dist == 0.0:
+            raise ValueError("centre_offset must be non-zero")
+        sx, sy = float(self.start[0]), float(self.start[1])
+        theta_s = math.atan2(-dy, -dx)
+        big_r = dist / (1.0 + self.epsilon * math.cos(2.0 * (theta_s - self.axis_angle)))
+        theta = np.linspace(0.0, 2.0 * math.pi, _PERIMETER_NODES, endpoint=False)
+        arg = 2.0 * (theta - self.axis_angle)
+        rho = big_r * (1.0 + self.epsilon * np.cos(arg))
+        drho = -2.0 * big_r * self.epsilon * np.sin(arg)
+        # Trapezoid rule on a smooth periodic integrand: exponentially accurate.
+        perimeter = float(np.mean(np.hypot(rho, drho))) * 2.0 * math.pi
+        object.__setattr__(self, "centre", (sx + dx, sy + dy))
+        object.__setattr__(self, "theta_start", theta_s)
+        object.__setattr__(self, "base_radius", big_r)
+        object.__setattr__(self, "r", perimeter / (2.0 * math.pi))
+        object.__setattr__(self, "length", perimeter * self.turns)
+
+    @property
+    def t_end(self) -> float:
+        """End time ``t0 + T``, s."""
+        return self.t_start + self.duration
+
+    def __call__(self, t: float) -> PathState:
+        """Commanded end-effector state at time ``t``.
+
+        Parameters
+        ----------
+        t : float
+            Time, s.
+
+        Returns
+        -------
+        PathState
+            ``(xe, ye, phie, vxe, vye, wphie)``.
+        """
+        sigma, dsigma = smoothstep5((t - self.t_start) / self.duration)
+        sweep = self.direction * 2.0 * math.pi * self.turns
+        theta = self.theta_start + sweep * sigma
+        theta_dot = sweep * dsigma / self.duration
+        arg = 2.0 * (theta - self.axis_angle)
+        rho = self.base_radius * (1.0 + self.epsilon * math.cos(arg))
+        drho = -2.0 * self.base_radius * self.epsilon * math.sin(arg)
+        c, s = math.cos(theta), math.sin(theta)
+        cx, cy = self.centre
+        return PathState(
+            cx + rho * c,
+            cy + rho * s,
+            self.heading,
+            (drho * c - rho * s) * theta_dot,
+            (drho * s + rho * c) * theta_dot,
+            0.0,
+        )
+
+
+def mission1_path(
+    start: tuple[float, float],
+    heading: float = 0.0,
+    duration: float = 60.0,
+    epsilon: float = 0.1,
+    direction: int = 1,
+) -> DeformedCircle:
+    """Mission 1: one closed lap (``2 pi r``), centre 1.25 m right, 0.5 m above start.
+
+    Parameters
+    ----------
+    start : tuple of float
+        End-effector start point, m.
+    heading : float
+        Constant end-effector heading, rad.
+    duration : float
+        Travel time, s.
+    epsilon : float
+        Radial deformation.
+    direction : int
+        +1 counter-clockwise, -1 clockwise.
+
+    Returns
+    -------
+    DeformedCircle
+        The path.
+    """
+    return DeformedCircle(
+        start, MISSION1_CENTRE_OFFSET, 1.0, duration, epsilon, 0.0, direction, heading
+    )
+
+
+def mission2_path(
+    start: tuple[float, float],
+    heading: float = 0.0,
+    duration: float = 60.0,
+    epsilon: float = 0.1,
+    direction: int = 1,
+) -> DeformedCircle:
+    """Mission 2: one and a half laps (``3 pi r``), centre 1.25 m right of start.
+
+    Parameters
+    ----------
+    start : tuple of float
+        End-effector start point, m.
+    heading : float
+        Constant end-effector heading, rad.
+    duration : float
+        Travel time, s.
+    epsilon : float
+        Radial deformation.
+    direction : int
+        +1 counter-clockwise, -1 clockwise.
+
+    Returns
+    -------
+    DeformedCircle
+        The path.
+    """
+    return DeformedCircle(
+        start, MISSION2_CENTRE_OFFSET, 1.5, duration, epsilon, 0.0, direction, heading
+    )
