@@ -15,6 +15,7 @@ Examples
 from hybrid.compose import System, compose
 from hybrid.errors import Position, SimulationError, SpecError
 from hybrid.model import Automaton
+from hybrid.simulate import Jump, Run, Termination, simulate
 from hybrid.spec.loader import load, load_text
 
 __all__ = [
@@ -24,8 +25,12 @@ __all__ = [
     "SpecError",
     "System",
     "compose",
+    "Jump",
+    "Run",
+    "Termination",
     "load",
     "load_text",
+    "simulate",
 ]
 
 __version__ = "0.1.0"

@@ -1,0 +1,559 @@
+"""The event loop: one ``solve_ivp`` call per stay in a mode, jumps in between.
+
+Semantics (docs/semantics.md): as-soon-as-possible firing; among transitions
+enabled at one instant the highest priority fires, ties by file order, and the
+choice is logged; after a jump the transitions are tested at the new point and
+one enabled there fires at once (same ``t``, next ``j``); a guard that sits on
+its boundary and moves away is disarmed until it has been strictly false, so
+it never fires spuriously; leaving an invariant with nothing enabled ends the
+run as ``blocked``.
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import threading
+import time
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from hybrid.compose import System
+from hybrid.dynamics import CompiledCondition, CompiledMode, CompiledTransition, Dynamics
+from hybrid.errors import SimulationError
+from hybrid.model import Automaton
+from hybrid.simulate.result import Jump, Run, Termination
+from hybrid.simulate.zeno import ZenoDetector
+
+__all__ = ["METHODS", "simulate"]
+
+METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
+MAX_JUMPS_PER_INSTANT = 1000
+
+
+def simulate(
+    model: Automaton | System,
+    t_end: float,
+    *,
+    max_jumps: int = 10_000,
+    rtol: float = 1e-6,
+    atol: float = 1e-9,
+    max_step: float | None = None,
+    method: str = "RK45",
+    parameters: Mapping[str, float] | None = None,
+    initial: Mapping[str, float] | None = None,
+    initial_location: str | None = None,
+    inputs: Mapping[str, Callable[[float], float]] | None = None,
+    t_start: float = 0.0,
+    dt: float | None = None,
+    zeno: bool = True,
+    max_jumps_per_instant: int = MAX_JUMPS_PER_INSTANT,
+    handle_sigint: bool = True,
+    dense: bool = False,
+) -> Run:
+    """Simulate ``model`` from ``t_start`` to ``t_end``.
+
+    Parameters
+    ----------
+    model : Automaton or System
+        From :func:`hybrid.load`.
+    t_end : float
+        End time; the run ends there with cause ``t_end`` unless it ends before.
+    max_jumps : int
+        Stop with cause ``max_jumps`` after this many jumps.
+    rtol, atol, max_step, method
+        Passed to :func:`scipy.integrate.solve_ivp`. Lower ``max_step`` so that
+        a guard that is true only briefly is not stepped over.
+    parameters : mapping, optional
+        Parameter overrides (``comp.name`` in a system).
+    initial : mapping, optional
+        Initial values of some state variables.
+    initial_location : str, optional
+        Start location of an automaton.
+    inputs : mapping, optional
+        External inputs of an automaton: name to a function of ``t``.
+    dt : float, optional
+        Store points on a uniform grid (jump points are always stored).
+    zeno : bool
+        Detect geometric accumulation of jumps (cause ``zeno``).
+    max_jumps_per_instant : int
+        Jumps allowed at one instant before the run ends as ``zeno``.
+    handle_sigint : bool
+        Turn Ctrl-C into a clean end (cause ``interrupted``), keeping the output.
+    dense : bool
+        Keep each segment's interpolant in ``run.segments`` (smooth plots).
+
+    Returns
+    -------
+    Run
+        The trajectory, jumps and termination (``run.termination.cause``).
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+    >>> run = hybrid.simulate(ball, t_end=3.0, rtol=1e-10, atol=1e-12)
+    >>> round(run.jumps[0].t, 9)  # sqrt(2 * 10 / 9.81)
+    1.427843123
+    """
+    _check_settings(t_start, t_end, max_jumps, rtol, atol, max_step, method, dt)
+    model = model.with_parameters(parameters) if parameters else model
+    if isinstance(model, Automaton) and (initial or initial_location):
+        model = model.with_initial(initial_location, initial)
+    elif isinstance(model, System) and initial_location:
+        raise SimulationError("initial_location applies to an automaton; set it per component")
+    dyn = Dynamics(model, inputs)
+    x0 = np.array(_initial_vector(model, dyn, initial), dtype=float)
+    settings = {
+        "t_start": t_start,
+        "t_end": t_end,
+        "max_jumps": max_jumps,
+        "rtol": rtol,
+        "atol": atol,
+        "max_step": max_step,
+        "method": method,
+        "dt": dt,
+        "dense": dense,
+    }
+    loop = _Loop(dyn, settings, zeno, max_jumps_per_instant)
+    with _sigint_watch(handle_sigint) as interrupted:
+        loop.interrupted = interrupted
+        termination = loop.run(t_start, x0)
+    return loop.result(model.name, termination, settings)
+
+
+def _check_settings(
+    t_start: float,
+    t_end: float,
+    max_jumps: int,
+    rtol: float,
+    atol: float,
+    max_step: float | None,
+    method: str,
+    dt: float | None,
+) -> None:
+    if not (math.isfinite(t_start) and math.isfinite(t_end)) or t_end <= t_start:
+        raise SimulationError(f"t_end must be a finite time after t_start={t_start}, got {t_end}")
+    if max_jumps < 0:
+        raise SimulationError(f"max_jumps must be >= 0, got {max_jumps}")
+    for name, value in (("rtol", rtol), ("atol", atol)):
+        if not value > 0:
+            raise SimulationError(f"{name} must be > 0, got {value}")
+    if max_step is not None and not max_step > 0:
+        raise SimulationError(f"max_step must be > 0, got {max_step}")
+    if dt is not None and not dt > 0:
+        raise SimulationError(f"dt must be > 0, got {dt}")
+    if method not in METHODS:
+        raise SimulationError(f"unknown method '{method}'; choose one of {', '.join(METHODS)}")
+
+
+def _initial_vector(
+    model: Automaton | System, dyn: Dynamics, initial: Mapping[str, float] | None
+) -> list[float]:
+    x0 = model.initial_vector()
+    if isinstance(model, System) and initial:
+        for name, value in initial.items():
+            if name not in dyn.state_names:
+                raise SimulationError(f"initial value for unknown state variable '{name}'")
+            x0[dyn.state_names.index(name)] = float(value)
+    return x0
+
+
+@contextmanager
+def _sigint_watch(enabled: bool) -> Iterator[list[bool]]:
+    """Turn the first Ctrl-C into a flag the loop sees at its next step."""
+    flag = [False]
+    if not enabled or threading.current_thread() is not threading.main_thread():
+        yield flag
+        return
+    previous = signal.getsignal(signal.SIGINT)
+
+    def handler(signum: int, frame: Any) -> None:
+        if flag[0]:
+            raise KeyboardInterrupt
+        flag[0] = True
+
+    signal.signal(signal.SIGINT, handler)
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+class _Event:
+    """A terminal event for solve_ivp; a disarmed one reads as strictly false until re-armed.
+
+    ``sign`` is +1 for a guard (event when rho falls to 0: the guard starts to
+    hold) and -1 for an invariant (event when rho rises to 0: it stops holding).
+    """
+
+    terminal = True
+
+    def __init__(self, fn: Callable[[float, Any], float], sign: float, armed: bool) -> None:
+        self.fn = fn
+        self.sign = sign
+        self.direction = -sign
+        self.armed = armed
+
+    def __call__(self, t: float, x: Any) -> float:
+        value: float = self.fn(t, x)
+        if self.armed:
+            return value
+        if self.sign * value > 0.0:
+            self.armed = True
+            return value
+        return self.sign
+
+
+class _Interrupt:
+    terminal = True
+    direction = 0.0
+
+    def __init__(self, flag: list[bool]) -> None:
+        self.flag = flag
+
+    def __call__(self, t: float, x: Any) -> float:
+        return -1.0 if self.flag[0] else 1.0
+
+
+@dataclass
+class _Loop:
+    dyn: Dynamics
+    settings: dict[str, Any]
+    zeno_enabled: bool
+    max_per_instant: int
+    interrupted: list[bool] = field(default_factory=lambda: [False])
+    t_rows: list[np.ndarray] = field(default_factory=list)
+    x_rows: list[np.ndarray] = field(default_factory=list)
+    j_rows: list[np.ndarray] = field(default_factory=list)
+    loc_rows: list[tuple[str, int]] = field(default_factory=list)
+    sig_rows: list[np.ndarray] = field(default_factory=list)
+    jumps: list[Jump] = field(default_factory=list)
+    segments: list[tuple[int, float, float, Any]] = field(default_factory=list)
+
+    # --- storing points -----------------------------------------------------------------
+
+    def _store(self, mode: CompiledMode, j: int, ts: np.ndarray, xs: np.ndarray) -> None:
+        """Store points ``ts`` (n,) with states ``xs`` (n, d) in ``mode`` at hybrid time ``j``."""
+        if ts.size == 0:
+            return
+        self.t_rows.append(ts)
+        self.x_rows.append(xs)
+        self.j_rows.append(np.full(ts.size, j, dtype=np.int64))
+        self.loc_rows.append((mode.name, ts.size))
+        outputs = mode.outputs
+        sig = np.array([outputs(float(t), x) for t, x in zip(ts, xs, strict=True)], dtype=float)
+        self.sig_rows.append(sig.reshape(ts.size, len(self.dyn.columns)))
+
+    def result(self, name: str, termination: Termination, settings: dict[str, Any]) -> Run:
+        n_states = len(self.dyn.state_names)
+        t = np.concatenate(self.t_rows) if self.t_rows else np.empty(0)
+        states = np.vstack(self.x_rows) if self.x_rows else np.empty((0, n_states))
+        signals = (
+            np.vstack(self.sig_rows) if self.sig_rows else np.empty((0, len(self.dyn.columns)))
+        )
+        j = np.concatenate(self.j_rows) if self.j_rows else np.empty(0, dtype=np.int64)
+        location = np.array([loc for loc, n in self.loc_rows for _ in range(n)], dtype=np.str_)
+        return Run(
+            model=name,
+            state_names=tuple(self.dyn.state_names),
+            signal_names=tuple(self.dyn.columns),
+            t=t,
+            j=j,
+            location=location,
+            states=states,
+            signals=signals,
+            jumps=self.jumps,
+            termination=termination,
+            settings=settings,
+            segments=self.segments,
+        )
+
+    # --- the loop -----------------------------------------------------------------------
+
+    def run(self, t: float, x: np.ndarray) -> Termination:
+        dyn = self.dyn
+        key = dyn.initial_key
+        mode = dyn.mode(key)
+        j = 0
+        t_end: float = self.settings["t_end"]
+        max_jumps: int = self.settings["max_jumps"]
+        if not np.all(np.isfinite(x)):
+            return Termination("nonfinite", t, j, "initial state is not finite", location=mode.name)
+        self._store(mode, j, np.array([t]), x.reshape(1, -1))
+        zeno = ZenoDetector()
+        same_instant, last_jump_t = 0, math.nan
+        started = time.perf_counter()
+        del started
+
+        while True:
+            if self.interrupted[0]:
+                return Termination(
+                    "interrupted", t, j, "interrupted by the user", location=mode.name
+                )
+            dyn.failure.clear()
+            chosen, enabled, armed = self._enabled_at_entry(mode, t, x)
+            if dyn.failure.error is not None:
+                return self._eval_failure(t, j, mode)
+            if chosen is None:
+                blocked = self._invariant_left_at(mode, t, x)
+                if blocked is not None:
+                    return Termination(
+                        "blocked",
+                        t,
+                        j,
+                        f"invariant of {blocked} does not hold and no transition is enabled",
+                        location=mode.name,
+                    )
+                outcome = self._flow(mode, t, x, j, armed)
+                if isinstance(outcome, Termination):
+                    return outcome
+                t, x, chosen, enabled = outcome
+                if chosen is None:
+                    continue
+            if j >= max_jumps:
+                return Termination(
+                    "max_jumps", t, j, f"reached max_jumps={max_jumps}", location=mode.name
+                )
+            same_instant = same_instant + 1 if t == last_jump_t else 1
+            last_jump_t = t
+            if same_instant > self.max_per_instant:
+                return Termination(
+                    "zeno",
+                    t,
+                    j,
+                    f"{self.max_per_instant} jumps at the same instant: a cycle of transitions "
+                    f"takes no time (last: {chosen.name})",
+                    zeno_time=t,
+                    location=mode.name,
+                )
+            mode, x = self._jump(mode, chosen, enabled, t, x, j)
+            j += 1
+            if dyn.failure.error is not None:
+                return self._eval_failure(t, j, mode)
+            if not np.all(np.isfinite(x)):
+                return Termination(
+                    "nonfinite",
+                    t,
+                    j,
+                    f"reset of {chosen.name} gave a non-finite state",
+                    location=mode.name,
+                )
+            estimate = zeno.update(t) if self.zeno_enabled else None
+            if estimate is not None and estimate <= t_end:
+                return Termination(
+                    "zeno",
+                    t,
+                    j,
+                    f"jumps accumulate (gaps shrink geometrically); estimated Zeno time {estimate:.12g}",
+                    zeno_time=estimate,
+                    location=mode.name,
+                )
+
+    def _eval_failure(self, t: float, j: int, mode: CompiledMode) -> Termination:
+        failure = self.dyn.failure
+        where = failure.t if failure.t is not None else t
+        return Termination(
+            "nonfinite",
+            float(where),
+            j,
+            f"evaluating {failure.where} failed: {failure.error}",
+            location=mode.name,
+        )
+
+    # --- entry and event decisions ------------------------------------------------------
+
+    def _band(self, x: np.ndarray) -> float:
+        return 1e-10 * (1.0 + float(np.max(np.abs(x)))) if x.size else 1e-10
+
+    def _slope(
+        self, fn: Callable[[float, Any], float], mode: CompiledMode, t: float, x: np.ndarray
+    ) -> float:
+        """d/dt of ``fn`` along the flow, by a small forward difference."""
+        h = 1e-7 * max(1.0, abs(t))
+        dx = np.asarray(mode.rhs(t, x), dtype=float)
+        return (fn(t + h, x + h * dx) - fn(t, x)) / h
+
+    def _holds_now(
+        self, cond: CompiledCondition, mode: CompiledMode, t: float, x: np.ndarray, armed: bool
+    ) -> tuple[bool, bool]:
+        """(enabled now, armed) for a guard at a point where no event says so."""
+        value = cond.rho(t, x)
+        band = self._band(x)
+        if value < -band:
+            return True, True
+        if value > band:
+            return False, True
+        if not armed:
+            return False, False
+        slope = self._slope(cond.rho, mode, t, x)
+        if slope < -band:
+            return True, True
+        if slope > band:
+            return False, False  # on the boundary, moving away: disarm until strictly false
+        return bool(cond.holds(t, x)), False
+
+    def _enabled_at_entry(
+        self, mode: CompiledMode, t: float, x: np.ndarray
+    ) -> tuple[CompiledTransition | None, list[CompiledTransition], list[bool]]:
+        enabled: list[CompiledTransition] = []
+        armed: list[bool] = []
+        for tr in mode.transitions:
+            now, is_armed = self._holds_now(tr, mode, t, x, True)
+            armed.append(is_armed)
+            if now:
+                enabled.append(tr)
+        return _choose(enabled), enabled, armed
+
+    def _invariant_left_at(self, mode: CompiledMode, t: float, x: np.ndarray) -> str | None:
+        band = self._band(x)
+        for inv in mode.invariants:
+            value = inv.rho(t, x)
+            if value > band:
+                return inv.name
+            if value >= -band:
+                slope = self._slope(inv.rho, mode, t, x)
+                if slope > band or (abs(slope) <= band and not inv.holds(t, x)):
+                    return inv.name
+        return None
+
+    # --- flowing ------------------------------------------------------------------------
+
+    def _flow(
+        self, mode: CompiledMode, t0: float, x0: np.ndarray, j: int, armed: list[bool]
+    ) -> (
+        Termination | tuple[float, np.ndarray, CompiledTransition | None, list[CompiledTransition]]
+    ):
+        settings = self.settings
+        t_end: float = settings["t_end"]
+        band = self._band(x0)
+        guard_events = [
+            _Event(tr.rho, 1.0, a) for tr, a in zip(mode.transitions, armed, strict=True)
+        ]
+        inv_events = []
+        for inv in mode.invariants:
+            inside = inv.rho(t0, x0) < -band
+            inv_events.append(_Event(inv.rho, -1.0, inside))
+        events: list[Any] = [*guard_events, *inv_events, _Interrupt(self.interrupted)]
+        dense = settings["dt"] is not None or settings["dense"]
+        sol = solve_ivp(
+            mode.rhs,
+            (t0, t_end),
+            x0,
+            method=settings["method"],
+            rtol=settings["rtol"],
+            atol=settings["atol"],
+            max_step=settings["max_step"] if settings["max_step"] is not None else np.inf,
+            events=events,
+            dense_output=dense,
+        )
+        ts, xs = sol.t, sol.y.T
+        self._store_segment(mode, j, sol, ts, xs)
+        if settings["dense"] and sol.sol is not None and ts.size > 1:
+            self.segments.append((j, float(ts[0]), float(ts[-1]), sol.sol))
+        t, x = float(ts[-1]), xs[-1].copy()
+        if self.dyn.failure.error is not None:
+            return self._eval_failure(t, j, mode)
+        if sol.status == -1:
+            cause = "nonfinite" if not np.all(np.isfinite(xs)) else "solver_failure"
+            peak = float(np.max(np.abs(xs[-1]))) if xs.size else math.nan
+            return Termination(
+                cause,
+                t,
+                j,
+                f"solver stopped: {sol.message} (largest |state| {peak:.3g}; the solution may "
+                "blow up here, or try another --method or tighter tolerances)",
+                location=mode.name,
+            )
+        if sol.status == 0:
+            return Termination("t_end", t, j, "reached t_end", location=mode.name)
+        n_guards = len(guard_events)
+        fired = [len(te) > 0 for te in sol.t_events]
+        if fired[-1] or self.interrupted[0]:
+            return Termination("interrupted", t, j, "interrupted by the user", location=mode.name)
+        enabled: list[CompiledTransition] = []
+        self.dyn.failure.clear()
+        for i, tr in enumerate(mode.transitions):
+            if fired[i]:
+                enabled.append(tr)
+            elif self._holds_now(tr, mode, t, x, guard_events[i].armed)[0]:
+                enabled.append(tr)
+        chosen = _choose(enabled)
+        if chosen is None and any(fired[n_guards:-1]):
+            left = [
+                inv.name for inv, f in zip(mode.invariants, fired[n_guards:-1], strict=True) if f
+            ]
+            return Termination(
+                "blocked",
+                t,
+                j,
+                f"invariant of {left[0]} is about to be left and no transition is enabled",
+                location=mode.name,
+            )
+        return t, x, chosen, enabled
+
+    def _store_segment(
+        self, mode: CompiledMode, j: int, sol: Any, ts: np.ndarray, xs: np.ndarray
+    ) -> None:
+        dt = self.settings["dt"]
+        if dt is None or sol.sol is None:
+            self._store(mode, j, ts[1:], xs[1:])
+            return
+        t0, t1 = float(ts[0]), float(ts[-1])
+        start = self.settings["t_start"]
+        k0 = math.floor((t0 - start) / dt) + 1
+        k1 = math.ceil((t1 - start) / dt) - 1
+        grid = start + dt * np.arange(k0, k1 + 1) if k1 >= k0 else np.empty(0)
+        grid = grid[(grid > t0) & (grid < t1)]
+        inner = sol.sol(grid).T if grid.size else np.empty((0, xs.shape[1]))
+        self._store(mode, j, np.append(grid, t1), np.vstack([inner, xs[-1:]]))
+
+    # --- jumping ------------------------------------------------------------------------
+
+    def _jump(
+        self,
+        mode: CompiledMode,
+        chosen: CompiledTransition,
+        enabled: list[CompiledTransition],
+        t: float,
+        x: np.ndarray,
+        j: int,
+    ) -> tuple[CompiledMode, np.ndarray]:
+        x_new = np.array(chosen.reset(t, x), dtype=float)
+        target = self.dyn.mode(chosen.view.target)
+        names = self.dyn.state_names
+        self.jumps.append(
+            Jump(
+                t=t,
+                j=j,
+                edge=chosen.name,
+                label=chosen.view.label,
+                source=mode.name,
+                target=target.name,
+                before=dict(zip(names, map(float, x), strict=True)),
+                after=dict(zip(names, map(float, x_new), strict=True)),
+                enabled=tuple(tr.name for tr in enabled),
+                chosen_by=_chosen_by(chosen, enabled),
+            )
+        )
+        self._store(target, j + 1, np.array([t]), x_new.reshape(1, -1))
+        return target, x_new
+
+
+def _choose(enabled: list[CompiledTransition]) -> CompiledTransition | None:
+    """Highest priority first, then file order."""
+    if not enabled:
+        return None
+    return min(enabled, key=lambda tr: (-tr.view.priority, tr.view.order))
+
+
+def _chosen_by(chosen: CompiledTransition, enabled: list[CompiledTransition]) -> str:
+    if len(enabled) == 1:
+        return "only"
+    top = [tr for tr in enabled if tr.view.priority == chosen.view.priority]
+    return "priority" if len(top) == 1 else "file order"
