@@ -220,6 +220,7 @@ def check_system(system: System) -> None:
                 )
             else:
                 owner[name] = (c.name, kind, pos)
+    _check_signal_cycles(system, problems)
     for c in system.components:
         a = c.automaton
         for name in a.inputs:
@@ -243,6 +244,36 @@ def check_system(system: System) -> None:
                 )
     if problems:
         raise SpecError.many(problems)
+
+
+def _check_signal_cycles(system: System, problems: list[tuple[Position, str]]) -> None:
+    """Signals defined through each other across components (any location's definitions)."""
+    from hybrid.spec.build import find_cycle
+
+    graph: dict[str, ir.Expr] = {}
+    where: dict[str, Position] = {}
+    for c in system.components:
+        a = c.automaton
+        for name in a.signal_names:
+            defs = [a.signals.get(name) or a.vectors[name]]
+            defs += [loc.signals.get(name) or loc.vectors.get(name) for loc in a.locations.values()]
+            graph[name] = ir.Call("_", tuple(d for d in defs if d is not None))
+            where[name] = a.signal_positions.get(name, a.position)
+    # an input refers to the signal of the same name, which makes it a signal reference
+    cycle = find_cycle({n: _inputs_as_signals(e, set(graph)) for n, e in graph.items()})
+    if cycle:
+        problems.append(
+            (
+                where[cycle[0]],
+                "signals of the components form a circular definition: "
+                + " -> ".join([*cycle, cycle[0]]),
+            )
+        )
+
+
+def _inputs_as_signals(node: ir.Expr, names: set[str]) -> ir.Expr:
+    refs = tuple(ir.Var(n, ir.SIGNAL) for n in sorted(ir.names_in(node) & names))
+    return ir.Call("_", refs)
 
 
 def build_system(

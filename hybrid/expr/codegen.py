@@ -134,6 +134,7 @@ def signal_order(
     """The signals ``needed`` (and those they use), dependencies first."""
     order: list[str] = []
     done: set[str] = set()
+    active: set[str] = set()
     stack: list[tuple[str, bool]] = [(name, False) for name in sorted(needed, reverse=True)]
     while stack:
         name, expanded = stack.pop()
@@ -145,10 +146,15 @@ def signal_order(
             continue
         if expanded:
             done.add(name)
+            active.discard(name)
             order.append(name)
             continue
+        if name in active:
+            raise ValueError(f"signals form a circular definition through '{name}'")
+        active.add(name)
         stack.append((name, True))
-        deps = ir.names_in(definition, ir.SIGNAL)
+        # inputs bound to another component's signal are dependencies too
+        deps = {d for d in ir.names_in(definition) if d in signals or d in vectors}
         stack.extend((d, False) for d in sorted(deps, reverse=True) if d not in done)
     return order
 

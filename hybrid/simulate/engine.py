@@ -7,6 +7,12 @@ one enabled there fires at once (same ``t``, next ``j``); a guard that sits on
 its boundary and moves away is disarmed until it has been strictly false, so
 it never fires spuriously; leaving an invariant with nothing enabled ends the
 run as ``blocked``.
+
+Evaluation errors (see :mod:`hybrid.dynamics`) end the run as ``nonfinite``
+when they happen at a point of the trajectory: a guard, invariant, signal or
+reset, or the right-hand side where the simulator itself evaluates it. A
+failure of the right-hand side at a trial point of the solver ends the run only
+if the solver then gives up; otherwise the solver has stepped around it.
 """
 
 from __future__ import annotations
@@ -26,6 +32,7 @@ from scipy.integrate import solve_ivp
 from hybrid.compose import System
 from hybrid.dynamics import CompiledCondition, CompiledMode, CompiledTransition, Dynamics
 from hybrid.errors import SimulationError
+from hybrid.expr.codegen import EvalFailure
 from hybrid.model import Automaton
 from hybrid.simulate.result import Jump, Run, Termination
 from hybrid.simulate.zeno import ZenoDetector
@@ -287,18 +294,19 @@ class _Loop:
             return Termination("nonfinite", t, j, "initial state is not finite", location=mode.name)
         self._store(mode, j, np.array([t]), x.reshape(1, -1))
         zeno = ZenoDetector()
-        same_instant, last_jump_t = 0, math.nan
+        same_instant, last_jump_t, stalls = 0, math.nan, 0
         started = time.perf_counter()
         del started
 
         while True:
+            if self._failed() is not None:
+                return self._eval_failure(t, j, mode)
             if self.interrupted[0]:
                 return Termination(
                     "interrupted", t, j, "interrupted by the user", location=mode.name
                 )
-            dyn.failure.clear()
             chosen, enabled, armed = self._enabled_at_entry(mode, t, x)
-            if dyn.failure.error is not None:
+            if self._failed() is not None:
                 return self._eval_failure(t, j, mode)
             if chosen is None:
                 blocked = self._invariant_left_at(mode, t, x)
@@ -313,8 +321,19 @@ class _Loop:
                 outcome = self._flow(mode, t, x, j, armed)
                 if isinstance(outcome, Termination):
                     return outcome
+                t_before = t
                 t, x, chosen, enabled = outcome
                 if chosen is None:
+                    stalls = stalls + 1 if t == t_before else 0
+                    if stalls > self.max_per_instant:
+                        return Termination(
+                            "solver_failure",
+                            t,
+                            j,
+                            "events keep firing at the same instant without any transition "
+                            "becoming enabled (a guard touching its boundary?)",
+                            location=mode.name,
+                        )
                     continue
             if j >= max_jumps:
                 return Termination(
@@ -334,7 +353,7 @@ class _Loop:
                 )
             mode, x = self._jump(mode, chosen, enabled, t, x, j)
             j += 1
-            if dyn.failure.error is not None:
+            if self._failed() is not None:
                 return self._eval_failure(t, j, mode)
             if not np.all(np.isfinite(x)):
                 return Termination(
@@ -355,14 +374,22 @@ class _Loop:
                     location=mode.name,
                 )
 
+    def _failed(self) -> EvalFailure | None:
+        """The evaluation failure at a point of the trajectory, if any."""
+        for failure in (self.dyn.failure, self.dyn.flow_failure):
+            if failure.error is not None:
+                return failure
+        return None
+
     def _eval_failure(self, t: float, j: int, mode: CompiledMode) -> Termination:
-        failure = self.dyn.failure
-        where = failure.t if failure.t is not None else t
+        failure = self._failed()
+        assert failure is not None
+        where = float(failure.t) if failure.t is not None else t
         return Termination(
             "nonfinite",
-            float(where),
+            where,
             j,
-            f"evaluating {failure.where} failed: {failure.error}",
+            f"{self.dyn.describe_failure(failure)} (at t={where:.9g})",
             location=mode.name,
         )
 
@@ -441,6 +468,7 @@ class _Loop:
             inv_events.append(_Event(inv.rho, -1.0, inside))
         events: list[Any] = [*guard_events, *inv_events, _Interrupt(self.interrupted)]
         dense = settings["dt"] is not None or settings["dense"]
+        self.dyn.flow_failure.clear()
         sol = solve_ivp(
             mode.rhs,
             (t0, t_end),
@@ -459,8 +487,20 @@ class _Loop:
         t, x = float(ts[-1]), xs[-1].copy()
         if self.dyn.failure.error is not None:
             return self._eval_failure(t, j, mode)
-        if sol.status == -1:
-            cause = "nonfinite" if not np.all(np.isfinite(xs)) else "solver_failure"
+        flow_failure = self.dyn.flow_failure
+        finite = bool(np.all(np.isfinite(xs)))
+        if flow_failure.error is not None and (sol.status == -1 or not finite):
+            return Termination(
+                "nonfinite",
+                t,
+                j,
+                f"{self.dyn.describe_failure(flow_failure)} (at t={flow_failure.t:.9g}); "
+                f"the solution leaves the domain of the flow after t={t:.9g}",
+                location=mode.name,
+            )
+        flow_failure.clear()  # only at trial points the solver rejected: it stepped around them
+        if sol.status == -1 or not finite:
+            cause = "nonfinite" if not finite else "solver_failure"
             peak = float(np.max(np.abs(xs[-1]))) if xs.size else math.nan
             return Termination(
                 cause,
@@ -477,12 +517,13 @@ class _Loop:
         if fired[-1] or self.interrupted[0]:
             return Termination("interrupted", t, j, "interrupted by the user", location=mode.name)
         enabled: list[CompiledTransition] = []
-        self.dyn.failure.clear()
         for i, tr in enumerate(mode.transitions):
-            if fired[i]:
+            # a crossing found by the solver still has to pass the boundary rule: rho may
+            # reach 0 and stay there while a strict guard never holds (e.g. `0 > 0 and ...`)
+            if self._holds_now(tr, mode, t, x, guard_events[i].armed or fired[i])[0]:
                 enabled.append(tr)
-            elif self._holds_now(tr, mode, t, x, guard_events[i].armed)[0]:
-                enabled.append(tr)
+        if self._failed() is not None:
+            return self._eval_failure(t, j, mode)
         chosen = _choose(enabled)
         if chosen is None and any(fired[n_guards:-1]):
             left = [

@@ -18,6 +18,7 @@ Examples
 
 from __future__ import annotations
 
+import itertools
 from collections import deque
 
 __all__ = ["ZenoDetector"]
@@ -47,7 +48,7 @@ class ZenoDetector:
         if len(self.gaps) < 2:
             return None
         gaps = list(self.gaps)
-        ratios = [b / a for a, b in zip(gaps, gaps[1:], strict=False)]
+        ratios = [b / a for a, b in itertools.pairwise(gaps)]
         latest = ratios[-1]
         steady = (
             len(ratios) >= self.window

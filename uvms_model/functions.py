@@ -1,0 +1,277 @@
+r"""The functions the UVMS specs call, registered under ``hybrid.functions``.
+
+``pyproject.toml`` declares the entry point ``uvms_model = uvms_model.functions:registry``;
+a spec says ``uses: [uvms_model]`` to call them. Every function takes and returns
+plain floats (tuples for vector results, marked with ``hybrid_outputs``) and is
+written with :mod:`math` on scalars, because the simulator calls them at every
+solver stage.
+
+The kinematic solves are Davies' method (``uvms_model.chain`` has the
+reference implementation with numpy): the network matrix
+:math:`N = [\$_x\ \$_y\ \$_\phi\ \$_{q1}\ \$_{q2}\ \$_{q3}\ -\$_{xe}\ -\$_{ye}\ -\$_{\phi e}]`
+(columns in that order), :math:`N\Psi = 0` split into secondary and primary
+columns, :math:`N_s \Psi_s = -N_p \Psi_p` solved by Cramer's rule.
+
+Examples
+--------
+>>> q1d, q2d, q3d = uvms_q0(0, 0, 0, 0.3, 1.2, -0.4, 0, 0, 0, 0.1, 0.0, 0.0, 1, 1, 0.25, 0.5, 0)
+>>> round(q1d + q2d + q3d, 12)   # end-effector heading rate 0, vehicle still
+0.0
+>>> sorted(registry())
+['quintic', 'uvms_ee', 'uvms_fm', 'uvms_path', 'uvms_q0', 'uvms_state3']
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from functools import lru_cache
+from typing import Any
+
+from uvms_model.functional_machine import functional_machine_clipped
+from uvms_model.paths import DeformedCircle
+
+__all__ = [
+    "SINGULAR_TOL",
+    "quintic",
+    "registry",
+    "uvms_ee",
+    "uvms_fm",
+    "uvms_path",
+    "uvms_q0",
+    "uvms_state3",
+]
+
+SINGULAR_TOL = 1e-9
+"""``|det Ns|`` below which a solve is refused as singular (ValueError)."""
+
+Column = tuple[float, float, float]
+
+
+def _points(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[float, ...]:
+    c, s = math.cos(phi), math.sin(phi)
+    p1x, p1y = x + c * bx - s * by, y + s * bx + c * by
+    t1 = phi + q1
+    t2 = t1 + q2
+    t3 = t2 + q3
+    p2x, p2y = p1x + a1 * math.cos(t1), p1y + a1 * math.sin(t1)
+    p3x, p3y = p2x + a2 * math.cos(t2), p2y + a2 * math.sin(t2)
+    ex, ey = p3x + a3 * math.cos(t3), p3y + a3 * math.sin(t3)
+    return p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, t3
+
+
+def uvms_ee(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[float, float, float]:
+    """End-effector pose ``(xe, ye, phie)`` by forward kinematics."""
+    *_, ex, ey, t3 = _points(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    return ex, ey, t3
+
+
+def _columns(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> list[Column]:
+    """The nine columns of N (screws of the closed chain, closing chain negated)."""
+    p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, _ = _points(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    return [
+        (0.0, 1.0, 0.0),  # $x: prismatic along X
+        (0.0, 0.0, 1.0),  # $y: prismatic along Y
+        (1.0, y, -x),  # $phi: revolute at P0
+        (1.0, p1y, -p1x),  # $q1
+        (1.0, p2y, -p2x),  # $q2
+        (1.0, p3y, -p3x),  # $q3
+        (0.0, -1.0, 0.0),  # -$xe
+        (0.0, 0.0, -1.0),  # -$ye
+        (-1.0, -ey, ex),  # -$phie: revolute at E
+    ]
+
+
+def _det3(a: Column, b: Column, c: Column) -> float:
+    return (
+        a[0] * (b[1] * c[2] - b[2] * c[1])
+        - b[0] * (a[1] * c[2] - a[2] * c[1])
+        + c[0] * (a[1] * b[2] - a[2] * b[1])
+    )
+
+
+def _solve(
+    columns: list[Column], secondary: tuple[int, int, int], primary: dict[int, float]
+) -> tuple[float, float, float]:
+    rhs = [0.0, 0.0, 0.0]
+    for k, value in primary.items():
+        col = columns[k]
+        rhs[0] -= col[0] * value
+        rhs[1] -= col[1] * value
+        rhs[2] -= col[2] * value
+    a, b, c = (columns[k] for k in secondary)
+    det = _det3(a, b, c)
+    if abs(det) < SINGULAR_TOL:
+        raise ValueError(f"kinematic singularity: |det Ns| = {abs(det):.3g}")
+    r = (rhs[0], rhs[1], rhs[2])
+    return _det3(r, b, c) / det, _det3(a, r, c) / det, _det3(a, b, r) / det
+
+
+def uvms_q0(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    xd: float,
+    yd: float,
+    phid: float,
+    xed: float,
+    yed: float,
+    phied: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[float, float, float]:
+    """Location q0: joint rates ``(q1d, q2d, q3d)`` from vehicle and end-effector rates."""
+    cols = _columns(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    return _solve(cols, (3, 4, 5), {0: xd, 1: yd, 2: phid, 6: xed, 7: yed, 8: phied})
+
+
+def uvms_state3(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    xed: float,
+    yed: float,
+    phied: float,
+    phid: float,
+    q1d: float,
+    q3d: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[float, float, float]:
+    """Kinematic state 3 (location q1): ``(xd, yd, q2d)`` from the other six rates."""
+    cols = _columns(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    return _solve(cols, (0, 1, 4), {2: phid, 3: q1d, 5: q3d, 6: xed, 7: yed, 8: phied})
+
+
+@lru_cache(maxsize=64)
+def _path(
+    turns: float,
+    off_x: float,
+    off_y: float,
+    sx: float,
+    sy: float,
+    duration: float,
+    epsilon: float,
+    heading: float,
+    direction: float,
+) -> DeformedCircle:
+    sense = 1 if direction >= 0 else -1
+    return DeformedCircle((sx, sy), (off_x, off_y), turns, duration, epsilon, 0.0, sense, heading)
+
+
+def uvms_path(
+    t: float,
+    turns: float,
+    off_x: float,
+    off_y: float,
+    sx: float,
+    sy: float,
+    duration: float,
+    epsilon: float,
+    heading: float,
+    direction: float,
+) -> tuple[float, float, float, float, float, float]:
+    """Commanded end-effector ``(xe, ye, phie, vxe, vye, wphie)`` on the mission path.
+
+    ``direction`` >= 0 runs counter-clockwise, < 0 clockwise.
+    """
+    path = _path(turns, off_x, off_y, sx, sy, duration, epsilon, heading, direction)
+    return tuple(path(t))  # type: ignore[return-value]
+
+
+def uvms_fm(gamma: float, theta_p: float, gamma_min: float) -> float:
+    """Functional machine output s in [0, 1] (tanh units, clipped; see functional_machine)."""
+    return functional_machine_clipped(gamma, theta_p, gamma_min, "tanh", 0.0, 1.0)
+
+
+def quintic(
+    t: float, t0: float, p0: float, v0: float, a0: float, duration: float, pf: float
+) -> tuple[float, float, float]:
+    """Quintic law (eq. 9) from ``(p0, v0, a0)`` at ``t0`` to ``(pf, 0, 0)`` at ``t0 + duration``.
+
+    Returns ``(p, v, a)``; held at ``(pf, 0, 0)`` after the end and at the start
+    values before it.
+    """
+    T = duration
+    if not T > 0.0:
+        raise ValueError("quintic duration must be > 0")
+    tau = t - t0
+    if tau <= 0.0:
+        return p0, v0, a0
+    if tau >= T:
+        return pf, 0.0, 0.0
+    d = pf - p0
+    c3 = (20.0 * d - 12.0 * v0 * T - 3.0 * a0 * T * T) / (2.0 * T**3)
+    c4 = (-30.0 * d + 16.0 * v0 * T + 3.0 * a0 * T * T) / (2.0 * T**4)
+    c5 = (12.0 * d - 6.0 * v0 * T - a0 * T * T) / (2.0 * T**5)
+    c2 = 0.5 * a0
+    p = p0 + tau * (v0 + tau * (c2 + tau * (c3 + tau * (c4 + tau * c5))))
+    v = v0 + tau * (2.0 * c2 + tau * (3.0 * c3 + tau * (4.0 * c4 + tau * 5.0 * c5)))
+    a = 2.0 * c2 + tau * (6.0 * c3 + tau * (12.0 * c4 + tau * 20.0 * c5))
+    return p, v, a
+
+
+def _mark(fn: Callable[..., Any], arity: int, outputs: int = 1) -> Callable[..., Any]:
+    fn.hybrid_arity = (arity, arity)  # type: ignore[attr-defined]
+    fn.hybrid_outputs = outputs  # type: ignore[attr-defined]
+    return fn
+
+
+def registry() -> dict[str, Callable[..., Any]]:
+    """The functions of the ``uvms_model`` library, by the name specs call them."""
+    return {
+        "uvms_ee": _mark(uvms_ee, 11, 3),
+        "uvms_q0": _mark(uvms_q0, 17, 3),
+        "uvms_state3": _mark(uvms_state3, 17, 3),
+        "uvms_path": _mark(uvms_path, 10, 6),
+        "uvms_fm": _mark(uvms_fm, 3),
+        "quintic": _mark(quintic, 7, 3),
+    }
