@@ -20,7 +20,7 @@ $(STAMP_TEST): pyproject.toml | $(BIN)/python
 	touch $@
 
 demo: $(STAMP_DEMO)
-	$(BIN)/python -m hybrid.demo
+	$(BIN)/python -m uvms_model.demo out
 
 lint: $(STAMP_TEST)
 	$(BIN)/ruff check hybrid uvms_model tests bench

@@ -255,7 +255,7 @@ def _check_signal_cycles(system: System, problems: list[tuple[Position, str]]) -
     for c in system.components:
         a = c.automaton
         for name in a.signal_names:
-            defs = [a.signals.get(name) or a.vectors[name]]
+            defs: list[ir.Expr | None] = [a.signals.get(name) or a.vectors[name]]
             defs += [loc.signals.get(name) or loc.vectors.get(name) for loc in a.locations.values()]
             graph[name] = ir.Call("_", tuple(d for d in defs if d is not None))
             where[name] = a.signal_positions.get(name, a.position)
