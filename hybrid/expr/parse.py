@@ -20,6 +20,7 @@ from __future__ import annotations
 import ast
 import difflib
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -120,11 +121,15 @@ def parse_expression(source: str, scope: Scope, *, want: str = "number") -> ir.E
         raise ExprError("empty expression")
     lead = len(source) - len(source.lstrip())
     try:
-        tree = ast.parse(text, mode="eval")
+        tree = _ast_parse(text)
     except SyntaxError as exc:
         col = (exc.offset or 1) - 1 if (exc.lineno or 1) == 1 else 0
         raise ExprError(f"syntax error: {exc.msg}", lead + col) from None
-    except (ValueError, MemoryError, RecursionError) as exc:
+    except (MemoryError, RecursionError):
+        raise ExprError(
+            f"expression is nested too deeply to be parsed (limit: {MAX_DEPTH} levels)", lead
+        ) from None
+    except ValueError as exc:
         raise ExprError(f"expression cannot be parsed: {exc}", lead) from None
     _check_depth(tree.body)
     node, kind = _Converter(scope, lead).convert(tree.body)
@@ -136,6 +141,17 @@ def parse_expression(source: str, scope: Scope, *, want: str = "number") -> ir.E
             )
         raise ExprError("expected a number, got a condition", lead)
     return node
+
+
+def _ast_parse(text: str) -> ast.Expression:
+    """``ast.parse`` in eval mode, without the warnings Python prints for odd source.
+
+    (``x>1and y`` parses but warns "invalid decimal literal" on stderr.)
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SyntaxWarning)
+        warnings.simplefilter("ignore", DeprecationWarning)
+        return ast.parse(text, mode="eval")
 
 
 def _check_depth(root: ast.AST) -> None:
@@ -281,6 +297,8 @@ class _Converter:
             raise ExprError("an index must be a whole-number literal, as name[0]", col)
         size = self.scope.vectors.get(name)
         if size is None:
+            if self.scope.function(name) is not None and name not in self.scope.variables:
+                raise ExprError(f"'{name}' is a function: call it, e.g. {name}(x)", col)
             if name in self.scope.variables:
                 raise ExprError(f"'{name}' is a single value and cannot be indexed", col)
             raise ExprError(f"unknown name '{name}'{_suggest(name, self.scope.known_names())}", col)
@@ -293,8 +311,10 @@ class _Converter:
 
 def vector_call(source: str, scope: Scope) -> tuple[ir.Call, int] | None:
     """If ``source`` is a single call of a multi-output function, return it and its size."""
+    if len(source) > MAX_SOURCE_CHARS:
+        return None  # parse_expression refuses it with the limit in the message
     try:
-        tree = ast.parse(source.strip(), mode="eval")
+        tree = _ast_parse(source.strip())
     except (SyntaxError, ValueError, MemoryError, RecursionError):
         return None
     body = tree.body

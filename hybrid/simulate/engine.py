@@ -218,14 +218,28 @@ class _Event:
 
 
 class _Interrupt:
+    """A terminal event that turns Ctrl-C into a step function of ``t``.
+
+    The flag is noticed at the end of a step, at time ``at``; from then on the
+    event reads +1 before ``at`` and -1 from it, so solve_ivp's root finding
+    between the step's ends sees a sign change (a bare flag would read -1 at
+    both ends and make ``brentq`` fail). At the start of a segment it reads +1.
+    """
+
     terminal = True
     direction = 0.0
 
-    def __init__(self, flag: list[bool]) -> None:
+    def __init__(self, flag: list[bool], t0: float) -> None:
         self.flag = flag
+        self.t0 = t0
+        self.at: float | None = None
 
     def __call__(self, t: float, x: Any) -> float:
-        return -1.0 if self.flag[0] else 1.0
+        if self.at is None:
+            if not self.flag[0] or t <= self.t0:
+                return 1.0
+            self.at = t
+        return 1.0 if t < self.at else -1.0
 
 
 @dataclass
@@ -466,7 +480,7 @@ class _Loop:
         for inv in mode.invariants:
             inside = inv.rho(t0, x0) < -band
             inv_events.append(_Event(inv.rho, -1.0, inside))
-        events: list[Any] = [*guard_events, *inv_events, _Interrupt(self.interrupted)]
+        events: list[Any] = [*guard_events, *inv_events, _Interrupt(self.interrupted, t0)]
         dense = settings["dt"] is not None or settings["dense"]
         self.dyn.flow_failure.clear()
         sol = solve_ivp(

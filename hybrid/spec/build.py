@@ -19,7 +19,14 @@ from typing import Any
 from hybrid.errors import Position, SpecError
 from hybrid.expr import ir
 from hybrid.expr.functions import BUILTINS, Function, available_libraries, load_library
-from hybrid.expr.parse import ExprError, Scope, parse_expression, vector_call
+from hybrid.expr.parse import (
+    MAX_SOURCE_CHARS,
+    ExprError,
+    Scope,
+    _ast_parse,
+    parse_expression,
+    vector_call,
+)
 from hybrid.model import Automaton, Edge, Location, Properties, StateVar
 from hybrid.spec.messages import closest
 from hybrid.spec.schema import AutomatonSpec, PropertiesSpec
@@ -197,8 +204,10 @@ def _declare_names(
 def _vector_sizes(spec: AutomatonSpec, functions: Mapping[str, Function]) -> dict[str, int]:
     sizes: dict[str, int] = {}
     for name, source in spec.signals.items():
+        if len(source) > MAX_SOURCE_CHARS:
+            continue  # refused with a position when the signal is parsed
         try:
-            body = ast.parse(source.strip(), mode="eval").body
+            body = _ast_parse(source.strip()).body
         except (SyntaxError, ValueError, MemoryError, RecursionError):
             continue
         if isinstance(body, ast.Call) and isinstance(body.func, ast.Name):

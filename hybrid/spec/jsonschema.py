@@ -27,8 +27,7 @@ def spec_schema() -> dict[str, Any]:
         [(AutomatonSpec, "validation"), (SystemSpec, "validation")],
         ref_template="#/definitions/{model}",
     )
-    definitions = top.get("$defs", {})
-    text = json.dumps(definitions)
+    definitions = _draft07(json.loads(json.dumps(top.get("$defs", {}))))
     return {
         "$schema": "http://json-schema.org/draft-07/schema#",
         "$id": "https://hybrid.invalid/schema/automaton.schema.json",
@@ -37,8 +36,24 @@ def spec_schema() -> dict[str, Any]:
             {"$ref": "#/definitions/AutomatonSpec"},
             {"$ref": "#/definitions/SystemSpec"},
         ],
-        "definitions": json.loads(text),
+        "definitions": definitions,
     }
+
+
+def _draft07(node: Any) -> Any:
+    """Rewrite the few draft 2020-12 keywords pydantic emits into their draft-07 form.
+
+    A fixed-length tuple is ``prefixItems`` in 2020-12 but ``items`` as a list in
+    draft-07; a draft-07 validator would silently ignore ``prefixItems``.
+    """
+    if isinstance(node, list):
+        return [_draft07(item) for item in node]
+    if not isinstance(node, dict):
+        return node
+    out = {key: _draft07(value) for key, value in node.items()}
+    if "prefixItems" in out:
+        out["items"] = out.pop("prefixItems")
+    return out
 
 
 def spec_schema_text() -> str:

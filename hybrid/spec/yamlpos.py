@@ -1,8 +1,9 @@
 """Safe YAML reading that remembers where every key and value came from.
 
 Only plain data is accepted: mappings, sequences and scalars. Anchors and
-aliases, explicit tags, duplicate keys, non-UTF-8 bytes and files over
-:data:`MAX_FILE_BYTES` are refused with a position. Booleans follow YAML 1.2
+aliases, explicit tags, duplicate keys, non-UTF-8 bytes, files over
+:data:`MAX_FILE_BYTES` and collections nested deeper than :data:`MAX_YAML_DEPTH`
+are refused with a position. Booleans follow YAML 1.2
 (``true``/``false`` only), so a location named ``on`` or ``off`` stays a string.
 
 Examples
@@ -25,10 +26,19 @@ import yaml
 
 from hybrid.errors import Position, SpecError
 
-__all__ = ["MAX_FILE_BYTES", "PositionMap", "YamlDocument", "read_yaml_file", "read_yaml_text"]
+__all__ = [
+    "MAX_FILE_BYTES",
+    "MAX_YAML_DEPTH",
+    "PositionMap",
+    "YamlDocument",
+    "read_yaml_file",
+    "read_yaml_text",
+]
 
 MAX_FILE_BYTES = 16 * 1024 * 1024
 """Largest spec file accepted (16 MiB): beyond it, a spec is refused unread."""
+MAX_YAML_DEPTH = 64
+"""Deepest nesting of mappings and sequences accepted (a spec needs about six)."""
 
 _PLAIN_TAGS = {
     "tag:yaml.org,2002:str",
@@ -75,6 +85,7 @@ class _Loader(
         yaml.parser.Parser.__init__(self)
         yaml.composer.Composer.__init__(self)
         _Resolver.__init__(self)
+        self._depth = 0
 
     def compose_node(self, parent: Any, index: Any) -> Any:
         event = self.peek_event()  # type: ignore[no-untyped-call]
@@ -86,6 +97,16 @@ class _Loader(
         tag = getattr(event, "tag", None)
         if tag is not None and tag != "!":
             raise _Refused(f"YAML tags ({tag}) are not allowed in specs", event.start_mark)
+        if isinstance(event, yaml.CollectionStartEvent):
+            if self._depth >= MAX_YAML_DEPTH:
+                raise _Refused(
+                    f"YAML is nested more than {MAX_YAML_DEPTH} levels deep", event.start_mark
+                )
+            self._depth += 1
+            try:
+                return super().compose_node(parent, index)
+            finally:
+                self._depth -= 1
         return super().compose_node(parent, index)
 
 
@@ -183,7 +204,17 @@ def read_yaml_text(
         )
     if text.startswith("\ufeff"):
         text = text[1:]
-    loader = _Loader(text)
+    try:
+        loader = _Loader(text)
+    except yaml.reader.ReaderError as exc:
+        at = int(exc.position)
+        line = text.count("\n", 0, at) + 1
+        column = at - (text.rfind("\n", 0, at) + 1) + 1
+        raise SpecError(
+            f"character U+{int(exc.character):04X} is not allowed in YAML "
+            "(control characters other than tab and line breaks are refused)",
+            Position(file, line, column),
+        ) from None
     try:
         node = loader.get_single_node()
     except _Refused as exc:
@@ -197,7 +228,11 @@ def read_yaml_text(
         raise SpecError(f"invalid YAML: {exc}", Position(file)) from None
     finally:
         loader.dispose()
-    if node is None:
+    if node is None or (
+        isinstance(node, yaml.ScalarNode)
+        and node.tag == "tag:yaml.org,2002:null"
+        and not node.value
+    ):
         raise SpecError(
             "file is empty: a spec is a mapping starting with 'automaton:' or 'system:'",
             Position(file),
