@@ -42,7 +42,8 @@ class Function:
 
 
 def _sign(x: float) -> float:
-    return (x > 0) - (x < 0) + 0.0
+    # not (x > 0) - (x < 0): numpy booleans cannot be subtracted
+    return 1.0 if x > 0 else -1.0 if x < 0 else 0.0
 
 
 def _clip(x: float, lo: float, hi: float) -> float:

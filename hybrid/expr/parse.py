@@ -131,7 +131,7 @@ def parse_expression(source: str, scope: Scope, *, want: str = "number") -> ir.E
         ) from None
     except ValueError as exc:
         raise ExprError(f"expression cannot be parsed: {exc}", lead) from None
-    _check_depth(tree.body)
+    _check_depth(tree.body, lead)
     node, kind = _Converter(scope, lead).convert(tree.body)
     expected = _BOOL if want == "bool" else _NUM
     if kind != expected:
@@ -154,16 +154,23 @@ def _ast_parse(text: str) -> ast.Expression:
         return ast.parse(text, mode="eval")
 
 
-def _check_depth(root: ast.AST) -> None:
+def _check_depth(root: ast.AST, lead: int = 0) -> None:
+    """Refuse trees deeper than :data:`MAX_DEPTH` expression nodes (``x`` is 1, ``-x`` is 2).
+
+    Operator and context nodes (``+``, ``Load``) are not levels of their own.
+    """
     stack: list[tuple[ast.AST, int]] = [(root, 1)]
     while stack:
         node, depth = stack.pop()
         if depth > MAX_DEPTH:
             raise ExprError(
                 f"expression is nested more than {MAX_DEPTH} levels deep",
-                getattr(node, "col_offset", 0),
+                lead + int(getattr(node, "col_offset", 0)),
             )
-        stack.extend((child, depth + 1) for child in ast.iter_child_nodes(node))
+        stack.extend(
+            (child, depth + 1 if isinstance(child, ast.expr) else depth)
+            for child in ast.iter_child_nodes(node)
+        )
 
 
 class _Converter:
@@ -324,7 +331,7 @@ def vector_call(source: str, scope: Scope) -> tuple[ir.Call, int] | None:
     if func is None or func.outputs == 1:
         return None
     lead = len(source) - len(source.lstrip())
-    _check_depth(body)
+    _check_depth(body, lead)
     converter = _Converter(scope, lead)
     n = len(body.args)
     if body.keywords:

@@ -106,6 +106,8 @@ def validation_problems(
             message = item["msg"]
             if kind == "string_pattern_mismatch":
                 message = "must be a name: a letter or _ then letters, digits or _"
+            elif kind in ("too_short", "string_too_short") and got == "":
+                message = "must not be empty"
             problems.append((positions.value(loc), f"{describe_path(loc)}: {message}{shown}"))
     return problems
 

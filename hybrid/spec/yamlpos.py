@@ -3,8 +3,10 @@
 Only plain data is accepted: mappings, sequences and scalars. Anchors and
 aliases, explicit tags, duplicate keys, non-UTF-8 bytes, files over
 :data:`MAX_FILE_BYTES` and collections nested deeper than :data:`MAX_YAML_DEPTH`
-are refused with a position. Booleans follow YAML 1.2
-(``true``/``false`` only), so a location named ``on`` or ``off`` stays a string.
+are refused with a position. Plain scalars resolve as in the YAML 1.2 core
+schema: booleans are ``true``/``false`` only, so a location named ``on`` or
+``off`` stays a string; ``017`` is seventeen (not octal), ``1e3`` and ``1.0e3``
+are numbers, and ``1:30``, ``1_000``, ``0b101`` or ``2001-12-14`` stay strings.
 
 Examples
 --------
@@ -17,6 +19,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -54,21 +57,41 @@ Path_ = tuple[str | int, ...]
 
 
 class _Resolver(yaml.resolver.Resolver):
-    """YAML 1.1 resolution minus its surprises: 1.2 booleans, no timestamps."""
+    """YAML 1.1 resolution minus its surprises: 1.2 core booleans and numbers, no timestamps.
+
+    (YAML 1.1 reads ``on``/``no`` as booleans, ``017`` as octal 15, ``1:30`` as
+    90 and ``1.0e3`` as a string.)
+    """
 
 
+_REPLACED = (
+    "tag:yaml.org,2002:bool",
+    "tag:yaml.org,2002:int",
+    "tag:yaml.org,2002:float",
+    "tag:yaml.org,2002:timestamp",
+)
 _Resolver.yaml_implicit_resolvers = {
-    first: [
-        (tag, regexp)
-        for tag, regexp in resolvers
-        if tag not in ("tag:yaml.org,2002:bool", "tag:yaml.org,2002:timestamp")
-    ]
+    first: [(tag, regexp) for tag, regexp in resolvers if tag not in _REPLACED]
     for first, resolvers in yaml.resolver.Resolver.yaml_implicit_resolvers.items()
 }
 _Resolver.add_implicit_resolver(
     "tag:yaml.org,2002:bool",
     re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"),
     list("tTfF"),
+)
+# int before float: the 1.2 float pattern also matches whole numbers
+_Resolver.add_implicit_resolver(
+    "tag:yaml.org,2002:int",
+    re.compile(r"^(?:[-+]?[0-9]+|0o[0-7]+|0x[0-9a-fA-F]+)$"),
+    list("-+0123456789"),
+)
+_Resolver.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(
+        r"^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?"
+        r"|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$"
+    ),
+    list("-+0123456789."),
 )
 
 
@@ -288,12 +311,18 @@ def _scalar(node: Any, file: str) -> Any:
         if tag == "tag:yaml.org,2002:bool":
             return value.lower() == "true"
         if tag == "tag:yaml.org,2002:int":
-            return yaml.constructor.SafeConstructor.construct_yaml_int(_CONSTRUCTOR, node)
+            if value.startswith("0o"):
+                return int(value[2:], 8)
+            if value.startswith("0x"):
+                return int(value[2:], 16)
+            return int(value, 10)
         if tag == "tag:yaml.org,2002:float":
-            return float(yaml.constructor.SafeConstructor.construct_yaml_float(_CONSTRUCTOR, node))
-    except (ValueError, yaml.YAMLError):
+            lowered = value.lower()
+            if lowered.endswith(".inf"):
+                return -math.inf if value.startswith("-") else math.inf
+            if lowered == ".nan":
+                return math.nan
+            return float(value)
+    except ValueError:
         raise SpecError(f"cannot read number {value!r}", _position(file, node.start_mark)) from None
     return str(value)
-
-
-_CONSTRUCTOR = yaml.constructor.SafeConstructor()

@@ -1,0 +1,379 @@
+"""Honest mistakes: each message says what to fix, at the line (and column) to fix it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+import hybrid
+from hybrid.cli import main as cli_main
+
+
+@dataclass(frozen=True)
+class Mistake:
+    id: str
+    spec: str
+    line: int
+    column: int
+    says: tuple[str, ...]
+
+
+BALL = """\
+automaton: ball
+parameters: {g: 9.81, e: 0.8}
+state:
+  height: {initial: 10.0}
+  velocity: {initial: 0.0}
+signals:
+  energy: 0.5*velocity**2 + g*height
+locations:
+  falling:
+    flow: {height: velocity, velocity: -g}
+    invariant: height >= 0
+edges:
+  - from: falling
+    to: falling
+    guard: height <= 0 and velocity < 0
+    reset: {velocity: -e*velocity}
+"""
+
+
+def ball(old: str, new: str) -> str:
+    """The valid ``BALL`` spec with one mistake put in."""
+    assert old in BALL, old
+    return BALL.replace(old, new, 1)
+
+
+MISTAKES = [
+    # --- unknown keys, with the closest valid name ---
+    Mistake(
+        "unknown-key-location",
+        ball("    flow: {height", "    flwo: {height"),
+        10,
+        5,
+        ("unknown key 'flwo'", "locations.falling", "did you mean 'flow'?"),
+    ),
+    Mistake(
+        "unknown-key-edge",
+        ball("    guard:", "    gaurd:"),
+        15,
+        5,
+        ("unknown key 'gaurd'", "edges[0]", "did you mean 'guard'?"),
+    ),
+    Mistake(
+        "unknown-key-state",
+        ball("height: {initial: 10.0}", "height: {intial: 10.0}"),
+        4,
+        12,
+        ("unknown key 'intial'", "state.height", "did you mean 'initial'?"),
+    ),
+    Mistake(
+        "unknown-key-top",
+        ball("parameters:", "paramters:"),
+        2,
+        1,
+        ("unknown key 'paramters'", "did you mean 'parameters'?"),
+    ),
+    Mistake(
+        "unknown-key-no-close-name",
+        ball("    to: falling\n", "    to: falling\n    colour: red\n"),
+        15,
+        5,
+        ("unknown key 'colour'", "valid keys here:", "guard", "reset", "priority"),
+    ),
+    # --- unknown names in expressions, with the closest declared name ---
+    Mistake(
+        "unknown-variable-flow",
+        ball("flow: {height: velocity,", "flow: {height: velocty,"),
+        10,
+        20,
+        ("unknown name 'velocty'", "did you mean 'velocity'?"),
+    ),
+    Mistake(
+        "unknown-variable-guard",
+        ball("guard: height <= 0 and velocity < 0", "guard: height <= 0 and velcity < 0"),
+        15,
+        28,
+        ("unknown name 'velcity'", "did you mean 'velocity'?"),
+    ),
+    Mistake(
+        "unknown-parameter-reset",
+        ball("reset: {velocity: -e*velocity}", "reset: {velocity: -ee*velocity}"),
+        16,
+        24,
+        ("unknown name 'ee'", "did you mean 'e'?"),
+    ),
+    Mistake(
+        "unknown-variable-signal",
+        ball("energy: 0.5*velocity**2 + g*height", "energy: 0.5*velocity**2 + g*hieght"),
+        7,
+        31,
+        ("unknown name 'hieght'", "did you mean 'height'?"),
+    ),
+    Mistake(
+        "unknown-function",
+        ball("invariant: height >= 0", "invariant: sqr(height) >= 0"),
+        11,
+        16,
+        ("unknown function 'sqr'", "did you mean 'sqrt'?"),
+    ),
+    Mistake(
+        "function-arity",
+        ball("invariant: height >= 0", "invariant: atan2(height) >= 0"),
+        11,
+        16,
+        ("atan2() takes 2 arguments, got 1",),
+    ),
+    Mistake(
+        "caret-is-not-power",
+        ball("0.5*velocity**2", "0.5*velocity^2"),
+        7,
+        11,
+        ("'^' is not a power here: write '**'",),
+    ),
+    Mistake(
+        "python-true",
+        ball("invariant: height >= 0", "invariant: 'True'"),
+        11,
+        17,
+        ("write 'true', not 'True'",),
+    ),
+    # --- references to locations, labels, state variables ---
+    Mistake(
+        "edge-to-missing-location",
+        ball("    to: falling", "    to: fallen"),
+        14,
+        9,
+        ("edge to unknown location 'fallen'", "did you mean 'falling'?"),
+    ),
+    Mistake(
+        "edge-from-missing-location",
+        ball("  - from: falling", "  - from: flying"),
+        13,
+        11,
+        ("edge from unknown location 'flying'",),
+    ),
+    Mistake(
+        "reset-of-undeclared-variable",
+        ball("reset: {velocity: -e*velocity}", "reset: {velocty: -e*velocity}"),
+        16,
+        13,
+        ("reset of 'velocty': not a state variable", "did you mean 'velocity'?"),
+    ),
+    Mistake(
+        "flow-of-undeclared-variable",
+        ball("flow: {height: velocity,", "flow: {heigth: velocity,"),
+        10,
+        12,
+        ("flow of 'heigth': not a state variable", "did you mean 'height'?"),
+    ),
+    Mistake(
+        "undeclared-label",
+        ball("    to: falling\n", "    to: falling\n    label: bounce\n"),
+        15,
+        12,
+        ("label 'bounce' is not declared in `labels`",),
+    ),
+    Mistake(
+        "initial-location-missing",
+        BALL + "initial: {location: faling}\n",
+        17,
+        21,
+        ("initial location 'faling' is not a location", "did you mean 'falling'?"),
+    ),
+    Mistake(
+        "property-unknown-location",
+        BALL + "properties: {reachable: [fallin]}\n",
+        17,
+        26,
+        ("reachable: unknown location 'fallin'", "did you mean 'falling'?"),
+    ),
+    Mistake(
+        "location-signal-not-declared",
+        ball("    invariant: height >= 0", "    signals: {enrgy: 0}\n    invariant: height >= 0"),
+        11,
+        15,
+        ("signal 'enrgy' is not declared in `signals`", "did you mean 'energy'?"),
+    ),
+    # --- names ---
+    Mistake(
+        "name-declared-twice",
+        ball("parameters: {g: 9.81, e: 0.8}", "parameters: {g: 9.81, e: 0.8, height: 1}"),
+        4,
+        3,
+        ("'height' is declared twice", "state variable here", "parameter at line 2"),
+    ),
+    Mistake(
+        "reserved-name",
+        ball("parameters: {g: 9.81, e: 0.8}", "parameters: {g: 9.81, e: 0.8, sin: 1}"),
+        2,
+        31,
+        ("'sin' is a reserved name",),
+    ),
+    # --- wrong types ---
+    Mistake(
+        "number-expected",
+        ball("height: {initial: 10.0}", "height: {initial: ten}"),
+        4,
+        21,
+        ("state.height.initial", "valid number", "got 'ten'"),
+    ),
+    Mistake(
+        "integer-expected",
+        ball("    to: falling\n", "    to: falling\n    priority: high\n"),
+        15,
+        15,
+        ("edges[0].priority", "valid integer", "got 'high'"),
+    ),
+    Mistake(
+        "parameter-not-a-number",
+        ball("parameters: {g: 9.81,", "parameters: {g: fast,"),
+        2,
+        17,
+        ("parameters.g", "valid number", "got 'fast'"),
+    ),
+    Mistake(
+        "bool-expected",
+        BALL + "properties: {deadlock_free: maybe}\n",
+        17,
+        29,
+        ("properties.deadlock_free", "valid boolean", "got 'maybe'"),
+    ),
+    Mistake(
+        "list-expected",
+        BALL + "labels: bounce\n",
+        17,
+        9,
+        ("labels", "valid list", "got 'bounce'"),
+    ),
+    Mistake(
+        "bounds-not-a-pair",
+        ball("height: {initial: 10.0}", "height: {initial: 10.0, bounds: 0}"),
+        4,
+        35,
+        ("state.height.bounds", "got 0"),
+    ),
+    Mistake(
+        "bad-name",
+        ball("automaton: ball", "automaton: my ball"),
+        1,
+        12,
+        ("automaton: must be a name", "got 'my ball'"),
+    ),
+    Mistake(
+        "condition-expected",
+        ball("guard: height <= 0 and velocity < 0", "guard: height - 1"),
+        15,
+        12,
+        ("expected a condition", "compare it"),
+    ),
+    Mistake(
+        "number-expected-in-flow",
+        ball("flow: {height: velocity,", "flow: {height: velocity > 0,"),
+        10,
+        20,
+        ("expected a number, got a condition",),
+    ),
+    Mistake(
+        "empty-expression",
+        ball("invariant: height >= 0", "invariant: ''"),
+        11,
+        17,
+        ("locations.falling.invariant", "must not be empty"),
+    ),
+    Mistake(
+        "initial-outside-bounds",
+        ball("height: {initial: 10.0}", "height: {initial: -1.0, bounds: [0, .inf]}"),
+        4,
+        21,
+        ("initial value -1.0 of 'height' is outside its bounds",),
+    ),
+    Mistake(
+        "missing-required-key",
+        ball("  - from: falling\n    to: falling", "  - to: falling"),
+        13,
+        5,
+        ("missing key 'from' in edges[0]",),
+    ),
+    # --- circular signal definitions ---
+    Mistake(
+        "circular-signals",
+        ball(
+            "  energy: 0.5*velocity**2 + g*height\n",
+            "  energy: 0.5*velocity**2 + g*height\n  p: q + 1\n  q: r * 2\n  r: p\n",
+        ),
+        8,
+        3,
+        ("circular definition", "p -> q -> r -> p"),
+    ),
+    Mistake(
+        "self-referencing-signal",
+        ball("energy: 0.5*velocity**2 + g*height", "energy: energy + 1"),
+        7,
+        3,
+        ("circular definition", "energy -> energy"),
+    ),
+    Mistake(
+        "circular-only-in-one-location",
+        ball(
+            "  energy: 0.5*velocity**2 + g*height\n",
+            "  energy: 0.5*velocity**2 + g*height\n  power: velocity\n",
+        ).replace(
+            "    invariant: height >= 0",
+            "    signals: {power: energy * power}\n    invariant: height >= 0",
+        ),
+        12,
+        15,
+        ("circular definition in location 'falling'", "power -> power"),
+    ),
+]
+
+
+def test_ball_is_valid() -> None:
+    model = hybrid.load_text(BALL)
+    assert isinstance(model, hybrid.Automaton)
+
+
+@pytest.mark.parametrize("mistake", MISTAKES, ids=[m.id for m in MISTAKES])
+def test_mistake_is_explained_at_its_place(mistake: Mistake) -> None:
+    with pytest.raises(hybrid.SpecError) as info:
+        hybrid.load_text(mistake.spec, file="ball.yaml")
+    err = info.value
+    where = [(pos.line, pos.column, msg) for pos, msg in err.problems]
+    match = [msg for line, column, msg in where if (line, column) == (mistake.line, mistake.column)]
+    assert match, f"no problem at {mistake.line}:{mistake.column}; got {where}"
+    assert any(all(f in msg for f in mistake.says) for msg in match), f"{mistake.says} vs {match}"
+    assert err.file == "ball.yaml"
+
+
+def test_every_problem_is_reported_in_file_order() -> None:
+    """Several mistakes in one file: all of them, one located line each, sorted by line."""
+    spec = (
+        ball("    to: falling", "    to: fallen")
+        .replace("reset: {velocity:", "reset: {velocty:")
+        .replace("flow: {height: velocity,", "flow: {height: velocty,")
+    )
+    with pytest.raises(hybrid.SpecError) as info:
+        hybrid.load_text(spec, file="ball.yaml")
+    lines = str(info.value).splitlines()
+    assert [line.split(": ", 1)[0] for line in lines] == [
+        "ball.yaml:10:20",
+        "ball.yaml:14:9",
+        "ball.yaml:16:13",
+    ]
+
+
+def test_cli_prints_each_problem_on_its_own_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "ball.yaml"
+    path.write_text(
+        ball("    to: falling", "    to: fallen").replace("guard: height", "guard: heigth")
+    )
+    assert cli_main(["validate", str(path)]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        f"{path}:14:9: edge to unknown location 'fallen'; did you mean 'falling'?",
+        f"{path}:15:12: unknown name 'heigth'; did you mean 'height'?",
+    ]
