@@ -20,10 +20,9 @@ EXIT_OK, EXIT_FINDINGS, EXIT_INVALID = 0, 1, 2
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse that exits with code 2 and a one-line message (its default too)."""
+    """argparse that exits with code 2 and one line of error (no usage block)."""
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        self.print_usage(sys.stderr)
         sys.stderr.write(f"hybrid: error: {message}\n")
         raise SystemExit(EXIT_INVALID)
 
@@ -122,7 +121,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
             return run_graph(args.file, fmt=args.format)
         if args.command == "simulate":
-            from hybrid.simulate.command import run_simulate
+            from hybrid.simulation.command import run_simulate
 
             return run_simulate(args)
     except SpecError as exc:

@@ -20,9 +20,10 @@ Examples
 >>> ball = hybrid.load("specs/bouncing_ball.yaml")
 >>> dyn = Dynamics(ball)
 >>> mode = dyn.mode(dyn.initial_key)
->>> mode.rhs(0.0, [10.0, 0.0])
+>>> import numpy as np
+>>> [float(v) for v in mode.rhs(0.0, np.array([10.0, 0.0]))]
 [0.0, -9.81]
->>> mode.transitions[0].rho(0.0, [0.0, -1.0]) <= 0
+>>> bool(mode.transitions[0].rho(0.0, np.array([0.0, -1.0])) <= 0)
 True
 """
 
@@ -35,7 +36,7 @@ from typing import Any
 from hybrid.compose import Mode, ModeView, System, TransitionView, as_system, initial_mode, mode_of
 from hybrid.errors import SimulationError
 from hybrid.expr import ir
-from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
+from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function, signal_order
 from hybrid.expr.functions import Function
 from hybrid.expr.rho import guard_to_rho
 from hybrid.model import Automaton
@@ -261,8 +262,7 @@ def _post_order(node: ir.Expr) -> list[ir.Expr]:
 
 def _culprit(exprs: list[ir.Expr], ctx: CodeContext, t: float, x: list[float]) -> str | None:
     """The innermost call or operation of ``exprs`` that fails at ``(t, x)``, shown with values."""
-    from hybrid.expr.codegen import signal_order
-
+    point = _Point(float(v) for v in x)
     probe = replace(ctx, failure=EvalFailure())
     used: set[str] = set()
     for e in exprs:
@@ -272,7 +272,7 @@ def _culprit(exprs: list[ir.Expr], ctx: CodeContext, t: float, x: list[float]) -
 
     def value(node: ir.Expr) -> Any:
         probe.failure.clear()
-        result = compile_function("probe", [node], probe, shape="scalar")(t, x)
+        result = compile_function("probe", [node], probe, shape="scalar")(t, point)
         return None if probe.failure.error is not None else result
 
     for root in roots:
@@ -287,6 +287,17 @@ def _culprit(exprs: list[ir.Expr], ctx: CodeContext, t: float, x: list[float]) -
                 return f"{node.func}({', '.join(shown)})"
             return f"{shown[0]} {node.op} {shown[1]}"
     return None
+
+
+class _Point(list[float]):
+    """A state as plain floats that compiled functions can read like an array.
+
+    Plain floats keep Python's arithmetic, which raises on a division by zero or
+    an overflow where numpy scalars would only warn, so the probe finds the culprit.
+    """
+
+    def tolist(self) -> list[float]:
+        return list(self)
 
 
 def _show(value: Any) -> str:

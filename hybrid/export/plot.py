@@ -6,7 +6,7 @@ from pathlib import Path
 
 from hybrid.errors import SimulationError
 from hybrid.export.atomic import atomic_write
-from hybrid.simulate.result import Run
+from hybrid.simulation.result import Run
 
 __all__ = ["plot_run"]
 

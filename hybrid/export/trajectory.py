@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from hybrid.export.atomic import atomic_write
-from hybrid.simulate.result import Run
+from hybrid.simulation.result import Run
 
 __all__ = ["events_document", "write_csv", "write_events", "write_npz"]
 

@@ -12,8 +12,9 @@ Examples
 >>> flow = [parse_expression(s, scope) for s in ("v", "-g")]
 >>> ctx = CodeContext(states=("h", "v"), params={"g": 9.81})
 >>> rhs = compile_function("rhs", flow, ctx, shape="list")
->>> rhs(0.0, [10.0, 0.0])
-[0.0, -9.81]
+>>> import numpy as np
+>>> rhs(0.0, np.array([10.0, 0.0]))
+[np.float64(0.0), -9.81]
 """
 
 from __future__ import annotations
@@ -126,6 +127,37 @@ class _Printer:
         return f"({text})" if prec < min_prec else text
 
 
+_SAFE_CALLS = {"min", "max", "abs"}
+
+
+def _float_safe(exprs: Sequence[ir.Expr]) -> bool:
+    """True if numpy scalars give exactly what Python floats give (no /, **, other calls).
+
+    Only then may a function read ``x[i]`` (a numpy scalar) directly: division by
+    zero or an overflowing power must raise as they do on floats, not give inf.
+    """
+    for root in exprs:
+        for node in ir.walk(root):
+            if isinstance(node, ir.Bin) and node.op in ("/", "**"):
+                return False
+            if isinstance(node, ir.Call) and node.func not in _SAFE_CALLS:
+                return False
+    return True
+
+
+def _state_uses(
+    exprs: Sequence[ir.Expr], definitions: Sequence[ir.Expr], states: Sequence[str]
+) -> dict[str, int]:
+    """How often each state variable is read by the outputs and the signals they need."""
+    wanted = set(states)
+    uses = dict.fromkeys(states, 0)
+    for root in (*exprs, *definitions):
+        for node in ir.walk(root):
+            if isinstance(node, ir.Var) and node.kind == ir.STATE and node.name in wanted:
+                uses[node.name] += 1
+    return uses
+
+
 def signal_order(
     needed: set[str],
     signals: Mapping[str, ir.Expr],
@@ -167,7 +199,7 @@ def compile_function(
     shape: str = "list",
     reset_of: Sequence[ir.Expr | None] | None = None,
 ) -> Callable[..., Any]:
-    """Compile ``outputs`` into one function ``f(t, x)``.
+    """Compile ``outputs`` into one function ``f(t, x)`` of a time and a 1-D numpy array.
 
     ``shape`` is ``"scalar"`` (one value), ``"list"`` or ``"tuple"``. With
     ``reset_of``, output ``i`` is ``reset_of[i]`` if given, else ``x[i]``
@@ -196,9 +228,19 @@ def compile_function(
         all_used |= ir.names_in(ctx.signals.get(s) or ctx.vectors[s])
 
     body: list[str] = []
-    if ctx.states:
+    uses = _state_uses(exprs, [ctx.signals.get(s) or ctx.vectors[s] for s in order], ctx.states)
+    tiny = all(n <= 1 for n in uses.values()) and sum(uses.values()) <= 3
+    if (
+        reset_of is None
+        and tiny
+        and _float_safe([*exprs, *(ctx.signals.get(s) or ctx.vectors[s] for s in order)])
+    ):
+        # a tiny function: index the array directly (faster than converting it)
+        for i, s in enumerate(ctx.states):
+            names[s] = f"x[{i}]"
+    elif ctx.states:
         targets = ", ".join(names[s] for s in ctx.states)
-        body.append(f"{targets}, = x.tolist() if hasattr(x, 'tolist') else x")
+        body.append(f"{targets}, = x.tolist()")
     for u in sorted(n for n in all_used if n in ctx.inputs):
         body.append(f"{names[u]} = _in_{u}(t)")
     for s in order:
@@ -238,7 +280,6 @@ def compile_function(
         "_nan": math.nan,
         "_K": tuple(consts),
         "_pow": math.pow,
-        "hasattr": hasattr,
     }
     for fname, func in BUILTINS.items():
         scope[f"_{fname}"] = func.fn

@@ -7,8 +7,8 @@ import sys
 from pathlib import Path
 
 from hybrid.errors import SimulationError
-from hybrid.simulate.engine import simulate
-from hybrid.simulate.result import Run
+from hybrid.simulation.engine import simulate
+from hybrid.simulation.result import Run
 
 __all__ = ["run_simulate"]
 

@@ -34,8 +34,8 @@ from hybrid.dynamics import CompiledCondition, CompiledMode, CompiledTransition,
 from hybrid.errors import SimulationError
 from hybrid.expr.codegen import EvalFailure
 from hybrid.model import Automaton
-from hybrid.simulate.result import Jump, Run, Termination
-from hybrid.simulate.zeno import ZenoDetector
+from hybrid.simulation.result import Jump, Run, Termination
+from hybrid.simulation.zeno import ZenoDetector
 
 __all__ = ["METHODS", "simulate"]
 
@@ -332,6 +332,8 @@ class _Loop:
                         f"invariant of {blocked} does not hold and no transition is enabled",
                         location=mode.name,
                     )
+                if t >= t_end:  # a jump landed exactly at t_end: nothing left to flow
+                    return Termination("t_end", t, j, "reached t_end", location=mode.name)
                 outcome = self._flow(mode, t, x, j, armed)
                 if isinstance(outcome, Termination):
                     return outcome

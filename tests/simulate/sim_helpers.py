@@ -1,0 +1,59 @@
+"""Shared helpers of the simulation tests: paths, running the CLI, reading its files."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+REPO = Path(__file__).resolve().parents[2]
+SPECS = REPO / "specs"
+DOCS = REPO / "docs"
+
+
+def run_cli(
+    *args: str | Path, cwd: Path | None = None, timeout: float = 60.0
+) -> subprocess.CompletedProcess[str]:
+    """``python -m hybrid ARGS`` in a fresh process (as a user types it)."""
+    env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
+    return subprocess.run(
+        [sys.executable, "-m", "hybrid", *map(str, args)],
+        capture_output=True,
+        text=True,
+        cwd=cwd or REPO,
+        env=env,
+        timeout=timeout,
+        check=False,
+    )
+
+
+def read_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:
+    """Header and rows of a trajectory CSV."""
+    with path.open(newline="") as handle:
+        reader = csv.reader(handle)
+        header = next(reader)
+        rows = [dict(zip(header, row, strict=True)) for row in reader]
+    return header, rows
+
+
+def read_json(path: Path) -> Any:
+    return json.loads(path.read_text())
+
+
+def assert_no_traceback(stderr: str) -> None:
+    assert "Traceback" not in stderr, stderr
+    assert 'File "' not in stderr, stderr
+
+
+def main_in_process(*args: str | Path) -> int:
+    """``hybrid ARGS`` in this process (same code path as the console script); the exit code."""
+    from hybrid.cli import main
+
+    try:
+        return main([str(a) for a in args])
+    except SystemExit as exc:  # argparse usage errors
+        return int(exc.code) if isinstance(exc.code, int) else 2
