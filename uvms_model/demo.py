@@ -48,7 +48,10 @@ def main(argv: list[str] | None = None) -> int:
         if not result.run.termination.ok:
             status = max(status, 1)
     print("\n== ablations (mission 2) ==")
-    lines = ["| variant | end | min gamma | uvms locations | max tracking error [mm] |", "|---|---|---|---|---|"]
+    lines = [
+        "| variant | end | min gamma | uvms locations | max tracking error [mm] |",
+        "|---|---|---|---|---|",
+    ]
     for label, overrides in ABLATIONS.items():
         result = run_mission("uvms_mission_2", overrides)
         locations = " ".join(dict.fromkeys(loc for loc, _ in result.visited))

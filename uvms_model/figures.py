@@ -8,6 +8,7 @@ rates (Figs. 9 and 12).
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -76,9 +77,7 @@ def write_figures(result: MissionResult, out_dir: Path, prefix: str) -> list[Pat
 def _parameters(result: MissionResult) -> dict[str, float]:
     import hybrid
 
-    model = hybrid.load(
-        Path(__file__).resolve().parent.parent / "specs" / f"{result.name}.yaml"
-    )
+    model = hybrid.load(Path(__file__).resolve().parent.parent / "specs" / f"{result.name}.yaml")
     assert isinstance(model, hybrid.System)
     merged: dict[str, float] = {}
     for component in model.components:
@@ -88,7 +87,7 @@ def _parameters(result: MissionResult) -> dict[str, float]:
 
 def _shade(ax: object, result: MissionResult) -> None:
     visited = [*result.visited, ("end", float(result.run.t[-1]))]
-    for (loc, start), (_, stop) in zip(visited, visited[1:], strict=False):
+    for (loc, start), (_, stop) in itertools.pairwise(visited):
         color = _SHADE.get(loc)
         if color is not None:
             ax.axvspan(start, stop, color=color, alpha=0.15)  # type: ignore[attr-defined]

@@ -133,5 +133,10 @@ def test_registered_quintic_matches_boundary_values() -> None:
     assert fn.quintic(6.0, 2.0, p0, v0, a0, T, pf) == pytest.approx((pf, 0.0, 0.0))
     h = 1e-6
     for t in (2.5, 3.7, 5.9):
-        p_plus, p_minus = fn.quintic(t + h, 2.0, p0, v0, a0, T, pf)[0], fn.quintic(t - h, 2.0, p0, v0, a0, T, pf)[0]
-        assert (p_plus - p_minus) / (2 * h) == pytest.approx(fn.quintic(t, 2.0, p0, v0, a0, T, pf)[1], abs=1e-8)
+        p_plus, p_minus = (
+            fn.quintic(t + h, 2.0, p0, v0, a0, T, pf)[0],
+            fn.quintic(t - h, 2.0, p0, v0, a0, T, pf)[0],
+        )
+        assert (p_plus - p_minus) / (2 * h) == pytest.approx(
+            fn.quintic(t, 2.0, p0, v0, a0, T, pf)[1], abs=1e-8
+        )

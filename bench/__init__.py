@@ -1,0 +1,1 @@
+"""Benchmarks: they report numbers and are not timed tests (see each module)."""

@@ -1,0 +1,84 @@
+"""(4) Load, validate and check generated automata of growing size: time and peak memory.
+
+Each automaton has n locations on a ring, each with about 5 outgoing edges (to the
+next 5 locations), one state variable with bounds and simple guards. The growth
+exponent between sizes is log(t2/t1)/log(n2/n1): 1 is linear, n log n reads a
+little above 1.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+import tracemalloc
+from typing import Any
+
+import hybrid
+
+__all__ = ["generate", "run"]
+
+SIZES = (10, 100, 1000, 10_000)
+
+
+def generate(n: int, edges_per_location: int = 5) -> str:
+    lines = [
+        f"automaton: ring{n}",
+        "parameters: {k: 1.0}",
+        "state:",
+        "  c: {initial: 0.0, bounds: [0, 10]}",
+        "labels: [tick]",
+        "locations:",
+    ]
+    lines += [f"  l{i}: {{flow: {{c: k}}, invariant: c <= 10}}" for i in range(n)]
+    lines.append("edges:")
+    for i in range(n):
+        for d in range(1, edges_per_location + 1):
+            lines.append(
+                f"  - {{from: l{i}, to: l{(i + d) % n}, guard: c >= {d}, reset: {{c: 0}}, priority: {d}}}"
+            )
+    return "\n".join(lines) + "\n"
+
+
+def _measure(fn: Any) -> tuple[float, float, Any]:
+    tracemalloc.start()
+    start = time.perf_counter()
+    value = fn()
+    elapsed = time.perf_counter() - start
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    return elapsed, peak / 2**20, value
+
+
+def run() -> dict[str, Any]:
+    rows = []
+    for n in SIZES:
+        text = generate(n)
+        t_load, m_load, model = _measure(lambda text=text: hybrid.load_text(text))
+        try:
+            from hybrid.analysis import check
+
+            t_check, m_check, _ = _measure(lambda model=model: check(model))
+        except ImportError:
+            t_check, m_check = math.nan, math.nan
+        rows.append(
+            {
+                "locations": n,
+                "edges": 5 * n,
+                "bytes": len(text),
+                "load_s": t_load,
+                "load_peak_MiB": m_load,
+                "check_s": t_check,
+                "check_peak_MiB": m_check,
+            }
+        )
+    for a, b in itertools.pairwise(rows):
+        ratio = b["locations"] / a["locations"]
+        for key in ("load_s", "check_s"):
+            b[f"{key}_growth_exponent"] = math.log(b[key] / a[key]) / math.log(ratio)
+    return {"name": "load/validate/check scaling", "rows": rows}
+
+
+if __name__ == "__main__":
+    for row in run()["rows"]:
+        print(row)
