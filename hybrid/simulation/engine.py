@@ -192,29 +192,51 @@ def _sigint_watch(enabled: bool) -> Iterator[list[bool]]:
         signal.signal(signal.SIGINT, previous)
 
 
-class _Event:
-    """A terminal event for solve_ivp; a disarmed one reads as strictly false until re-armed.
+class _Watch:
+    """One terminal event for a whole stay in a mode.
 
-    ``sign`` is +1 for a guard (event when rho falls to 0: the guard starts to
-    hold) and -1 for an invariant (event when rho rises to 0: it stops holding).
+    Its value is the smallest of: each guard's rho (the guard starts to hold when
+    it falls to 0), each invariant's -rho (the invariant stops holding when it
+    falls to 0), and the Ctrl-C watch. So solve_ivp locates one root per crossing,
+    the earliest, as a hand-written loop with one event would. A guard or
+    invariant sitting on its boundary at entry is disarmed (reads +1) until it has
+    been strictly on the safe side once; arming changes only at step ends, where
+    time moves forward, so the root finding inside a step sees one function.
     """
 
     terminal = True
+    direction = -1.0
 
-    def __init__(self, fn: Callable[[float, Any], float], sign: float, armed: bool) -> None:
-        self.fn = fn
-        self.sign = sign
-        self.direction = -sign
+    def __init__(
+        self,
+        functions: list[Callable[[float, Any], float]],
+        signs: list[float],
+        armed: list[bool],
+        interrupt: _Interrupt,
+    ) -> None:
+        self.functions = functions
+        self.signs = signs
         self.armed = armed
+        self.interrupt = interrupt
+        self.single = functions[0] if len(functions) == 1 and armed[0] and signs[0] > 0 else None
 
     def __call__(self, t: float, x: Any) -> float:
-        value: float = self.fn(t, x)
-        if self.armed:
-            return value
-        if self.sign * value > 0.0:
-            self.armed = True
-            return value
-        return self.sign
+        value = self.interrupt(t, x)
+        single = self.single
+        if single is not None:
+            v: float = single(t, x)
+            return v if v < value else value
+        armed = self.armed
+        for i, (fn, sign) in enumerate(zip(self.functions, self.signs, strict=True)):
+            v = sign * fn(t, x)
+            if not armed[i]:
+                if v > 0.0:
+                    armed[i] = True
+                else:
+                    continue
+            if v < value:
+                value = v
+        return value
 
 
 class _Interrupt:
@@ -475,14 +497,15 @@ class _Loop:
         settings = self.settings
         t_end: float = settings["t_end"]
         band = self._band(x0)
-        guard_events = [
-            _Event(tr.rho, 1.0, a) for tr, a in zip(mode.transitions, armed, strict=True)
-        ]
-        inv_events = []
-        for inv in mode.invariants:
-            inside = inv.rho(t0, x0) < -band
-            inv_events.append(_Event(inv.rho, -1.0, inside))
-        events: list[Any] = [*guard_events, *inv_events, _Interrupt(self.interrupted, t0)]
+        inv_armed = [inv.rho(t0, x0) < -band for inv in mode.invariants]
+        interrupt = _Interrupt(self.interrupted, t0)
+        watch = _Watch(
+            [*(tr.rho for tr in mode.transitions), *(inv.rho for inv in mode.invariants)],
+            [1.0] * len(mode.transitions) + [-1.0] * len(mode.invariants),
+            [*armed, *inv_armed],
+            interrupt,
+        )
+        events: list[Any] = [watch]
         dense = settings["dt"] is not None or settings["dense"]
         self.dyn.flow_failure.clear()
         sol = solve_ivp(
@@ -528,30 +551,29 @@ class _Loop:
             )
         if sol.status == 0:
             return Termination("t_end", t, j, "reached t_end", location=mode.name)
-        n_guards = len(guard_events)
-        fired = [len(te) > 0 for te in sol.t_events]
-        if fired[-1] or self.interrupted[0]:
+        if interrupt.at is not None or self.interrupted[0]:
             return Termination("interrupted", t, j, "interrupted by the user", location=mode.name)
+        band = self._band(x)
         enabled: list[CompiledTransition] = []
         for i, tr in enumerate(mode.transitions):
-            # a crossing found by the solver still has to pass the boundary rule: rho may
+            # a crossing the solver found still has to pass the boundary rule: rho may
             # reach 0 and stay there while a strict guard never holds (e.g. `0 > 0 and ...`)
-            if self._holds_now(tr, mode, t, x, guard_events[i].armed or fired[i])[0]:
+            armed_now = watch.armed[i] or tr.rho(t, x) <= band
+            if self._holds_now(tr, mode, t, x, armed_now)[0]:
                 enabled.append(tr)
         if self._failed() is not None:
             return self._eval_failure(t, j, mode)
         chosen = _choose(enabled)
-        if chosen is None and any(fired[n_guards:-1]):
-            left = [
-                inv.name for inv, f in zip(mode.invariants, fired[n_guards:-1], strict=True) if f
-            ]
-            return Termination(
-                "blocked",
-                t,
-                j,
-                f"invariant of {left[0]} is about to be left and no transition is enabled",
-                location=mode.name,
-            )
+        if chosen is None:
+            left = self._invariant_left_at(mode, t, x)
+            if left is not None:
+                return Termination(
+                    "blocked",
+                    t,
+                    j,
+                    f"invariant of {left} is about to be left and no transition is enabled",
+                    location=mode.name,
+                )
         return t, x, chosen, enabled
 
     def _store_segment(

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+import yaml.cyaml  # noqa: F401  (exists whenever __with_libyaml__)
 
 from hybrid.errors import Position, SpecError
 
@@ -95,20 +96,10 @@ _Resolver.add_implicit_resolver(
 )
 
 
-class _Loader(
-    yaml.reader.Reader,
-    yaml.scanner.Scanner,
-    yaml.parser.Parser,
-    yaml.composer.Composer,
-    _Resolver,
-):
-    def __init__(self, stream: str) -> None:
-        yaml.reader.Reader.__init__(self, stream)
-        yaml.scanner.Scanner.__init__(self)
-        yaml.parser.Parser.__init__(self)
-        yaml.composer.Composer.__init__(self)
-        _Resolver.__init__(self)
-        self._depth = 0
+class _Checks(yaml.composer.Composer):
+    """Our composer: refuses aliases, anchors, tags and deep nesting at each node."""
+
+    _depth = 0
 
     def compose_node(self, parent: Any, index: Any) -> Any:
         event = self.peek_event()  # type: ignore[no-untyped-call]
@@ -131,6 +122,38 @@ class _Loader(
             finally:
                 self._depth -= 1
         return super().compose_node(parent, index)
+
+
+class _PyLoader(
+    _Checks,
+    yaml.reader.Reader,
+    yaml.scanner.Scanner,
+    yaml.parser.Parser,
+    _Resolver,
+):
+    """Pure-Python scanning and parsing."""
+
+    def __init__(self, stream: str) -> None:
+        yaml.reader.Reader.__init__(self, stream)
+        yaml.scanner.Scanner.__init__(self)
+        yaml.parser.Parser.__init__(self)
+        yaml.composer.Composer.__init__(self)
+        _Resolver.__init__(self)
+
+
+if getattr(yaml, "__with_libyaml__", False):
+
+    class _CLoader(_Checks, yaml.cyaml.CParser, _Resolver):  # type: ignore[misc]
+        """libyaml scans and parses (in C); our composer, first in the MRO, builds the nodes."""
+
+        def __init__(self, stream: str) -> None:
+            yaml.cyaml.CParser.__init__(self, stream)
+            yaml.composer.Composer.__init__(self)
+            _Resolver.__init__(self)
+
+    _Loader: type = _CLoader
+else:  # pragma: no cover - libyaml ships in PyYAML's wheels
+    _Loader = _PyLoader
 
 
 class _Refused(Exception):
@@ -217,6 +240,12 @@ def read_yaml_bytes(raw: bytes, file: str, *, max_bytes: int = MAX_FILE_BYTES) -
     return read_yaml_text(text, file, max_bytes=max_bytes)
 
 
+# YAML's printable set (YAML 1.2, 5.1): tab, line breaks and printable Unicode.
+_NOT_PRINTABLE = re.compile(
+    "[^\x09\x0a\x0d\x20-\x7e\x85\xa0-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]"
+)
+
+
 def read_yaml_text(
     text: str, file: str = "<string>", *, max_bytes: int = MAX_FILE_BYTES
 ) -> YamlDocument:
@@ -227,17 +256,17 @@ def read_yaml_text(
         )
     if text.startswith("\ufeff"):
         text = text[1:]
-    try:
-        loader = _Loader(text)
-    except yaml.reader.ReaderError as exc:
-        at = int(exc.position)
+    bad = _NOT_PRINTABLE.search(text)
+    if bad is not None:
+        at = bad.start()
         line = text.count("\n", 0, at) + 1
         column = at - (text.rfind("\n", 0, at) + 1) + 1
         raise SpecError(
-            f"character U+{int(exc.character):04X} is not allowed in YAML "
+            f"character U+{ord(bad.group()):04X} is not allowed in YAML "
             "(control characters other than tab and line breaks are refused)",
             Position(file, line, column),
-        ) from None
+        )
+    loader = _Loader(text)
     try:
         node = loader.get_single_node()
     except _Refused as exc:

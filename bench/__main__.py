@@ -1,0 +1,53 @@
+"""``make bench``: run every benchmark, print a summary, write bench/results.json.
+
+``python -m bench [--quick]``: --quick uses fewer repeats (for a smoke run).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from bench import engine_overhead, peers, rhs_call, spec_scaling, uvms_realtime
+from bench.harness import machine
+
+RESULTS = Path(__file__).resolve().parent / "results.json"
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = sys.argv[1:] if argv is None else argv
+    quick = "--quick" in args
+    repeats = 3 if quick else 15
+    started = time.perf_counter()
+    report: dict[str, Any] = {"machine": machine(), "comparisons": []}
+    for module, kwargs in (
+        (engine_overhead, {"repeats": repeats}),
+        (rhs_call, {"repeats": repeats}),
+        (uvms_realtime, {"repeats": max(3, repeats // 2)}),
+    ):
+        for result in module.run(**kwargs):
+            print(result.line(), json.dumps(result.extra))
+            report["comparisons"].append(result.as_dict())
+    scaling = spec_scaling.run()
+    for row in scaling["rows"]:
+        print(scaling["name"], row)
+    report["scaling"] = scaling
+    from bench import product_exploration
+
+    product = product_exploration.run(8 if quick else 12)
+    print("product exploration", product)
+    report["product_exploration"] = product
+    report["peers"] = peers.run()
+    print("peers", report["peers"])
+    report["total_s"] = time.perf_counter() - started
+    if not quick:
+        RESULTS.write_text(json.dumps(report, indent=2) + "\n")
+        print(f"written {RESULTS}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
