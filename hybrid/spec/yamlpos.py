@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-import yaml.cyaml  # noqa: F401  (exists whenever __with_libyaml__)
+import yaml.cyaml  # the C parser lives here when PyYAML has libyaml
 
 from hybrid.errors import Position, SpecError
 
