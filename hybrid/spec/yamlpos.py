@@ -26,7 +26,6 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-import yaml.cyaml  # the C parser lives here when PyYAML has libyaml
 
 from hybrid.errors import Position, SpecError
 
@@ -102,7 +101,7 @@ class _Checks(yaml.composer.Composer):
     _depth = 0
 
     def compose_node(self, parent: Any, index: Any) -> Any:
-        event = self.peek_event()  # type: ignore[no-untyped-call]
+        event = self.peek_event()  # type: ignore[attr-defined]
         if isinstance(event, yaml.AliasEvent):
             raise _Refused("YAML aliases (*name) are not allowed in specs", event.start_mark)
         anchor = getattr(event, "anchor", None)
@@ -141,13 +140,19 @@ class _PyLoader(
         _Resolver.__init__(self)
 
 
+_CParser: Any = None
 if getattr(yaml, "__with_libyaml__", False):
+    import yaml.cyaml
 
-    class _CLoader(_Checks, yaml.cyaml.CParser, _Resolver):  # type: ignore[misc]
+    _CParser = getattr(yaml.cyaml, "CParser", None)
+
+if _CParser is not None:
+
+    class _CLoader(_Checks, _CParser, _Resolver):  # type: ignore[misc]
         """libyaml scans and parses (in C); our composer, first in the MRO, builds the nodes."""
 
         def __init__(self, stream: str) -> None:
-            yaml.cyaml.CParser.__init__(self, stream)
+            _CParser.__init__(self, stream)
             yaml.composer.Composer.__init__(self)
             _Resolver.__init__(self)
 
