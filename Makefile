@@ -30,6 +30,7 @@ typecheck: $(STAMP_TEST)
 
 check-specs: $(STAMP_TEST)
 	$(BIN)/hybrid validate specs/*.yaml
+	$(BIN)/hybrid check specs/*.yaml
 
 test: lint typecheck check-specs
 	$(BIN)/python -m pytest -q

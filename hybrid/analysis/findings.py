@@ -1,0 +1,208 @@
+"""Findings of `hybrid check`, their rules and severities, and the report holding them.
+
+Severities, and why:
+
+================================  ========  ============================================
+rule                              severity  reason
+================================  ========  ============================================
+``property-violated``             error     the spec promised it; CI must fail
+``sink-location``                 error     a run that gets there ends ``blocked``
+``invalid-spec``                  error     the file cannot be checked at all
+``unreachable-location``          warning   dead model text, often a typo in a guard
+``dead-edge``                     warning   the same, for an edge
+``nondeterminism``                warning   the simulator picks by file order; say so
+``zero-time-cycle``               warning   a Zeno candidate; may be intended
+``unused-declaration``            warning   usually a typo or leftover
+``analysis-incomplete``           note      the product was too large to explore whole
+================================  ========  ============================================
+
+``hybrid check`` exits 1 on any error finding, and with ``--strict`` on any
+warning too; notes never fail a run.
+
+Examples
+--------
+>>> from hybrid.errors import Position
+>>> f = Finding.at("dead-edge", Position("a.yaml", 3, 5), "edge 'e' can never fire", where="e")
+>>> f.text()
+"a.yaml:3:5: warning dead-edge: edge 'e' can never fire"
+>>> Report((f,)).ok, Report((f,)).failed(strict=True)
+(True, True)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from typing import Any
+
+from hybrid.errors import Position
+
+__all__ = ["RULES", "SEVERITIES", "Finding", "Report", "Rule", "WitnessStep"]
+
+SEVERITIES = ("error", "warning", "note")
+
+
+@dataclass(frozen=True)
+class Rule:
+    """A rule id with its default severity and descriptions (used by SARIF too)."""
+
+    id: str
+    severity: str
+    summary: str
+    description: str
+
+
+RULES: dict[str, Rule] = {
+    r.id: r
+    for r in (
+        Rule(
+            "unreachable-location",
+            "warning",
+            "Location cannot be reached",
+            "No path from the initial location along edges whose guards can hold within the "
+            "declared bounds (and, in a system, that can synchronise) reaches this location.",
+        ),
+        Rule(
+            "sink-location",
+            "error",
+            "Location with no way out",
+            "The invariant of this location can be left by the flow, but no edge out of it can "
+            "ever fire: a run that gets here ends blocked.",
+        ),
+        Rule(
+            "dead-edge",
+            "warning",
+            "Edge can never fire",
+            "The guard cannot hold anywhere within the declared bounds and the closure of the "
+            "source invariant, or (in a system) its label never synchronises.",
+        ),
+        Rule(
+            "nondeterminism",
+            "warning",
+            "Edges enabled at once",
+            "Two edges of one location with the same priority have guards that can hold at the "
+            "same point; the simulator then takes the first in file order.",
+        ),
+        Rule(
+            "zero-time-cycle",
+            "warning",
+            "Cycle without time passing",
+            "A cycle of edges each of whose guards can hold right after the previous edge's "
+            "reset: the run may jump forever at one instant (a Zeno candidate).",
+        ),
+        Rule(
+            "unused-declaration",
+            "warning",
+            "Declaration never used",
+            "A parameter or input no expression reads, or a label no edge carries. Signals "
+            "are outputs (written to the trajectory) and are never reported.",
+        ),
+        Rule(
+            "property-violated",
+            "error",
+            "Declared property does not hold",
+            "A property under `properties:` (reachable, unreachable, deadlock_free, "
+            "deterministic) is refuted, with a witness path where there is one.",
+        ),
+        Rule(
+            "analysis-incomplete",
+            "note",
+            "Product too large to explore whole",
+            "Exploration of the product stopped at its state limit; findings that need the "
+            "whole reachable product are not reported.",
+        ),
+        Rule(
+            "invalid-spec",
+            "error",
+            "Spec cannot be loaded",
+            "The file is not a valid spec; `hybrid validate` gives the same message.",
+        ),
+    )
+}
+
+WitnessStep = tuple[str | None, str]  # (transition taken, mode reached); first: (None, initial)
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One finding, placed in a spec file.
+
+    ``where`` names what it is about (a location, an edge, a property);
+    ``witness`` is a path of ``(transition, mode)`` steps from the initial mode
+    where one exists (the first step has no transition).
+    """
+
+    rule: str
+    severity: str
+    file: str
+    line: int
+    column: int
+    message: str
+    where: str = ""
+    witness: tuple[WitnessStep, ...] = field(default=())
+
+    @classmethod
+    def at(
+        cls,
+        rule: str,
+        position: Position,
+        message: str,
+        *,
+        where: str = "",
+        witness: Iterable[WitnessStep] = (),
+        severity: str | None = None,
+    ) -> Finding:
+        """A finding of ``rule`` at ``position`` (severity: the rule's default)."""
+        return cls(
+            rule,
+            severity or RULES[rule].severity,
+            position.file,
+            position.line,
+            position.column,
+            message,
+            where,
+            tuple(witness),
+        )
+
+    def text(self) -> str:
+        """``file:line:column: severity rule-id: message``."""
+        return f"{self.file}:{self.line}:{self.column}: {self.severity} {self.rule}: {self.message}"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON object of the contract (plus ``witness``, a list of steps)."""
+        return {
+            "rule": self.rule,
+            "severity": self.severity,
+            "file": self.file,
+            "line": self.line,
+            "column": self.column,
+            "message": self.message,
+            "where": self.where,
+            "witness": [{"transition": t, "mode": m} for t, m in self.witness],
+        }
+
+    def sort_key(self) -> tuple[str, int, int, str, str]:
+        return (self.file, self.line, self.column, self.rule, self.message)
+
+
+@dataclass(frozen=True)
+class Report:
+    """The findings of one model. ``ok`` is true when none of them is an error."""
+
+    findings: tuple[Finding, ...] = ()
+    name: str = ""
+    file: str = ""
+
+    @property
+    def ok(self) -> bool:
+        return not any(f.severity == "error" for f in self.findings)
+
+    def count(self, severity: str) -> int:
+        return sum(1 for f in self.findings if f.severity == severity)
+
+    def failed(self, *, strict: bool = False) -> bool:
+        """Whether `hybrid check` exits 1 for this report."""
+        return not self.ok or (strict and self.count("warning") > 0)
+
+    def by_rule(self, rule: str) -> list[Finding]:
+        return [f for f in self.findings if f.rule == rule]

@@ -1,0 +1,200 @@
+"""Writers of `hybrid check` reports: text, json, github, junit, sarif.
+
+Each writer takes the reports of all files checked (an invalid file is a
+report holding its ``invalid-spec`` findings) and returns the whole output as
+one string. The text writer leaves ``invalid-spec`` findings out: the command
+prints those to stderr, as ``hybrid validate`` does.
+
+Examples
+--------
+>>> from hybrid.errors import Position
+>>> f = Finding.at("dead-edge", Position("a.yaml", 3, 5), "edge 'e' can never fire")
+>>> print(write("text", [Report((f,), "a", "a.yaml"), Report((), "b", "b.yaml")]))
+a.yaml:3:5: warning dead-edge: edge 'e' can never fire
+b.yaml: ok
+>>> print(write("github", [Report((f,), "a", "a.yaml")]))
+::warning file=a.yaml,line=3,col=5,title=dead-edge::edge 'e' can never fire
+"""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+from collections.abc import Callable, Sequence
+from pathlib import PurePath
+from typing import Any
+from urllib.parse import quote
+
+from hybrid.analysis.findings import RULES, Finding, Report
+
+__all__ = ["FORMATS", "SARIF_SCHEMA", "write"]
+
+SARIF_SCHEMA = "https://json.schemastore.org/sarif-2.1.0.json"
+TOOL_VERSION = "0.1.0"
+_GITHUB_LEVEL = {"error": "error", "warning": "warning", "note": "notice"}
+
+
+def _all(reports: Sequence[Report]) -> list[Finding]:
+    return [f for r in reports for f in r.findings]
+
+
+def text(reports: Sequence[Report], strict: bool = False) -> str:
+    """One ``file:line:column: severity rule-id: message`` line per finding; ``file: ok`` if none."""
+    lines: list[str] = []
+    for report in reports:
+        shown = [f for f in report.findings if f.rule != "invalid-spec"]
+        lines.extend(f.text() for f in shown)
+        if not report.findings:
+            lines.append(f"{report.file}: ok")
+    return "\n".join(lines)
+
+
+def json_report(reports: Sequence[Report], strict: bool = False) -> str:
+    """``{"ok": bool, "findings": [...]}``; ``ok`` is false if any finding is an error."""
+    findings = _all(reports)
+    ok = not any(f.severity == "error" for f in findings)
+    return json.dumps({"ok": ok, "findings": [f.to_dict() for f in findings]}, indent=2)
+
+
+def _escape_data(value: str) -> str:
+    return value.replace("%", "%25").replace("\r", "%0D").replace("\n", "%0A")
+
+
+def _escape_property(value: str) -> str:
+    return _escape_data(value).replace(":", "%3A").replace(",", "%2C")
+
+
+def github(reports: Sequence[Report], strict: bool = False) -> str:
+    """GitHub Actions workflow commands: ``::error file=…,line=…,col=…,title=rule::message``."""
+    lines = []
+    for f in _all(reports):
+        props = ",".join(
+            f"{k}={_escape_property(str(v))}"
+            for k, v in (("file", f.file), ("line", f.line), ("col", f.column), ("title", f.rule))
+        )
+        lines.append(f"::{_GITHUB_LEVEL[f.severity]} {props}::{_escape_data(f.message)}")
+    return "\n".join(lines)
+
+
+def junit(reports: Sequence[Report], strict: bool = False) -> str:
+    """JUnit XML: a test suite per file, a test case per finding and per rule with none.
+
+    Errors are ``<failure>`` (warnings too with ``strict``), an invalid spec is an
+    ``<error>``; other findings pass with the message in ``<system-out>``.
+    """
+    root = ET.Element("testsuites", name="hybrid check")
+    total = failed = errored = 0
+    for report in reports:
+        suite = ET.SubElement(root, "testsuite", name=report.file)
+        tests = failures = errors = 0
+        for f in report.findings:
+            case = ET.SubElement(
+                suite,
+                "testcase",
+                classname=report.file,
+                name=f"{f.rule}: {f.where}" if f.where else f.rule,
+                file=f.file,
+                line=str(f.line),
+            )
+            tests += 1
+            if f.rule == "invalid-spec":
+                ET.SubElement(case, "error", message=f.message, type=f.rule).text = f.text()
+                errors += 1
+            elif f.severity == "error" or (strict and f.severity == "warning"):
+                ET.SubElement(case, "failure", message=f.message, type=f.rule).text = f.text()
+                failures += 1
+            else:
+                ET.SubElement(case, "system-out").text = f.text()
+        if not any(f.rule == "invalid-spec" for f in report.findings):
+            hit = {f.rule for f in report.findings}
+            for rule in RULES:
+                if rule not in hit and rule not in ("invalid-spec", "analysis-incomplete"):
+                    ET.SubElement(suite, "testcase", classname=report.file, name=rule)
+                    tests += 1
+        suite.set("tests", str(tests))
+        suite.set("failures", str(failures))
+        suite.set("errors", str(errors))
+        suite.set("skipped", "0")
+        total, failed, errored = total + tests, failed + failures, errored + errors
+    root.set("tests", str(total))
+    root.set("failures", str(failed))
+    root.set("errors", str(errored))
+    ET.indent(root)
+    return ET.tostring(root, encoding="unicode", xml_declaration=True)
+
+
+def _uri(file: str) -> str:
+    path = PurePath(file)
+    if path.is_absolute():
+        return path.as_uri()
+    return quote(path.as_posix())
+
+
+def sarif(reports: Sequence[Report], strict: bool = False) -> str:
+    """SARIF 2.1.0: one run, every rule described, one result per finding."""
+    rule_ids = list(RULES)
+    rules = [
+        {
+            "id": r.id,
+            "name": "".join(w.capitalize() for w in r.id.split("-")),
+            "shortDescription": {"text": r.summary},
+            "fullDescription": {"text": r.description},
+            "defaultConfiguration": {"level": r.severity},
+            "help": {"text": r.description},
+        }
+        for r in RULES.values()
+    ]
+    results: list[dict[str, Any]] = []
+    for f in _all(reports):
+        location: dict[str, Any] = {
+            "physicalLocation": {
+                "artifactLocation": {"uri": _uri(f.file)},
+                "region": {"startLine": max(f.line, 1), "startColumn": max(f.column, 1)},
+            }
+        }
+        if f.where:
+            location["logicalLocations"] = [{"name": f.where, "fullyQualifiedName": f.where}]
+        result: dict[str, Any] = {
+            "ruleId": f.rule,
+            "ruleIndex": rule_ids.index(f.rule),
+            "level": f.severity,
+            "message": {"text": f.message},
+            "locations": [location],
+        }
+        if f.witness:
+            result["properties"] = {"witness": [{"transition": t, "mode": m} for t, m in f.witness]}
+        results.append(result)
+    invalid = any(f.rule == "invalid-spec" for f in _all(reports))
+    log = {
+        "$schema": SARIF_SCHEMA,
+        "version": "2.1.0",
+        "runs": [
+            {
+                "tool": {
+                    "driver": {
+                        "name": "hybrid",
+                        "version": TOOL_VERSION,
+                        "rules": rules,
+                    }
+                },
+                "invocations": [{"executionSuccessful": not invalid}],
+                "columnKind": "unicodeCodePoints",
+                "results": results,
+            }
+        ],
+    }
+    return json.dumps(log, indent=2)
+
+
+FORMATS: dict[str, Callable[[Sequence[Report], bool], str]] = {
+    "text": text,
+    "json": json_report,
+    "github": github,
+    "junit": junit,
+    "sarif": sarif,
+}
+
+
+def write(fmt: str, reports: Sequence[Report], *, strict: bool = False) -> str:
+    """The reports in format ``fmt`` (one of :data:`FORMATS`)."""
+    return FORMATS[fmt](reports, strict)
