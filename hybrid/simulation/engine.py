@@ -114,7 +114,7 @@ def simulate(
         model = model.with_initial(initial_location, initial)
     elif isinstance(model, System) and initial_location:
         raise SimulationError("initial_location applies to an automaton; set it per component")
-    dyn = Dynamics(model, inputs)
+    dyn = _dynamics(model, inputs)
     x0 = np.array(_initial_vector(model, dyn, initial), dtype=float)
     settings = {
         "t_start": t_start,
@@ -132,6 +132,33 @@ def simulate(
         loop.interrupted = interrupted
         termination = loop.run(t_start, x0)
     return loop.result(model.name, termination, settings)
+
+
+_CACHE = threading.local()
+_CACHE_SIZE = 8
+
+
+def _dynamics(
+    model: Automaton | System, inputs: Mapping[str, Callable[[float], float]] | None
+) -> Dynamics:
+    """Compiled dynamics of ``model``, reused across runs of the same model in a thread.
+
+    Compiling a mode's functions costs far more than a jump; a parameter sweep or
+    a benchmark simulates one model many times. Models with external inputs are
+    compiled afresh (the inputs are bound into the code).
+    """
+    if inputs:
+        return Dynamics(model, inputs)
+    cache: dict[int, tuple[Automaton | System, Dynamics]] = getattr(_CACHE, "models", None) or {}
+    _CACHE.models = cache
+    hit = cache.get(id(model))
+    if hit is not None and hit[0] is model:
+        return hit[1]
+    dyn = Dynamics(model)
+    if len(cache) >= _CACHE_SIZE:
+        cache.pop(next(iter(cache)))
+    cache[id(model)] = (model, dyn)
+    return dyn
 
 
 def _check_settings(
@@ -192,51 +219,51 @@ def _sigint_watch(enabled: bool) -> Iterator[list[bool]]:
         signal.signal(signal.SIGINT, previous)
 
 
-class _Watch:
-    """One terminal event for a whole stay in a mode.
+def _watch_factory(signs: tuple[float, ...], armed: tuple[bool, ...]) -> Callable[..., Any]:
+    """Source-built factory of the one terminal event of a stay in a mode.
 
-    Its value is the smallest of: each guard's rho (the guard starts to hold when
-    it falls to 0), each invariant's -rho (the invariant stops holding when it
-    falls to 0), and the Ctrl-C watch. So solve_ivp locates one root per crossing,
-    the earliest, as a hand-written loop with one event would. A guard or
-    invariant sitting on its boundary at entry is disarmed (reads +1) until it has
-    been strictly on the safe side once; arming changes only at step ends, where
-    time moves forward, so the root finding inside a step sees one function.
+    The event's value is the smallest of: each guard's rho (the guard starts to
+    hold when it falls to 0) and each invariant's -rho (the invariant stops
+    holding when it falls to 0); so solve_ivp locates one root per crossing, the
+    earliest, as a hand-written loop with one event would. A guard or invariant
+    on its boundary at entry is disarmed: it is left out until it has been
+    strictly on its safe side once (arming changes only at step ends, where time
+    moves forward, so root finding inside a step sees one function). Ctrl-C is
+    read from a flag; only once set does the interrupt watch take over.
+
+    The source comes from this template and the arming pattern only (no user
+    text); factories are cached per mode and pattern by the caller.
     """
-
-    terminal = True
-    direction = -1.0
-
-    def __init__(
-        self,
-        functions: list[Callable[[float, Any], float]],
-        signs: list[float],
-        armed: list[bool],
-        interrupt: _Interrupt,
-    ) -> None:
-        self.functions = functions
-        self.signs = signs
-        self.armed = armed
-        self.interrupt = interrupt
-        self.single = functions[0] if len(functions) == 1 and armed[0] and signs[0] > 0 else None
-
-    def __call__(self, t: float, x: Any) -> float:
-        value = self.interrupt(t, x)
-        single = self.single
-        if single is not None:
-            v: float = single(t, x)
-            return v if v < value else value
-        armed = self.armed
-        for i, (fn, sign) in enumerate(zip(self.functions, self.signs, strict=True)):
-            v = sign * fn(t, x)
-            if not armed[i]:
-                if v > 0.0:
-                    armed[i] = True
-                else:
-                    continue
-            if v < value:
-                value = v
-        return value
+    lines = [
+        "def make(_fns, _flag, _interrupt, _armed):",
+        *(f"    _f{i} = _fns[{i}]" for i in range(len(signs))),
+        "    def watch(t, x):",
+        "        if _flag[0]:",
+        "            return _interrupt(t, x)",
+        "        v = 1.0e308",
+    ]
+    for i, (sign, is_armed) in enumerate(zip(signs, armed, strict=True)):
+        term = f"{'-' if sign < 0 else ''}_f{i}(t, x)"
+        lines.append(f"        w = {term}")
+        if not is_armed:
+            lines += [
+                f"        if not _armed[{i}]:",
+                "            if w > 0.0:",
+                f"                _armed[{i}] = True",
+                "            else:",
+                "                w = 1.0e308",
+            ]
+        lines += ["        if w < v:", "            v = w"]
+    lines += [
+        "        return v if v < 1.0e308 else 1.0",
+        "    watch.terminal = True",
+        "    watch.direction = -1.0",
+        "    return watch",
+    ]
+    scope: dict[str, Any] = {"__builtins__": {}}
+    exec(compile("\n".join(lines) + "\n", "<hybrid:watch>", "exec"), scope)
+    factory: Callable[..., Any] = scope["make"]
+    return factory
 
 
 class _Interrupt:
@@ -271,37 +298,36 @@ class _Loop:
     zeno_enabled: bool
     max_per_instant: int
     interrupted: list[bool] = field(default_factory=lambda: [False])
-    t_rows: list[np.ndarray] = field(default_factory=list)
-    x_rows: list[np.ndarray] = field(default_factory=list)
-    j_rows: list[np.ndarray] = field(default_factory=list)
-    loc_rows: list[tuple[str, int]] = field(default_factory=list)
-    sig_rows: list[np.ndarray] = field(default_factory=list)
+    chunks: list[tuple[CompiledMode, int, np.ndarray, np.ndarray, list[Any]]] = field(
+        default_factory=list
+    )
+    watch_factories: dict[tuple[Any, ...], Callable[..., Any]] = field(default_factory=dict)
     jumps: list[Jump] = field(default_factory=list)
     segments: list[tuple[int, float, float, Any]] = field(default_factory=list)
 
     # --- storing points -----------------------------------------------------------------
 
     def _store(self, mode: CompiledMode, j: int, ts: np.ndarray, xs: np.ndarray) -> None:
-        """Store points ``ts`` (n,) with states ``xs`` (n, d) in ``mode`` at hybrid time ``j``."""
-        if ts.size == 0:
-            return
-        self.t_rows.append(ts)
-        self.x_rows.append(xs)
-        self.j_rows.append(np.full(ts.size, j, dtype=np.int64))
-        self.loc_rows.append((mode.name, ts.size))
-        outputs = mode.outputs
-        sig = np.array([outputs(float(t), x) for t, x in zip(ts, xs, strict=True)], dtype=float)
-        self.sig_rows.append(sig.reshape(ts.size, len(self.dyn.columns)))
+        """Store points ``ts`` (n,) with states ``xs`` (n, d) in ``mode`` at hybrid time ``j``.
+
+        Signals are computed now (a failing one must end the run here) into plain
+        lists; the arrays are assembled once, in :meth:`result`.
+        """
+        if ts.size:
+            outputs = mode.outputs
+            signals = [outputs(t, x) for t, x in zip(ts.tolist(), xs, strict=True)]
+            self.chunks.append((mode, j, ts, xs, signals))
 
     def result(self, name: str, termination: Termination, settings: dict[str, Any]) -> Run:
-        n_states = len(self.dyn.state_names)
-        t = np.concatenate(self.t_rows) if self.t_rows else np.empty(0)
-        states = np.vstack(self.x_rows) if self.x_rows else np.empty((0, n_states))
-        signals = (
-            np.vstack(self.sig_rows) if self.sig_rows else np.empty((0, len(self.dyn.columns)))
-        )
-        j = np.concatenate(self.j_rows) if self.j_rows else np.empty(0, dtype=np.int64)
-        location = np.array([loc for loc, n in self.loc_rows for _ in range(n)], dtype=np.str_)
+        n_states, n_signals = len(self.dyn.state_names), len(self.dyn.columns)
+        chunks = self.chunks
+        sizes = [c[2].size for c in chunks]
+        t = np.concatenate([c[2] for c in chunks]) if chunks else np.empty(0)
+        states = np.vstack([c[3] for c in chunks]) if chunks else np.empty((0, n_states))
+        j = np.repeat(np.array([c[1] for c in chunks], dtype=np.int64), sizes)
+        location = np.repeat(np.array([c[0].name for c in chunks], dtype=np.str_), sizes)
+        rows = [row for c in chunks for row in c[4]]
+        signals = np.array(rows, dtype=float).reshape(len(rows), n_signals)
         return Run(
             model=name,
             state_names=tuple(self.dyn.state_names),
@@ -326,7 +352,7 @@ class _Loop:
         j = 0
         t_end: float = self.settings["t_end"]
         max_jumps: int = self.settings["max_jumps"]
-        if not np.all(np.isfinite(x)):
+        if not _finite(x):
             return Termination("nonfinite", t, j, "initial state is not finite", location=mode.name)
         self._store(mode, j, np.array([t]), x.reshape(1, -1))
         zeno = ZenoDetector()
@@ -393,7 +419,7 @@ class _Loop:
             j += 1
             if self._failed() is not None:
                 return self._eval_failure(t, j, mode)
-            if not np.all(np.isfinite(x)):
+            if not _finite(x):
                 return Termination(
                     "nonfinite",
                     t,
@@ -434,22 +460,28 @@ class _Loop:
     # --- entry and event decisions ------------------------------------------------------
 
     def _band(self, x: np.ndarray) -> float:
-        return 1e-10 * (1.0 + float(np.max(np.abs(x)))) if x.size else 1e-10
+        """Values of rho within this of 0 count as on the boundary."""
+        return 1e-10 * (1.0 + max(map(abs, x.tolist()), default=0.0))
 
     def _slope(
         self, fn: Callable[[float, Any], float], mode: CompiledMode, t: float, x: np.ndarray
     ) -> float:
         """d/dt of ``fn`` along the flow, by a small forward difference."""
         h = 1e-7 * max(1.0, abs(t))
-        dx = np.asarray(mode.rhs(t, x), dtype=float)
-        return (fn(t + h, x + h * dx) - fn(t, x)) / h
+        ahead = [xi + h * di for xi, di in zip(x.tolist(), mode.rhs(t, x), strict=True)]
+        return float((fn(t + h, np.array(ahead)) - fn(t, x)) / h)
 
     def _holds_now(
-        self, cond: CompiledCondition, mode: CompiledMode, t: float, x: np.ndarray, armed: bool
+        self,
+        cond: CompiledCondition,
+        mode: CompiledMode,
+        t: float,
+        x: np.ndarray,
+        armed: bool,
+        band: float,
     ) -> tuple[bool, bool]:
         """(enabled now, armed) for a guard at a point where no event says so."""
         value = cond.rho(t, x)
-        band = self._band(x)
         if value < -band:
             return True, True
         if value > band:
@@ -468,8 +500,9 @@ class _Loop:
     ) -> tuple[CompiledTransition | None, list[CompiledTransition], list[bool]]:
         enabled: list[CompiledTransition] = []
         armed: list[bool] = []
+        band = self._band(x)
         for tr in mode.transitions:
-            now, is_armed = self._holds_now(tr, mode, t, x, True)
+            now, is_armed = self._holds_now(tr, mode, t, x, True, band)
             armed.append(is_armed)
             if now:
                 enabled.append(tr)
@@ -499,13 +532,14 @@ class _Loop:
         band = self._band(x0)
         inv_armed = [inv.rho(t0, x0) < -band for inv in mode.invariants]
         interrupt = _Interrupt(self.interrupted, t0)
-        watch = _Watch(
-            [*(tr.rho for tr in mode.transitions), *(inv.rho for inv in mode.invariants)],
-            [1.0] * len(mode.transitions) + [-1.0] * len(mode.invariants),
-            [*armed, *inv_armed],
-            interrupt,
-        )
-        events: list[Any] = [watch]
+        functions = [*(tr.rho for tr in mode.transitions), *(inv.rho for inv in mode.invariants)]
+        signs = (1.0,) * len(mode.transitions) + (-1.0,) * len(mode.invariants)
+        pattern = (*armed, *inv_armed)
+        factory = self.watch_factories.get((mode.key, pattern))
+        if factory is None:
+            factory = self.watch_factories[(mode.key, pattern)] = _watch_factory(signs, pattern)
+        watch_armed = list(pattern)
+        events: list[Any] = [factory(functions, interrupt.flag, interrupt, watch_armed)]
         dense = settings["dt"] is not None or settings["dense"]
         self.dyn.flow_failure.clear()
         sol = solve_ivp(
@@ -527,7 +561,9 @@ class _Loop:
         if self.dyn.failure.error is not None:
             return self._eval_failure(t, j, mode)
         flow_failure = self.dyn.flow_failure
-        finite = bool(np.all(np.isfinite(xs)))
+        # a state that becomes non-finite makes the solver fail, so the last row is enough
+        # unless it did
+        finite = _finite(x) if sol.status != -1 else bool(np.isfinite(xs).all())
         if flow_failure.error is not None and (sol.status == -1 or not finite):
             return Termination(
                 "nonfinite",
@@ -558,8 +594,8 @@ class _Loop:
         for i, tr in enumerate(mode.transitions):
             # a crossing the solver found still has to pass the boundary rule: rho may
             # reach 0 and stay there while a strict guard never holds (e.g. `0 > 0 and ...`)
-            armed_now = watch.armed[i] or tr.rho(t, x) <= band
-            if self._holds_now(tr, mode, t, x, armed_now)[0]:
+            armed_now = watch_armed[i] or tr.rho(t, x) <= band
+            if self._holds_now(tr, mode, t, x, armed_now, band)[0]:
                 enabled.append(tr)
         if self._failed() is not None:
             return self._eval_failure(t, j, mode)
@@ -603,25 +639,30 @@ class _Loop:
         x: np.ndarray,
         j: int,
     ) -> tuple[CompiledMode, np.ndarray]:
-        x_new = np.array(chosen.reset(t, x), dtype=float)
+        after = chosen.reset(t, x)
+        x_new = np.array(after, dtype=float)
         target = self.dyn.mode(chosen.view.target)
         names = self.dyn.state_names
         self.jumps.append(
             Jump(
-                t=t,
-                j=j,
-                edge=chosen.name,
-                label=chosen.view.label,
-                source=mode.name,
-                target=target.name,
-                before=dict(zip(names, map(float, x), strict=True)),
-                after=dict(zip(names, map(float, x_new), strict=True)),
-                enabled=tuple(tr.name for tr in enabled),
-                chosen_by=_chosen_by(chosen, enabled),
+                t,
+                j,
+                chosen.name,
+                chosen.view.label,
+                mode.name,
+                target.name,
+                dict(zip(names, x.tolist(), strict=True)),
+                dict(zip(names, x_new.tolist(), strict=True)),
+                tuple(tr.name for tr in enabled),
+                _chosen_by(chosen, enabled),
             )
         )
         self._store(target, j + 1, np.array([t]), x_new.reshape(1, -1))
         return target, x_new
+
+
+def _finite(x: np.ndarray) -> bool:
+    return all(map(math.isfinite, x.tolist()))
 
 
 def _choose(enabled: list[CompiledTransition]) -> CompiledTransition | None:

@@ -18,7 +18,6 @@ Examples
 
 from __future__ import annotations
 
-import itertools
 from collections import deque
 
 __all__ = ["ZenoDetector"]
@@ -33,6 +32,7 @@ class ZenoDetector:
         self.shrink = shrink
         self.last_t: float | None = None
         self.gaps: deque[float] = deque(maxlen=window + 1)
+        self.ratios: deque[float] = deque(maxlen=window)
         self.run_start_gap: float | None = None
 
     def update(self, t: float) -> float | None:
@@ -44,17 +44,17 @@ class ZenoDetector:
         self.last_t = t
         if gap <= 0.0:
             return None  # zero-time jumps are counted by the engine's per-instant cap
-        self.gaps.append(gap)
-        if len(self.gaps) < 2:
+        gaps = self.gaps
+        if gaps:
+            ratio = gap / gaps[-1]
+            self.ratios.append(ratio)
+        gaps.append(gap)
+        ratios = self.ratios
+        if len(ratios) < self.window:
             return None
-        gaps = list(self.gaps)
-        ratios = [b / a for a, b in itertools.pairwise(gaps)]
         latest = ratios[-1]
-        steady = (
-            len(ratios) >= self.window
-            and all(0.0 < r < 1.0 for r in ratios)
-            and max(abs(r - latest) for r in ratios) <= self.spread * latest
-        )
+        limit = self.spread * latest
+        steady = all(0.0 < r < 1.0 and abs(r - latest) <= limit for r in ratios)
         if not steady:
             self.run_start_gap = None
             return None
