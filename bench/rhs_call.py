@@ -55,7 +55,8 @@ def run(repeats: int = 9) -> list[Comparison]:
     rhs10 = lin.mode(lin.initial_key).rhs
 
     def hand_linear(t: float, x: Any) -> list[float]:
-        x0, x1, x2, x3, x4, x5, x6, x7, x8, x9 = x
+        # the faster of the usual idioms (unpacking the array directly is ~4x slower)
+        x0, x1, x2, x3, x4, x5, x6, x7, x8, x9 = x.tolist()
         return [
             -1.0 * x0 + 0.5 * x1,
             -2.0 * x1 + 0.5 * x2,

@@ -40,36 +40,38 @@ def generate(n: int, edges_per_location: int = 5) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _measure(fn: Any) -> tuple[float, float, Any]:
-    tracemalloc.start()
+def _timed(fn: Any) -> tuple[float, Any]:
     start = time.perf_counter()
     value = fn()
-    elapsed = time.perf_counter() - start
+    return time.perf_counter() - start, value
+
+
+def _peak_mib(fn: Any) -> float:
+    """Peak traced allocation of ``fn`` (a separate run: tracing slows code several times)."""
+    tracemalloc.start()
+    fn()
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
-    return elapsed, peak / 2**20, value
+    return peak / 2**20
 
 
 def run() -> dict[str, Any]:
+    from hybrid.analysis import check
+
     rows = []
     for n in SIZES:
         text = generate(n)
-        t_load, m_load, model = _measure(lambda text=text: hybrid.load_text(text))
-        try:
-            from hybrid.analysis import check
-
-            t_check, m_check, _ = _measure(lambda model=model: check(model))
-        except ImportError:
-            t_check, m_check = math.nan, math.nan
+        t_load, model = _timed(lambda text=text: hybrid.load_text(text))
+        t_check, _ = _timed(lambda model=model: check(model))
         rows.append(
             {
                 "locations": n,
                 "edges": 5 * n,
                 "bytes": len(text),
                 "load_s": t_load,
-                "load_peak_MiB": m_load,
                 "check_s": t_check,
-                "check_peak_MiB": m_check,
+                "load_peak_MiB": _peak_mib(lambda text=text: hybrid.load_text(text)),
+                "check_peak_MiB": _peak_mib(lambda model=model: check(model)),
             }
         )
     for a, b in itertools.pairwise(rows):

@@ -24,6 +24,7 @@ from hybrid.analysis.graph import location_graph
 from hybrid.analysis.product import DEFAULT_MAX_STATES, ProductTables, product_graph
 from hybrid.compose import System
 from hybrid.model import Automaton
+from hybrid.spec.loader import gc_paused
 
 __all__ = [
     "RULES",
@@ -60,8 +61,9 @@ def check(model: Automaton | System, *, max_states: int = DEFAULT_MAX_STATES) ->
     >>> [f.rule for f in check(m).findings]
     ['unreachable-location', 'dead-edge']
     """
-    analysis = analyse(model, max_states=max_states)
-    return Report(tuple(run_checks(analysis)), analysis.system.name, analysis.system.file)
+    with gc_paused():  # many small acyclic objects: the collector only costs time here
+        analysis = analyse(model, max_states=max_states)
+        return Report(tuple(run_checks(analysis)), analysis.system.name, analysis.system.file)
 
 
 def system_graph(model: Automaton | System, *, max_states: int = 10_000) -> nx.MultiDiGraph:

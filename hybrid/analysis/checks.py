@@ -67,7 +67,7 @@ class Analysis:
         """Whether the location may be reached (always true if exploration stopped early)."""
         if not self.exploration.complete:
             return True
-        loc = self.tables.components[component].locations.index(location)
+        loc = self.tables.components[component].index[location]
         return bool(self.exploration.reached[component][loc])
 
     def qualified(self, component: int, name: str) -> str:

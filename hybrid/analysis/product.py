@@ -87,6 +87,10 @@ class _Component:
     labels: tuple[str, ...]  # shared labels of this component, in bit order
     targets: list[int]  # per edge index: target location index
     conflicts: list[list[tuple[int, int]]]  # per location: overlapping same-priority pairs
+    index: dict[str, int] = field(default_factory=dict)  # location name -> position
+
+    def __post_init__(self) -> None:
+        self.index = {name: i for i, name in enumerate(self.locations)}
 
 
 class ProductTables:
@@ -141,7 +145,7 @@ class ProductTables:
             self.weights.append(self.size)
             self.size *= n
         self.initial: Mode = tuple(
-            comp.locations.index(c.automaton.initial_location)
+            comp.index[c.automaton.initial_location]
             for comp, c in zip(self.components, system.components, strict=True)
         )
         self._stuck: dict[tuple[int, int, int], bool] = {}
