@@ -371,15 +371,9 @@ class _Loop:
             if self._failed() is not None:
                 return self._eval_failure(t, j, mode)
             if chosen is None:
-                blocked = self._invariant_left_at(mode, t, x)
+                blocked = self._blocked(mode, t, x, j, "does not hold")
                 if blocked is not None:
-                    return Termination(
-                        "blocked",
-                        t,
-                        j,
-                        f"invariant of {blocked} does not hold and no transition is enabled",
-                        location=mode.name,
-                    )
+                    return blocked
                 if t >= t_end:  # a jump landed exactly at t_end: nothing left to flow
                     return Termination("t_end", t, j, "reached t_end", location=mode.name)
                 outcome = self._flow(mode, t, x, j, armed)
@@ -508,6 +502,16 @@ class _Loop:
                 enabled.append(tr)
         return _choose(enabled), enabled, armed
 
+    def _blocked(
+        self, mode: CompiledMode, t: float, x: np.ndarray, j: int, how: str
+    ) -> Termination | None:
+        """End as ``blocked`` if an invariant is being left here (no transition is enabled)."""
+        left = self._invariant_left_at(mode, t, x)
+        if left is None:
+            return None
+        message = f"invariant of {left} {how} and no transition is enabled"
+        return Termination("blocked", t, j, message, location=mode.name)
+
     def _invariant_left_at(self, mode: CompiledMode, t: float, x: np.ndarray) -> str | None:
         band = self._band(x)
         for inv in mode.invariants:
@@ -601,15 +605,9 @@ class _Loop:
             return self._eval_failure(t, j, mode)
         chosen = _choose(enabled)
         if chosen is None:
-            left = self._invariant_left_at(mode, t, x)
-            if left is not None:
-                return Termination(
-                    "blocked",
-                    t,
-                    j,
-                    f"invariant of {left} is about to be left and no transition is enabled",
-                    location=mode.name,
-                )
+            blocked = self._blocked(mode, t, x, j, "is about to be left")
+            if blocked is not None:
+                return blocked
         return t, x, chosen, enabled
 
     def _store_segment(
