@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 
-from hybrid.errors import Position, SpecError
+from hybrid.errors import Position, SpecError, did_you_mean
 from hybrid.expr import ir
 from hybrid.expr.transform import bind_parameters
 from hybrid.model import Automaton, Edge, Properties, StateVar
@@ -136,18 +136,14 @@ def _resolve_parameter(system: System, key: str) -> tuple[str, str]:
         comp, pname = key.split(".", 1)
         names = [c.name for c in system.components]
         if comp not in names:
-            from hybrid.spec.messages import closest
-
             raise SpecError(
-                f"unknown component '{comp}' in parameter '{key}'{closest(comp, names)}",
+                f"unknown component '{comp}' in parameter '{key}'{did_you_mean(comp, names, 0.5)}",
                 system.position,
             )
         if pname not in system.component(comp).automaton.parameters:
-            from hybrid.spec.messages import closest
-
             params = list(system.component(comp).automaton.parameters)
             raise SpecError(
-                f"component '{comp}' has no parameter '{pname}'{closest(pname, params)}",
+                f"component '{comp}' has no parameter '{pname}'{did_you_mean(pname, params, 0.5)}",
                 system.position,
             )
         return comp, pname
@@ -247,20 +243,26 @@ def check_system(system: System) -> None:
 
 
 def _check_signal_cycles(system: System, problems: list[tuple[Position, str]]) -> None:
-    """Signals defined through each other across components (any location's definitions)."""
-    from hybrid.spec.build import find_cycle
+    """Signals defined through each other across components (any location's definitions).
 
-    graph: dict[str, ir.Expr] = {}
+    An input counts as a use of the signal of the same name, which another
+    component defines.
+    """
+    from hybrid.spec.build import find_dependency_cycle
+
+    deps: dict[str, set[str]] = {}
     where: dict[str, Position] = {}
     for c in system.components:
         a = c.automaton
         for name in a.signal_names:
-            defs: list[ir.Expr | None] = [a.signals.get(name) or a.vectors[name]]
-            defs += [loc.signals.get(name) or loc.vectors.get(name) for loc in a.locations.values()]
-            graph[name] = ir.Call("_", tuple(d for d in defs if d is not None))
+            definitions = [a.signals.get(name) or a.vectors[name]]
+            for loc in a.locations.values():
+                local = loc.signals.get(name) or loc.vectors.get(name)
+                if local is not None:
+                    definitions.append(local)
+            deps[name] = set().union(*(ir.names_in(d) for d in definitions))
             where[name] = a.signal_positions.get(name, a.position)
-    # an input refers to the signal of the same name, which makes it a signal reference
-    cycle = find_cycle({n: _inputs_as_signals(e, set(graph)) for n, e in graph.items()})
+    cycle = find_dependency_cycle(deps)
     if cycle:
         problems.append(
             (
@@ -269,11 +271,6 @@ def _check_signal_cycles(system: System, problems: list[tuple[Position, str]]) -
                 + " -> ".join([*cycle, cycle[0]]),
             )
         )
-
-
-def _inputs_as_signals(node: ir.Expr, names: set[str]) -> ir.Expr:
-    refs = tuple(ir.Var(n, ir.SIGNAL) for n in sorted(ir.names_in(node) & names))
-    return ir.Call("_", refs)
 
 
 def build_system(

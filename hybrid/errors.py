@@ -7,9 +7,11 @@ Anything else escaping the public API is a bug in ``hybrid``.
 
 from __future__ import annotations
 
+import difflib
+from collections.abc import Iterable
 from dataclasses import dataclass
 
-__all__ = ["Position", "SimulationError", "SpecError"]
+__all__ = ["Position", "SimulationError", "SpecError", "did_you_mean"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -119,3 +121,15 @@ class SimulationError(Exception):
         if self.location is not None:
             where.append(f"location {self.location}")
         return f"{' '.join(where)}: {self.message}" if where else self.message
+
+
+def did_you_mean(name: str, candidates: Iterable[str], cutoff: float = 0.6) -> str:
+    """``"; did you mean 'x'?"`` for the closest candidate, or ``""`` if none is close.
+
+    Examples
+    --------
+    >>> did_you_mean("flwo", ["flow", "signals"])
+    "; did you mean 'flow'?"
+    """
+    match = difflib.get_close_matches(name, list(candidates), n=1, cutoff=cutoff)
+    return f"; did you mean '{match[0]}'?" if match else ""

@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
-from hybrid.errors import Position, SpecError
+from hybrid.errors import Position, SpecError, did_you_mean
 from hybrid.expr import ir
 from hybrid.expr.functions import Function
 
@@ -137,12 +137,10 @@ class Automaton:
             return self
         unknown = [k for k in overrides if k not in self.parameters]
         if unknown:
-            from hybrid.spec.messages import closest
-
             name = unknown[0]
             raise SpecError(
                 f"unknown parameter '{name}' for automaton '{self.name}'"
-                f"{closest(name, list(self.parameters))}",
+                f"{did_you_mean(name, self.parameters, 0.5)}",
                 self.position,
             )
         merged = dict(self.parameters)
@@ -157,10 +155,8 @@ class Automaton:
         result = self
         if location is not None:
             if location not in self.locations:
-                from hybrid.spec.messages import closest
-
                 raise SpecError(
-                    f"unknown initial location '{location}'{closest(location, list(self.locations))}",
+                    f"unknown initial location '{location}'{did_you_mean(location, self.locations, 0.5)}",
                     self.position,
                 )
             result = replace(result, initial_location=location)
@@ -169,10 +165,9 @@ class Automaton:
             merged = dict(result.initial_state)
             for key, value in state.items():
                 if key not in names:
-                    from hybrid.spec.messages import closest
-
                     raise SpecError(
-                        f"unknown state variable '{key}'{closest(key, list(names))}", self.position
+                        f"unknown state variable '{key}'{did_you_mean(key, names, 0.5)}",
+                        self.position,
                     )
                 merged[key] = _as_float(key, value, self.position)
             result = replace(result, initial_state=_frozen(merged))  # type: ignore[arg-type]

@@ -18,12 +18,12 @@ Num(value=1.4142135623730951, col=0)
 from __future__ import annotations
 
 import ast
-import difflib
 import math
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from hybrid.errors import did_you_mean
 from hybrid.expr import ir
 from hybrid.expr.functions import BUILTINS, Function
 
@@ -265,7 +265,7 @@ class _Converter:
             return ir.Var(name, kind, col), _NUM
         if self.scope.function(name) is not None:
             raise ExprError(f"'{name}' is a function: call it, e.g. {name}(x)", col)
-        raise ExprError(f"unknown name '{name}'{_suggest(name, self.scope.known_names())}", col)
+        raise ExprError(f"unknown name '{name}'{did_you_mean(name, self.scope.known_names())}", col)
 
     def _call(self, node: ast.Call, col: int) -> tuple[ir.Expr, str]:
         if not isinstance(node.func, ast.Name):
@@ -276,7 +276,7 @@ class _Converter:
         func = self.scope.function(fname)
         if func is None:
             names = [*BUILTINS, *self.scope.functions]
-            raise ExprError(f"unknown function '{fname}'{_suggest(fname, names)}", col)
+            raise ExprError(f"unknown function '{fname}'{did_you_mean(fname, names)}", col)
         if node.keywords:
             raise ExprError(f"{fname}() takes positional arguments only", col)
         n = len(node.args)
@@ -308,7 +308,9 @@ class _Converter:
                 raise ExprError(f"'{name}' is a function: call it, e.g. {name}(x)", col)
             if name in self.scope.variables:
                 raise ExprError(f"'{name}' is a single value and cannot be indexed", col)
-            raise ExprError(f"unknown name '{name}'{_suggest(name, self.scope.known_names())}", col)
+            raise ExprError(
+                f"unknown name '{name}'{did_you_mean(name, self.scope.known_names())}", col
+            )
         if not 0 <= index.value < size:
             raise ExprError(
                 f"index {index.value} is out of range for '{name}' ({size} values)", col
@@ -348,11 +350,6 @@ def _arity(func: Function) -> str:
     if func.min_args == func.max_args:
         return f"{func.min_args} argument{'s' if func.min_args != 1 else ''}"
     return f"{func.min_args} to {func.max_args} arguments"
-
-
-def _suggest(name: str, candidates: list[str]) -> str:
-    close = difflib.get_close_matches(name, candidates, n=1, cutoff=0.6)
-    return f"; did you mean '{close[0]}'?" if close else ""
 
 
 def _fold(node: ir.Expr, func: Function | None = None) -> ir.Expr:

@@ -20,7 +20,6 @@ from __future__ import annotations
 import math
 import signal
 import threading
-import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -357,8 +356,6 @@ class _Loop:
         self._store(mode, j, np.array([t]), x.reshape(1, -1))
         zeno = ZenoDetector()
         same_instant, last_jump_t, stalls = 0, math.nan, 0
-        started = time.perf_counter()
-        del started
 
         while True:
             if self._failed() is not None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import ast
 import keyword
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from types import MappingProxyType
 from typing import Any
 
@@ -32,7 +32,7 @@ from hybrid.spec.messages import closest
 from hybrid.spec.schema import AutomatonSpec, PropertiesSpec
 from hybrid.spec.yamlpos import PositionMap
 
-__all__ = ["build_automaton", "build_properties", "find_cycle"]
+__all__ = ["build_automaton", "build_properties", "find_cycle", "find_dependency_cycle"]
 
 RESERVED = {"t", "pi", "true", "false", *BUILTINS, *keyword.kwlist, *keyword.softkwlist}
 _KIND_TEXT = {"param": "parameter", "state": "state variable", "signal": "signal", "input": "input"}
@@ -390,11 +390,22 @@ def build_properties(
 
 def find_cycle(definitions: Mapping[str, ir.Expr]) -> list[str] | None:
     """A list of signal names forming a cycle of definitions, or ``None``."""
-    deps = {
-        n: sorted(ir.names_in(e, ir.SIGNAL) & definitions.keys()) for n, e in definitions.items()
-    }
+    return find_dependency_cycle(
+        {n: ir.names_in(e, ir.SIGNAL) & definitions.keys() for n, e in definitions.items()}
+    )
+
+
+def find_dependency_cycle(deps: Mapping[str, Iterable[str]]) -> list[str] | None:
+    """A cycle in a dependency graph (name -> names it uses), or ``None``.
+
+    Examples
+    --------
+    >>> find_dependency_cycle({"a": ["b"], "b": ["a"], "c": []})
+    ['a', 'b']
+    """
+    edges = {n: sorted(d for d in ds if d in deps) for n, ds in deps.items()}
     color: dict[str, int] = {}
-    for start in definitions:
+    for start in edges:
         if color.get(start):
             continue
         stack: list[tuple[str, int]] = [(start, 0)]
@@ -404,9 +415,9 @@ def find_cycle(definitions: Mapping[str, ir.Expr]) -> list[str] | None:
             if i == 0:
                 color[node] = 1
                 path.append(node)
-            if i < len(deps[node]):
+            if i < len(edges[node]):
                 stack.append((node, i + 1))
-                nxt = deps[node][i]
+                nxt = edges[node][i]
                 if color.get(nxt) == 1:
                     return path[path.index(nxt) :]
                 if not color.get(nxt):

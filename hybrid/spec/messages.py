@@ -8,22 +8,21 @@ key points at its parent mapping.
 
 from __future__ import annotations
 
-import difflib
 import types
 from typing import Annotated, Any, Union, get_args, get_origin
 
 from pydantic import BaseModel, ValidationError
 
-from hybrid.errors import Position
+from hybrid.errors import Position, did_you_mean
 from hybrid.spec.yamlpos import PositionMap
 
 __all__ = ["closest", "describe_path", "validation_problems"]
 
 
 def closest(name: str, candidates: list[str]) -> str:
-    """``"; did you mean 'x'?"`` for the closest candidate, or ``""``."""
-    match = difflib.get_close_matches(name, candidates, n=1, cutoff=0.5)
-    return f"; did you mean '{match[0]}'?" if match else ""
+    """``"; did you mean 'x'?"`` for the closest candidate, or ``""`` (a looser match
+    than for names in expressions: keys and locations are few)."""
+    return did_you_mean(name, candidates, cutoff=0.5)
 
 
 def describe_path(path: tuple[Any, ...]) -> str:
