@@ -176,7 +176,31 @@ def as_system(model: Automaton | System) -> System:
 def compose(
     *automata: Automaton, name: str | None = None, names: Sequence[str] | None = None
 ) -> System:
-    """Compose automata in parallel; component names default to the automata's names."""
+    """Compose automata in parallel into a :class:`System`.
+
+    Parameters
+    ----------
+    *automata : Automaton
+        The components, in order (their order is the file order of their edges).
+    name : str, optional
+        The system's name (default: the component names joined by ``_``).
+    names : sequence of str, optional
+        Component names (default: each automaton's name).
+
+    Raises
+    ------
+    SpecError
+        If state variables or signals clash, or an input is bound to no signal
+        or to several.
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> a = hybrid.load_text("automaton: a\\nstate: {x: {}}\\nlocations: {l: {}}\\n")
+    >>> b = hybrid.load_text("automaton: b\\nstate: {y: {}}\\nlocations: {m: {}}\\n")
+    >>> hybrid.compose(a, b, names=["left", "right"]).state_names
+    ('x', 'y')
+    """
     if not automata:
         raise SpecError("compose() needs at least one automaton")
     comp_names = list(names) if names is not None else [a.name for a in automata]

@@ -34,8 +34,31 @@ __all__ = ["gc_paused", "load", "load_document", "load_text"]
 def load(path: str | Path, parameters: Mapping[str, float] | None = None) -> Automaton | System:
     """Load an automaton or system spec file.
 
-    ``parameters`` overrides declared parameters (``comp.name`` in a system, or
-    the plain name where only one component declares it).
+    Parameters
+    ----------
+    path : str or Path
+        The YAML file (``automaton:`` or ``system:``); a system's component
+        specs are found relative to it.
+    parameters : mapping, optional
+        Overrides of declared parameters: ``name`` in an automaton; in a system
+        ``comp.name``, or ``name`` where only one component declares it.
+
+    Returns
+    -------
+    Automaton or System
+        The frozen model.
+
+    Raises
+    ------
+    SpecError
+        With ``file``, ``line`` and ``column`` of every problem found.
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> ball = hybrid.load("specs/bouncing_ball.yaml", parameters={"e": 0.7})
+    >>> ball.parameters["e"], ball.initial_location
+    (0.7, 'falling')
     """
     with gc_paused():
         doc = read_yaml_file(path)
@@ -49,7 +72,26 @@ def load_text(
     file: str = "<string>",
     base_dir: str | Path = ".",
 ) -> Automaton | System:
-    """Load a spec from a string; system component paths resolve from ``base_dir``."""
+    """Load a spec from a string, as :func:`load` does from a file.
+
+    Parameters
+    ----------
+    text : str
+        The YAML text.
+    parameters : mapping, optional
+        Overrides of declared parameters (see :func:`load`).
+    file : str
+        The name errors give as the file (default ``<string>``).
+    base_dir : str or Path
+        Where a system's component specs are found.
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> m = hybrid.load_text("automaton: a\\nlocations: {only: {}}\\n", file="a.yaml")
+    >>> m.name, m.file
+    ('a', 'a.yaml')
+    """
     with gc_paused():
         doc = read_yaml_text(text, file)
         return load_document(doc, Path(base_dir), parameters)

@@ -1,0 +1,40 @@
+"""Meta-tests of the public API: every keyword documented, unknown keywords refused.
+
+Like python-control's tests: a keyword a user can pass must be explained in the
+docstring, and a misspelt one must fail loudly instead of being ignored.
+"""
+
+from __future__ import annotations
+
+import inspect
+
+import pytest
+
+import hybrid
+
+PUBLIC_FUNCTIONS = ["load", "load_text", "simulate", "check", "compose"]
+
+
+@pytest.mark.parametrize("name", PUBLIC_FUNCTIONS)
+def test_every_keyword_is_documented(name: str) -> None:
+    fn = getattr(hybrid, name)
+    doc = inspect.getdoc(fn) or ""
+    assert doc, f"hybrid.{name} has no docstring"
+    assert "Examples" in doc or ">>>" in doc, f"hybrid.{name} has no example"
+    for param in inspect.signature(fn).parameters.values():
+        if param.kind in (param.VAR_POSITIONAL, param.VAR_KEYWORD):
+            continue
+        assert param.name in doc, f"hybrid.{name}: keyword '{param.name}' is not documented"
+
+
+@pytest.mark.parametrize("name", PUBLIC_FUNCTIONS)
+def test_unknown_keywords_raise(name: str) -> None:
+    with pytest.raises(TypeError, match="unexpected keyword"):
+        getattr(hybrid, name)(no_such_keyword=1)
+
+
+def test_all_names_resolve() -> None:
+    for name in hybrid.__all__:
+        assert getattr(hybrid, name) is not None
+    with pytest.raises(AttributeError):
+        hybrid.no_such_thing  # noqa: B018
