@@ -151,7 +151,12 @@ def _resolve_parameter(system: System, key: str) -> tuple[str, str]:
     if len(owners) == 1:
         return owners[0], key
     if not owners:
-        raise SpecError(f"no component has a parameter '{key}'", system.position)
+        known = [f"{c.name}.{p}" for c in system.components for p in c.automaton.parameters]
+        known += [p for c in system.components for p in c.automaton.parameters]
+        raise SpecError(
+            f"no component has a parameter '{key}'{did_you_mean(key, known, 0.5)}",
+            system.position,
+        )
     raise SpecError(
         f"parameter '{key}' is ambiguous: write one of {', '.join(f'{o}.{key}' for o in owners)}",
         system.position,

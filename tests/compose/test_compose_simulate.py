@@ -142,3 +142,8 @@ def test_qualified_parameter_override(system: hybrid.System) -> None:
     assert [j.t for j in run.jumps] == pytest.approx([2.0, 4.0, 6.0], abs=1e-7)
     with pytest.raises(hybrid.SpecError, match="no parameter 'Q'"):
         system.with_parameters({"controller.Q": 1.0})
+
+
+def test_misspelt_system_parameter_suggests_the_right_one(system: hybrid.System) -> None:
+    with pytest.raises(hybrid.SpecError, match=r"'Pp'; did you mean 'P'\?"):
+        system.with_parameters({"Pp": 2.0})
