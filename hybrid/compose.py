@@ -1,54 +1,36 @@
-"""Parallel composition, and the per-mode view the simulator and analysis share.
+"""Parallel composition of automata into a system.
 
 A :class:`System` puts automata side by side: state spaces concatenated (a name
 used by two components is an error naming both places), each input bound to
-the one other component that defines a signal of that name. Edges whose label
-is declared by several components fire together, one edge from each; the
-others fire alone.
-
-A *mode* is one location per component. :func:`mode_of` gives its flows,
-signals, invariants and outgoing transitions (synchronised ones included) with
-parameters already bound, so that a single automaton and a system look the
-same to the simulator (an automaton is a system of one component).
+the one other component that defines a signal of that name. What is in force in
+each combination of locations is :mod:`hybrid.modes`.
 
 Examples
 --------
 >>> import hybrid
 >>> a = hybrid.load_text("automaton: a\\nstate: {x: {}}\\nlocations: {l: {flow: {x: 1}}}\\n")
 >>> b = hybrid.load_text("automaton: b\\nstate: {y: {}}\\nlocations: {m: {flow: {y: 2}}}\\n")
->>> s = compose(a, b)
->>> s.state_names, mode_name(s, initial_mode(s))
-(('x', 'y'), 'a.l|b.m')
+>>> compose(a, b).state_names
+('x', 'y')
 """
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import MappingProxyType
 
 from hybrid.errors import Position, SpecError, did_you_mean
 from hybrid.expr import ir
-from hybrid.expr.transform import bind_parameters
-from hybrid.model import Automaton, Edge, Properties, StateVar
+from hybrid.model import Automaton, Properties, StateVar
 
 __all__ = [
     "Component",
-    "ModeView",
     "System",
-    "TransitionView",
     "as_system",
     "build_system",
     "compose",
-    "initial_mode",
-    "mode_name",
-    "mode_of",
-    "transitions_of",
 ]
-
-Mode = tuple[str, ...]
 
 
 @dataclass(frozen=True)
@@ -360,154 +342,3 @@ def build_system(
     )
     check_system(system)
     return system.with_parameters(parameters) if parameters else system
-
-
-# --- the per-mode view -------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class TransitionView:
-    """An outgoing transition of a mode: one edge, or one edge per synchronising component."""
-
-    name: str
-    label: str | None
-    edges: tuple[tuple[int, Edge], ...]
-    guard: ir.Expr
-    reset: Mapping[str, ir.Expr]
-    priority: int
-    order: tuple[int, ...]
-    target: Mode
-
-
-@dataclass(frozen=True)
-class ModeView:
-    """Everything in force in one mode, parameters bound."""
-
-    key: Mode
-    name: str
-    flow: Mapping[str, ir.Expr]
-    signals: Mapping[str, ir.Expr]
-    vectors: Mapping[str, ir.Call]
-    invariants: tuple[tuple[str, ir.Expr], ...]
-    transitions: tuple[TransitionView, ...]
-
-
-def initial_mode(system: System) -> Mode:
-    return tuple(c.automaton.initial_location for c in system.components)
-
-
-def mode_name(system: System, key: Mode) -> str:
-    """``loc`` for a plain automaton, ``comp.loc|comp.loc`` for a system."""
-    if system.single:
-        return key[0]
-    return "|".join(f"{c.name}.{loc}" for c, loc in zip(system.components, key, strict=True))
-
-
-def _owners(system: System) -> dict[str, list[int]]:
-    owners: dict[str, list[int]] = {}
-    for i, c in enumerate(system.components):
-        for label in c.automaton.labels:
-            owners.setdefault(label, []).append(i)
-    return owners
-
-
-def transitions_of(system: System, key: Mode, *, bind: bool = True) -> tuple[TransitionView, ...]:
-    """The transitions leaving mode ``key``, in priority-then-file order of their edges."""
-    owners = _owners(system)
-    result: list[TransitionView] = []
-    shared: dict[str, list[list[Edge]]] = {}
-    for i, (c, loc) in enumerate(zip(system.components, key, strict=True)):
-        for edge in c.automaton.outgoing(loc):
-            if edge.label is None or len(owners.get(edge.label, [])) <= 1:
-                result.append(_single(system, key, i, edge, bind))
-            else:
-                shared.setdefault(edge.label, [[] for _ in owners[edge.label]])
-                slot = owners[edge.label].index(i)
-                shared[edge.label][slot].append(edge)
-    for label, per_comp in shared.items():
-        comps = owners[label]
-        for combo in itertools.product(*per_comp):
-            result.append(
-                _synchronised(system, key, label, list(zip(comps, combo, strict=True)), bind)
-            )
-    result.sort(key=lambda tr: tr.order)
-    return tuple(result)
-
-
-def _bound(system: System, i: int, node: ir.Expr, bind: bool) -> ir.Expr:
-    return bind_parameters(node, system.components[i].automaton.parameters) if bind else node
-
-
-def _edge_name(system: System, i: int, edge: Edge) -> str:
-    return edge.name if system.single else f"{system.components[i].name}.{edge.name}"
-
-
-def _single(system: System, key: Mode, i: int, edge: Edge, bind: bool) -> TransitionView:
-    target = list(key)
-    target[i] = edge.target
-    return TransitionView(
-        name=_edge_name(system, i, edge),
-        label=edge.label,
-        edges=((i, edge),),
-        guard=_bound(system, i, edge.guard, bind),
-        reset=MappingProxyType({k: _bound(system, i, v, bind) for k, v in edge.reset.items()}),
-        priority=edge.priority,
-        order=(i, edge.index),
-        target=tuple(target),
-    )
-
-
-def _synchronised(
-    system: System, key: Mode, label: str, parts: list[tuple[int, Edge]], bind: bool
-) -> TransitionView:
-    target = list(key)
-    reset: dict[str, ir.Expr] = {}
-    guards: list[ir.Expr] = []
-    for i, edge in parts:
-        target[i] = edge.target
-        guards.append(_bound(system, i, edge.guard, bind))
-        reset.update({k: _bound(system, i, v, bind) for k, v in edge.reset.items()})
-    return TransitionView(
-        name="+".join(_edge_name(system, i, e) for i, e in parts),
-        label=label,
-        edges=tuple(parts),
-        guard=guards[0] if len(guards) == 1 else ir.BoolOp("and", tuple(guards)),
-        reset=MappingProxyType(reset),
-        priority=max(e.priority for _, e in parts),
-        order=tuple(x for i, e in parts for x in (i, e.index)),
-        target=tuple(target),
-    )
-
-
-def mode_of(system: System, key: Mode) -> ModeView:
-    """Flows, signals, invariants and transitions of mode ``key``, parameters bound."""
-    flow: dict[str, ir.Expr] = {}
-    signals: dict[str, ir.Expr] = {}
-    vectors: dict[str, ir.Call] = {}
-    invariants: list[tuple[str, ir.Expr]] = []
-    for i, (c, loc_name) in enumerate(zip(system.components, key, strict=True)):
-        a = c.automaton
-        loc = a.locations[loc_name]
-        for name in a.signal_names:
-            if name in loc.signals:
-                signals[name] = _bound(system, i, loc.signals[name], True)
-            elif name in loc.vectors:
-                vectors[name] = _bound(system, i, loc.vectors[name], True)  # type: ignore[assignment]
-            elif name in a.signals:
-                signals[name] = _bound(system, i, a.signals[name], True)
-            else:
-                vectors[name] = _bound(system, i, a.vectors[name], True)  # type: ignore[assignment]
-        for var, expr in loc.flow.items():
-            flow[var] = _bound(system, i, expr, True)
-        if not (isinstance(loc.invariant, ir.BoolConst) and loc.invariant.value):
-            label = loc_name if system.single else f"{c.name}.{loc_name}"
-            invariants.append((label, _bound(system, i, loc.invariant, True)))
-    return ModeView(
-        key=key,
-        name=mode_name(system, key),
-        flow=MappingProxyType(flow),
-        signals=MappingProxyType(signals),
-        vectors=MappingProxyType(vectors),
-        invariants=tuple(invariants),
-        transitions=transitions_of(system, key),
-    )

@@ -33,13 +33,14 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
-from hybrid.compose import Mode, ModeView, System, TransitionView, as_system, initial_mode, mode_of
+from hybrid.compose import System, as_system
 from hybrid.errors import SimulationError
 from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function, signal_order
 from hybrid.expr.functions import Function
 from hybrid.expr.rho import guard_to_rho
 from hybrid.model import Automaton
+from hybrid.modes import Mode, ModeView, TransitionView, initial_mode, mode_of
 
 __all__ = ["CompiledCondition", "CompiledMode", "CompiledTransition", "Dynamics"]
 
@@ -139,7 +140,7 @@ class Dynamics:
         return columns
 
     def mode_name(self, key: Mode) -> str:
-        from hybrid.compose import mode_name
+        from hybrid.modes import mode_name
 
         return mode_name(self.system, key)
 

@@ -6,7 +6,7 @@ so only reachable modes are ever visited. It works on discrete structure
 precomputed per component (:class:`ProductTables`): per location, the live
 edges (guard can hold within bounds) split into local ones and ones carrying
 a label shared with other components (those fire together, one edge from
-each owner of the label, as in :func:`hybrid.compose.transitions_of`).
+each owner of the label, as in :func:`hybrid.modes.transitions_of`).
 
 Modes are tuples of location indices, encoded as integers in mixed radix, and
 each BFS level is processed with numpy: successors, the visited set (a bitmap
@@ -49,7 +49,8 @@ import numpy as np
 
 from hybrid.analysis.graph import expression_text
 from hybrid.analysis.static import AutomatonFacts
-from hybrid.compose import System, mode_name
+from hybrid.compose import System
+from hybrid.modes import mode_name
 
 __all__ = [
     "DEFAULT_MAX_STATES",

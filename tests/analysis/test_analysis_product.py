@@ -11,7 +11,8 @@ import hybrid
 from hybrid.analysis import check, product_graph
 from hybrid.analysis.product import ProductTables, explore, explore_reference
 from hybrid.analysis.static import AutomatonFacts
-from hybrid.compose import System, initial_mode, mode_name, transitions_of
+from hybrid.compose import System
+from hybrid.modes import initial_mode, mode_name, transitions_of
 
 HEATER = """
 automaton: heater
@@ -87,7 +88,7 @@ edges:
 
 
 def _reference_modes(system: System) -> set[str]:
-    """Brute force over :func:`hybrid.compose.transitions_of`, following only live edges."""
+    """Brute force over :func:`hybrid.modes.transitions_of`, following only live edges."""
     facts = [AutomatonFacts(c.automaton) for c in system.components]
 
     def live(tr) -> bool:
