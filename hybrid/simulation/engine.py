@@ -446,7 +446,8 @@ class _Loop:
         if factory is None:
             factory = self.watch_factories[(mode.key, pattern)] = watch_factory(signs, pattern)
         watch_armed = list(pattern)
-        events: list[Any] = [factory(functions, interrupt.flag, interrupt, watch_armed)]
+        stalled = [False]
+        events: list[Any] = [factory(functions, interrupt.flag, interrupt, watch_armed, stalled)]
         dense = settings["dt"] is not None or settings["dense"]
         self.dyn.flow_failure.clear()
         sol = solve_ivp(
@@ -494,6 +495,17 @@ class _Loop:
             )
         if sol.status == 0:
             return Termination("t_end", t, j, "reached t_end", location=mode.name)
+        if stalled[0]:
+            peak = max(map(abs, x.tolist()), default=0.0)
+            return Termination(
+                "solver_failure",
+                t,
+                j,
+                f"solver stopped advancing: its step size fell below the spacing of "
+                f"floating-point numbers at t={t:.9g} (largest |state| {peak:.3g}; the solution "
+                "may blow up here, or try another --method)",
+                location=mode.name,
+            )
         if interrupt.at is not None or self.interrupted[0]:
             return Termination("interrupted", t, j, "interrupted by the user", location=mode.name)
         band = self._band(x)
