@@ -207,6 +207,7 @@ class _Loop:
         default_factory=list
     )
     watch_factories: dict[tuple[Any, ...], Callable[..., Any]] = field(default_factory=dict)
+    last_step: float | None = None
     jumps: list[Jump] = field(default_factory=list)
     segments: list[tuple[int, float, float, Any]] = field(default_factory=list)
 
@@ -450,6 +451,7 @@ class _Loop:
         events: list[Any] = [factory(functions, interrupt.flag, interrupt, watch_armed, stalled)]
         dense = settings["dt"] is not None or settings["dense"]
         self.dyn.flow_failure.clear()
+        max_step = settings["max_step"] if settings["max_step"] is not None else np.inf
         sol = solve_ivp(
             mode.rhs,
             (t0, t_end),
@@ -457,11 +459,14 @@ class _Loop:
             method=settings["method"],
             rtol=settings["rtol"],
             atol=settings["atol"],
-            max_step=settings["max_step"] if settings["max_step"] is not None else np.inf,
+            max_step=max_step,
+            first_step=self._first_step(t0, t_end, max_step),
             events=events,
             dense_output=dense,
         )
         ts, xs = sol.t, sol.y.T
+        if ts.size >= 3:  # the last full step (the final one is cut short by the event)
+            self.last_step = float(ts[-2] - ts[-3])
         self._store_segment(mode, j, sol, ts, xs)
         if settings["dense"] and sol.sol is not None and ts.size > 1:
             self.segments.append((j, float(ts[0]), float(ts[-1]), sol.sol))
@@ -524,6 +529,18 @@ class _Loop:
             if blocked is not None:
                 return blocked
         return t, x, chosen, enabled
+
+    def _first_step(self, t0: float, t_end: float, max_step: float) -> float | None:
+        """Start a stay with the last full step of the previous one (None: let scipy choose).
+
+        Warm-starting saves the solver's initial-step estimate (two evaluations of
+        the right-hand side) at every jump; its error control still accepts or
+        shrinks the step as the tolerances require.
+        """
+        h = self.last_step
+        if h is None or not h > 0.0:
+            return None
+        return min(h, max_step, t_end - t0) if t_end > t0 else None
 
     def _store_segment(
         self, mode: CompiledMode, j: int, sol: Any, ts: np.ndarray, xs: np.ndarray
