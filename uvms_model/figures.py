@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import itertools
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -45,33 +46,47 @@ def write_figures(result: MissionResult, out_dir: Path, prefix: str) -> list[Pat
     ax.legend(loc="lower right", fontsize=8)
     paths.append(_save(fig, out_dir / f"{prefix}_gamma.png"))
 
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
-    for name, label in (("x", "x"), ("y", "y"), ("phi", "phi")):
-        a1.plot(t, run[name], label=label)
-    for name, label in (("x_rate", "xp"), ("y_rate", "yp"), ("phid", "phip")):
-        a2.plot(t, run[name], label=label)
-    for ax, ylabel in ((a1, "[m], [rad]"), (a2, "[m/s], [rad/s]")):
-        _shade(ax, result)
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel(ylabel)
-        ax.legend(fontsize=8)
+    fig = _two_panels(
+        plt,
+        result,
+        [("x", "x"), ("y", "y"), ("phi", "phi")],
+        [("x_rate", "xp"), ("y_rate", "yp"), ("phid", "phip")],
+        ("[m], [rad]", "[m/s], [rad/s]"),
+    )
     fig.suptitle(f"{model}: vehicle position and velocity (cf. Figs. 8/11)")
     paths.append(_save(fig, out_dir / f"{prefix}_vehicle.png"))
 
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
-    for name in ("q1", "q2", "q3"):
-        a1.plot(t, run[name], label=name)
-    for name, label in (("q1_rate", "q1p"), ("q2_rate", "q2p"), ("q3_rate_out", "q3p")):
-        a2.plot(t, run[name], label=label)
-    for ax, ylabel in ((a1, "[rad]"), (a2, "[rad/s]")):
-        _shade(ax, result)
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel(ylabel)
-        ax.legend(fontsize=8)
+    fig = _two_panels(
+        plt,
+        result,
+        [("q1", "q1"), ("q2", "q2"), ("q3", "q3")],
+        [("q1_rate", "q1p"), ("q2_rate", "q2p"), ("q3_rate_out", "q3p")],
+        ("[rad]", "[rad/s]"),
+    )
     fig.suptitle(f"{model}: joint positions and velocities (cf. Figs. 9/12)")
     paths.append(_save(fig, out_dir / f"{prefix}_joints.png"))
     plt.close("all")
     return paths
+
+
+def _two_panels(
+    plt: Any,
+    result: MissionResult,
+    positions: list[tuple[str, str]],
+    rates: list[tuple[str, str]],
+    ylabels: tuple[str, str],
+) -> Any:
+    """Positions on the left, their rates on the right, the automaton's locations shaded."""
+    run = result.run
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    for ax, columns, ylabel in zip(axes, (positions, rates), ylabels, strict=True):
+        for name, label in columns:
+            ax.plot(run.t, run[name], label=label)
+        _shade(ax, result)
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel(ylabel)
+        ax.legend(fontsize=8)
+    return fig
 
 
 def _parameters(result: MissionResult) -> dict[str, float]:
