@@ -90,12 +90,11 @@ def _two_panels(
 
 
 def _parameters(result: MissionResult) -> dict[str, float]:
-    import hybrid
+    """The parameters of every component of the simulated model, merged."""
+    from hybrid.compose import as_system
 
-    model = hybrid.load(Path(__file__).resolve().parent.parent / "specs" / f"{result.name}.yaml")
-    assert isinstance(model, hybrid.System)
     merged: dict[str, float] = {}
-    for component in model.components:
+    for component in as_system(result.model).components:
         merged.update(component.automaton.parameters)
     return merged
 

@@ -55,6 +55,8 @@ class MissionResult:
     """A simulated mission and its measures."""
 
     name: str
+    model: hybrid.Automaton | hybrid.System
+    """The simulated model, parameters as overridden."""
     run: hybrid.Run
     wall_time: float
     visited: list[tuple[str, float]]
@@ -108,6 +110,7 @@ def run_mission(
     ]
     return MissionResult(
         name=name,
+        model=model,
         run=run,
         wall_time=wall,
         visited=visited,
