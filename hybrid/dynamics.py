@@ -139,11 +139,6 @@ class Dynamics:
                     columns.append(name)
         return columns
 
-    def mode_name(self, key: Mode) -> str:
-        from hybrid.modes import mode_name
-
-        return mode_name(self.system, key)
-
     def mode(self, key: Mode) -> CompiledMode:
         """The compiled mode ``key`` (compiled on first use, then cached)."""
         compiled = self._modes.get(key)
