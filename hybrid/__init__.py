@@ -14,19 +14,24 @@ Examples
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from hybrid.compose import System, compose
-from hybrid.errors import Position, SimulationError, SpecError
+from hybrid.errors import HybridError, Position, SimulationError, SpecError, UsageError
+from hybrid.lazy import lazy_attributes
 from hybrid.model import Automaton
-from hybrid.spec.loader import load, load_text
+from hybrid.reader.loader import load, load_text
+from hybrid.version import __version__
 
 if TYPE_CHECKING:
-    from hybrid.analysis import Report, check
-    from hybrid.simulation import Jump, Run, Termination, simulate
+    from hybrid.analysis.api import check
+    from hybrid.analysis.findings import Report
+    from hybrid.simulation.engine import simulate
+    from hybrid.simulation.result import Jump, Run, Termination
 
 __all__ = [
     "Automaton",
+    "HybridError",
     "Jump",
     "Position",
     "Report",
@@ -35,6 +40,8 @@ __all__ = [
     "SpecError",
     "System",
     "Termination",
+    "UsageError",
+    "__version__",
     "check",
     "compose",
     "load",
@@ -42,27 +49,21 @@ __all__ = [
     "simulate",
 ]
 
-__version__ = "0.1.0"
-
 # The simulator (scipy) and the analysis (networkx) load on first use, so that
 # `hybrid validate` and `import hybrid` stay quick.
 _LAZY = {
-    "Jump": "hybrid.simulation",
-    "Run": "hybrid.simulation",
-    "Termination": "hybrid.simulation",
-    "simulate": "hybrid.simulation",
-    "Report": "hybrid.analysis",
-    "check": "hybrid.analysis",
+    "Jump": "hybrid.simulation.result",
+    "Run": "hybrid.simulation.result",
+    "Termination": "hybrid.simulation.result",
+    "simulate": "hybrid.simulation.engine",
+    "Report": "hybrid.analysis.findings",
+    "check": "hybrid.analysis.api",
 }
+_lazy_getattr, _lazy_dir = lazy_attributes(__name__, _LAZY)
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'hybrid' has no attribute '{name}'")
-    import importlib
-
-    value = getattr(importlib.import_module(module), name)
+def __getattr__(name: str) -> object:
+    value = _lazy_getattr(name)
     globals()[name] = value
     return value
 

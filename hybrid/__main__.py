@@ -1,5 +1,5 @@
 """``python -m hybrid``: the command line."""
 
-from hybrid.cli import main
+from hybrid.cli.main import main
 
 raise SystemExit(main())

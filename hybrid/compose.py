@@ -17,18 +17,21 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
-from pathlib import Path
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+from types import MappingProxyType
 
 from hybrid.errors import Position, SpecError, did_you_mean
 from hybrid.expr import ir
+from hybrid.expr.dependencies import find_dependency_cycle
+from hybrid.expr.functions import Function
 from hybrid.model import Automaton, Properties, StateVar
 
 __all__ = [
     "Component",
     "System",
     "as_system",
-    "build_system",
+    "check_system",
     "compose",
 ]
 
@@ -58,24 +61,81 @@ class System:
     position: Position = field(default_factory=lambda: Position("<spec>"))
     single: bool = False
 
-    @property
+    # --- facts of the composition, computed once -----------------------------------------
+
+    @cached_property
     def states(self) -> tuple[StateVar, ...]:
+        """Every state variable, component by component (the order of the state vector)."""
         return tuple(s for c in self.components for s in c.automaton.states)
 
-    @property
+    @cached_property
     def state_names(self) -> tuple[str, ...]:
         return tuple(s.name for s in self.states)
 
-    @property
+    @cached_property
     def signal_names(self) -> tuple[str, ...]:
         return tuple(n for c in self.components for n in c.automaton.signal_names)
 
-    @property
+    @cached_property
     def labels(self) -> tuple[str, ...]:
-        seen: dict[str, None] = {}
+        """Every label, in order of first declaration."""
+        return tuple(self.label_owners)
+
+    @cached_property
+    def label_owners(self) -> Mapping[str, tuple[int, ...]]:
+        """Label -> indices of the components that declare it."""
+        owners: dict[str, list[int]] = {}
+        for i, c in enumerate(self.components):
+            for label in c.automaton.labels:
+                owners.setdefault(label, []).append(i)
+        return MappingProxyType({k: tuple(v) for k, v in owners.items()})
+
+    @cached_property
+    def shared_labels(self) -> Mapping[str, tuple[int, ...]]:
+        """Labels declared by several components (their edges fire together)."""
+        return MappingProxyType({k: v for k, v in self.label_owners.items() if len(v) > 1})
+
+    @cached_property
+    def functions(self) -> Mapping[str, Function]:
+        """The library functions the components use."""
+        merged: dict[str, Function] = {}
         for c in self.components:
-            seen.update(dict.fromkeys(c.automaton.labels))
-        return tuple(seen)
+            merged.update(c.automaton.functions)
+        return MappingProxyType(merged)
+
+    @cached_property
+    def signal_columns(self) -> tuple[str, ...]:
+        """Trajectory columns of the signals: ``name``, or ``name[k]`` per value of a vector."""
+        columns: list[str] = []
+        for c in self.components:
+            sizes = c.automaton.vector_sizes
+            for name in c.automaton.signal_names:
+                if name in sizes:
+                    columns.extend(f"{name}[{k}]" for k in range(sizes[name]))
+                else:
+                    columns.append(name)
+        return tuple(columns)
+
+    @cached_property
+    def initial_mode(self) -> tuple[str, ...]:
+        """The initial location of each component."""
+        return tuple(c.automaton.initial_location for c in self.components)
+
+    def qualified(self, component: int, name: str) -> str:
+        """A location, edge or parameter name as a user writes it: ``comp.name`` in a system.
+
+        Examples
+        --------
+        >>> import hybrid
+        >>> a = hybrid.load_text("automaton: a\\nlocations: {l: {}}\\n")
+        >>> as_system(a).qualified(0, "l"), compose(a, names=["left"]).qualified(0, "l")
+        ('l', 'left.l')
+        """
+        return name if self.single else f"{self.components[component].name}.{name}"
+
+    def mode_name(self, mode: Sequence[str]) -> str:
+        """``loc`` for a plain automaton, ``comp.loc|comp.loc`` for a system."""
+        return "|".join(self.qualified(i, loc) for i, loc in enumerate(mode))
 
     def component(self, name: str) -> Component:
         for c in self.components:
@@ -102,15 +162,7 @@ class System:
 
 
 def _replace_components(system: System, parts: tuple[Component, ...]) -> System:
-    return System(
-        system.name,
-        parts,
-        system.properties,
-        system.description,
-        system.file,
-        system.position,
-        system.single,
-    )
+    return replace(system, components=parts)
 
 
 def _resolve_parameter(system: System, key: str) -> tuple[str, str]:
@@ -133,7 +185,11 @@ def _resolve_parameter(system: System, key: str) -> tuple[str, str]:
     if len(owners) == 1:
         return owners[0], key
     if not owners:
-        known = [f"{c.name}.{p}" for c in system.components for p in c.automaton.parameters]
+        known = [
+            system.qualified(i, p)
+            for i, c in enumerate(system.components)
+            for p in c.automaton.parameters
+        ]
         known += [p for c in system.components for p in c.automaton.parameters]
         raise SpecError(
             f"no component has a parameter '{key}'{did_you_mean(key, known, 0.5)}",
@@ -259,16 +315,14 @@ def _check_signal_cycles(system: System, problems: list[tuple[Position, str]]) -
     An input counts as a use of the signal of the same name, which another
     component defines.
     """
-    from hybrid.spec.build import find_dependency_cycle
-
     deps: dict[str, set[str]] = {}
     where: dict[str, Position] = {}
     for c in system.components:
         a = c.automaton
         for name in a.signal_names:
-            definitions = [a.signals.get(name) or a.vectors[name]]
+            definitions = [a.signals[name]]
             for loc in a.locations.values():
-                local = loc.signals.get(name) or loc.vectors.get(name)
+                local = loc.signals.get(name)
                 if local is not None:
                     definitions.append(local)
             deps[name] = set().union(*(ir.names_in(d) for d in definitions))
@@ -282,63 +336,3 @@ def _check_signal_cycles(system: System, problems: list[tuple[Position, str]]) -
                 + " -> ".join([*cycle, cycle[0]]),
             )
         )
-
-
-def build_system(
-    spec: object,
-    positions: object,
-    base_dir: Path,
-    parameters: Mapping[str, float] | None,
-    *,
-    _stack: tuple[str, ...] = (),
-) -> System:
-    """Load a system file's components and compose them."""
-    from hybrid.spec.build import build_properties
-    from hybrid.spec.loader import load_document
-    from hybrid.spec.schema import SystemSpec
-    from hybrid.spec.yamlpos import PositionMap, read_yaml_file
-
-    assert isinstance(spec, SystemSpec) and isinstance(positions, PositionMap)
-    parts: list[Component] = []
-    problems: list[tuple[Position, str]] = []
-    for i, comp in enumerate(spec.components):
-        where = positions.value(("components", i, "spec"))
-        path = (base_dir / comp.spec).resolve()
-        if str(path) in _stack:
-            problems.append((where, f"component spec '{comp.spec}' includes itself"))
-            continue
-        if not path.is_file():
-            problems.append(
-                (where, f"component spec '{comp.spec}' not found (looked in {base_dir})")
-            )
-            continue
-        try:
-            doc = read_yaml_file(path)
-            model = load_document(doc, path.parent, None, _stack=(*_stack, str(path)))
-        except SpecError as exc:
-            problems.extend(exc.problems)
-            continue
-        if not isinstance(model, Automaton):
-            problems.append(
-                (where, f"component spec '{comp.spec}' is a system; components must be automata")
-            )
-            continue
-        try:
-            model = model.with_parameters(comp.parameters)
-            if comp.initial is not None:
-                model = model.with_initial(comp.initial.location, comp.initial.state)
-        except SpecError as exc:
-            problems.append((positions.value(("components", i)), exc.message))
-            continue
-        parts.append(Component(comp.name or model.name, model, positions.value(("components", i))))
-    if problems:
-        raise SpecError.many(problems)
-    qualified = [f"{c.name}.{loc}" for c in parts for loc in c.automaton.locations]
-    properties = build_properties(spec.properties, positions, problems, qualified)
-    if problems:
-        raise SpecError.many(problems)
-    system = System(
-        spec.system, tuple(parts), properties, spec.description, positions.file, positions.value(())
-    )
-    check_system(system)
-    return system.with_parameters(parameters) if parameters else system

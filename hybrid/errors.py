@@ -1,8 +1,15 @@
 """User-facing errors: every mistake a user can make ends in one of these.
 
-``SpecError`` carries a place in the user's file (``file:line:column``);
-``SimulationError`` carries a place in hybrid time (``t`` and ``j``).
-Anything else escaping the public API is a bug in ``hybrid``.
+All derive from :class:`HybridError`. ``SpecError`` carries a place in the
+user's file (``file:line:column``); ``SimulationError`` carries a place in
+hybrid time (``t`` and ``j``); ``UsageError``, a ``SimulationError``, is an
+invalid argument or setting (the command line exits 2 for it). Anything else
+escaping the public API is a bug in ``hybrid``.
+
+Examples
+--------
+>>> issubclass(SpecError, HybridError), issubclass(UsageError, SimulationError)
+(True, True)
 """
 
 from __future__ import annotations
@@ -11,7 +18,14 @@ import difflib
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-__all__ = ["Position", "SimulationError", "SpecError", "did_you_mean"]
+__all__ = [
+    "HybridError",
+    "Position",
+    "SimulationError",
+    "SpecError",
+    "UsageError",
+    "did_you_mean",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -36,7 +50,11 @@ class Position:
         return Position(self.file, self.line, self.column + offset)
 
 
-class SpecError(Exception):
+class HybridError(Exception):
+    """The root of every error a user of ``hybrid`` can cause."""
+
+
+class SpecError(HybridError):
     """A spec that cannot be accepted, with the place of each problem.
 
     ``message`` is the first problem; ``problems`` lists all of them as
@@ -89,7 +107,7 @@ class SpecError(Exception):
         return "\n".join(f"{pos}: {msg}" for pos, msg in self.problems)
 
 
-class SimulationError(Exception):
+class SimulationError(HybridError):
     """A simulation that cannot start or go on, with its place in hybrid time.
 
     Examples
@@ -121,6 +139,16 @@ class SimulationError(Exception):
         if self.location is not None:
             where.append(f"location {self.location}")
         return f"{' '.join(where)}: {self.message}" if where else self.message
+
+
+class UsageError(SimulationError):
+    """An invalid argument or setting of a call or command (no place in a file or in time).
+
+    Examples
+    --------
+    >>> str(UsageError("rtol must be > 0, got -1"))
+    'rtol must be > 0, got -1'
+    """
 
 
 def did_you_mean(name: str, candidates: Iterable[str], cutoff: float = 0.6) -> str:

@@ -1,6 +1,6 @@
 """The compiled, frozen hybrid automaton M = (L, X, A, W, E, Inv, Act).
 
-Built from a validated spec by :mod:`hybrid.spec.build`; read (never changed)
+Built from a validated spec by :mod:`hybrid.reader.build`; read (never changed)
 by the simulator and the analysis. Expressions are held as checked IR;
 parameters stay symbolic in the IR and are inlined when code is generated, so
 overriding a parameter is cheap (:meth:`Automaton.with_parameters`).
@@ -43,7 +43,7 @@ class Location:
     name: str
     flow: Mapping[str, ir.Expr]
     signals: Mapping[str, ir.Expr]
-    vectors: Mapping[str, ir.Call]
+    """Signal definitions that override the automaton's here (vector ones included)."""
     invariant: ir.Expr
     invariant_source: str = "true"
     position: Position = field(default_factory=lambda: Position("<spec>"))
@@ -101,7 +101,9 @@ class Automaton:
     parameters: Mapping[str, float]
     states: tuple[StateVar, ...]
     signals: Mapping[str, ir.Expr]
-    vectors: Mapping[str, ir.Call]
+    """Every signal's definition; a vector signal's is a call of a multi-output function."""
+    vector_sizes: Mapping[str, int]
+    """The number of values of each vector-valued signal (``name[k]``)."""
     signal_names: tuple[str, ...]
     inputs: tuple[str, ...]
     labels: tuple[str, ...]

@@ -14,7 +14,7 @@ Examples
 >>> a = hybrid.load_text("automaton: a\\nstate: {x: {}}\\nlocations: {l: {flow: {x: 1}}}\\n")
 >>> b = hybrid.load_text("automaton: b\\nstate: {y: {}}\\nlocations: {m: {flow: {y: 2}}}\\n")
 >>> s = compose(a, b)
->>> mode_name(s, initial_mode(s)), list(mode_of(s, initial_mode(s)).flow)
+>>> s.mode_name(s.initial_mode), list(mode_of(s, s.initial_mode).flow)
 ('a.l|b.m', ['x', 'y'])
 """
 
@@ -30,15 +30,7 @@ from hybrid.expr import ir
 from hybrid.expr.transform import bind_parameters
 from hybrid.model import Edge
 
-__all__ = [
-    "Mode",
-    "ModeView",
-    "TransitionView",
-    "initial_mode",
-    "mode_name",
-    "mode_of",
-    "transitions_of",
-]
+__all__ = ["Mode", "ModeView", "TransitionView", "mode_of", "transitions_of"]
 
 Mode = tuple[str, ...]
 
@@ -65,38 +57,19 @@ class ModeView:
     name: str
     flow: Mapping[str, ir.Expr]
     signals: Mapping[str, ir.Expr]
-    vectors: Mapping[str, ir.Call]
+    """Every signal's definition in force (vector ones are calls of multi-output functions)."""
     invariants: tuple[tuple[str, ir.Expr], ...]
     transitions: tuple[TransitionView, ...]
 
 
-def initial_mode(system: System) -> Mode:
-    return tuple(c.automaton.initial_location for c in system.components)
-
-
-def mode_name(system: System, key: Mode) -> str:
-    """``loc`` for a plain automaton, ``comp.loc|comp.loc`` for a system."""
-    if system.single:
-        return key[0]
-    return "|".join(f"{c.name}.{loc}" for c, loc in zip(system.components, key, strict=True))
-
-
-def _owners(system: System) -> dict[str, list[int]]:
-    owners: dict[str, list[int]] = {}
-    for i, c in enumerate(system.components):
-        for label in c.automaton.labels:
-            owners.setdefault(label, []).append(i)
-    return owners
-
-
 def transitions_of(system: System, key: Mode, *, bind: bool = True) -> tuple[TransitionView, ...]:
     """The transitions leaving mode ``key``, in priority-then-file order of their edges."""
-    owners = _owners(system)
+    owners = system.shared_labels
     result: list[TransitionView] = []
     shared: dict[str, list[list[Edge]]] = {}
     for i, (c, loc) in enumerate(zip(system.components, key, strict=True)):
         for edge in c.automaton.outgoing(loc):
-            if edge.label is None or len(owners.get(edge.label, [])) <= 1:
+            if edge.label is None or edge.label not in owners:
                 result.append(_single(system, key, i, edge, bind))
             else:
                 shared.setdefault(edge.label, [[] for _ in owners[edge.label]])
@@ -116,15 +89,11 @@ def _bound(system: System, i: int, node: ir.Expr, bind: bool) -> ir.Expr:
     return bind_parameters(node, system.components[i].automaton.parameters) if bind else node
 
 
-def _edge_name(system: System, i: int, edge: Edge) -> str:
-    return edge.name if system.single else f"{system.components[i].name}.{edge.name}"
-
-
 def _single(system: System, key: Mode, i: int, edge: Edge, bind: bool) -> TransitionView:
     target = list(key)
     target[i] = edge.target
     return TransitionView(
-        name=_edge_name(system, i, edge),
+        name=system.qualified(i, edge.name),
         label=edge.label,
         edges=((i, edge),),
         guard=_bound(system, i, edge.guard, bind),
@@ -146,7 +115,7 @@ def _synchronised(
         guards.append(_bound(system, i, edge.guard, bind))
         reset.update({k: _bound(system, i, v, bind) for k, v in edge.reset.items()})
     return TransitionView(
-        name="+".join(_edge_name(system, i, e) for i, e in parts),
+        name="+".join(system.qualified(i, e.name) for i, e in parts),
         label=label,
         edges=tuple(parts),
         guard=guards[0] if len(guards) == 1 else ir.BoolOp("and", tuple(guards)),
@@ -161,31 +130,23 @@ def mode_of(system: System, key: Mode) -> ModeView:
     """Flows, signals, invariants and transitions of mode ``key``, parameters bound."""
     flow: dict[str, ir.Expr] = {}
     signals: dict[str, ir.Expr] = {}
-    vectors: dict[str, ir.Call] = {}
     invariants: list[tuple[str, ir.Expr]] = []
     for i, (c, loc_name) in enumerate(zip(system.components, key, strict=True)):
         a = c.automaton
         loc = a.locations[loc_name]
         for name in a.signal_names:
-            if name in loc.signals:
-                signals[name] = _bound(system, i, loc.signals[name], True)
-            elif name in loc.vectors:
-                vectors[name] = _bound(system, i, loc.vectors[name], True)  # type: ignore[assignment]
-            elif name in a.signals:
-                signals[name] = _bound(system, i, a.signals[name], True)
-            else:
-                vectors[name] = _bound(system, i, a.vectors[name], True)  # type: ignore[assignment]
+            signals[name] = _bound(system, i, loc.signals.get(name, a.signals[name]), True)
         for var, expr in loc.flow.items():
             flow[var] = _bound(system, i, expr, True)
         if not (isinstance(loc.invariant, ir.BoolConst) and loc.invariant.value):
-            label = loc_name if system.single else f"{c.name}.{loc_name}"
-            invariants.append((label, _bound(system, i, loc.invariant, True)))
+            invariants.append(
+                (system.qualified(i, loc_name), _bound(system, i, loc.invariant, True))
+            )
     return ModeView(
         key=key,
-        name=mode_name(system, key),
+        name=system.mode_name(key),
         flow=MappingProxyType(flow),
         signals=MappingProxyType(signals),
-        vectors=MappingProxyType(vectors),
         invariants=tuple(invariants),
         transitions=transitions_of(system, key),
     )

@@ -72,7 +72,7 @@ class Analysis:
 
     def qualified(self, component: int, name: str) -> str:
         """A location or edge name as the user writes it (``comp.name`` in a system)."""
-        return name if self.system.single else f"{self.system.components[component].name}.{name}"
+        return self.system.qualified(component, name)
 
     def witness_to(self, location: str) -> tuple[WitnessStep, ...] | None:
         """A shortest path to a location (``comp.loc`` in a system), or ``None`` if unreachable.
@@ -298,7 +298,7 @@ def unused_declarations(analysis: Analysis) -> list[Finding]:
     location overrides it.
     """
     found: list[Finding] = []
-    for comp in analysis.system.components:
+    for index, comp in enumerate(analysis.system.components):
         a = comp.automaton
         exprs = _expressions(a)
         params: set[str] = set()
@@ -306,15 +306,14 @@ def unused_declarations(analysis: Analysis) -> list[Finding]:
         for e in exprs:
             params |= ir.names_in(e, ir.PARAM)
             inputs |= ir.names_in(e, ir.INPUT)
-        prefix = "" if analysis.system.single else f"{comp.name}."
         for name in a.parameters:
             if name not in params:
                 found.append(
                     Finding.at(
                         "unused-declaration",
                         a.parameter_positions.get(name, a.position),
-                        f"parameter '{prefix}{name}' is never used",
-                        where=f"{prefix}{name}",
+                        f"parameter '{analysis.qualified(index, name)}' is never used",
+                        where=analysis.qualified(index, name),
                     )
                 )
         for name in a.inputs:
@@ -323,8 +322,8 @@ def unused_declarations(analysis: Analysis) -> list[Finding]:
                     Finding.at(
                         "unused-declaration",
                         a.input_positions.get(name, a.position),
-                        f"input '{prefix}{name}' is never used",
-                        where=f"{prefix}{name}",
+                        f"input '{analysis.qualified(index, name)}' is never used",
+                        where=analysis.qualified(index, name),
                     )
                 )
         carried = {e.label for e in a.edges}
@@ -334,22 +333,22 @@ def unused_declarations(analysis: Analysis) -> list[Finding]:
                     Finding.at(
                         "unused-declaration",
                         a.label_positions.get(name, a.position),
-                        f"label '{prefix}{name}' is on no edge"
+                        f"label '{analysis.qualified(index, name)}' is on no edge"
                         + (
                             " (so edges of other components with this label can never fire)"
                             if name in analysis.tables.owners
                             else ""
                         ),
-                        where=f"{prefix}{name}",
+                        where=analysis.qualified(index, name),
                     )
                 )
     return found
 
 
 def _expressions(a: Automaton) -> list[ir.Expr]:
-    exprs: list[ir.Expr] = [*a.signals.values(), *a.vectors.values()]
+    exprs: list[ir.Expr] = [*a.signals.values()]
     for loc in a.locations.values():
-        exprs += [*loc.flow.values(), *loc.signals.values(), *loc.vectors.values(), loc.invariant]
+        exprs += [*loc.flow.values(), *loc.signals.values(), loc.invariant]
     for edge in a.edges:
         exprs += [edge.guard, *edge.reset.values()]
     return exprs

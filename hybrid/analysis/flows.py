@@ -11,7 +11,7 @@ Points where the flow is tangent (derivative exactly 0) are not exits.
 Examples
 --------
 >>> from hybrid.expr.parse import Scope, parse_expression
->>> from hybrid.expr.codegen import to_source
+>>> from hybrid.expr.printer import to_source
 >>> scope = Scope({"h": "state", "v": "state"})
 >>> inv = parse_expression("h >= 0", scope, want="bool")
 >>> [to_source(c, {"h": "h", "v": "v"}) for c in exit_conditions(inv, {"h": ir.Var("v", "state")})]
@@ -94,7 +94,7 @@ def derivative(
 
     Examples
     --------
-    >>> from hybrid.expr.codegen import to_source
+    >>> from hybrid.expr.printer import to_source
     >>> x = ir.Var("x", "state")
     >>> d = derivative(ir.Bin("*", x, x), {"x": ir.Num(2.0)}, {})
     >>> to_source(d, {"x": "x"})

@@ -26,11 +26,11 @@ from typing import Any
 from urllib.parse import quote
 
 from hybrid.analysis.findings import RULES, Finding, Report
+from hybrid.version import __version__
 
 __all__ = ["FORMATS", "SARIF_SCHEMA", "write"]
 
 SARIF_SCHEMA = "https://json.schemastore.org/sarif-2.1.0.json"
-TOOL_VERSION = "0.1.0"
 _GITHUB_LEVEL = {"error": "error", "warning": "warning", "note": "notice"}
 
 
@@ -173,7 +173,7 @@ def sarif(reports: Sequence[Report], strict: bool = False) -> str:
                 "tool": {
                     "driver": {
                         "name": "hybrid",
-                        "version": TOOL_VERSION,
+                        "version": __version__,
                         "rules": rules,
                     }
                 },

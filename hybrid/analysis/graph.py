@@ -18,17 +18,13 @@ Examples
 
 from __future__ import annotations
 
-import math
-
 import networkx as nx
 
 from hybrid.analysis.static import AutomatonFacts
-from hybrid.expr import ir
+from hybrid.expr.printer import expression_text
 from hybrid.model import Automaton
 
-__all__ = ["expression_text", "live_subgraph", "location_graph"]
-
-_PREC = {"or": 1, "and": 2, "not": 3, "cmp": 4, "+": 5, "-": 5, "*": 6, "/": 6, "neg": 7, "**": 8}
+__all__ = ["live_subgraph", "location_graph"]
 
 
 def location_graph(automaton: Automaton, facts: AutomatonFacts | None = None) -> nx.MultiDiGraph:
@@ -75,56 +71,3 @@ def location_graph(automaton: Automaton, facts: AutomatonFacts | None = None) ->
 def live_subgraph(graph: nx.MultiDiGraph) -> nx.MultiDiGraph:
     """A view of ``graph`` keeping only the edges whose guard can hold."""
     return nx.subgraph_view(graph, filter_edge=lambda u, v, k: graph.edges[u, v, k]["live"])
-
-
-def expression_text(node: ir.Expr) -> str:
-    """An expression as a user would write it.
-
-    Examples
-    --------
-    >>> from hybrid.expr.parse import Scope, parse_expression
-    >>> expression_text(parse_expression("-e*v + max(0, v)**2", Scope({"e": "param", "v": "state"})))
-    '-e * v + max(0, v) ** 2'
-    """
-    return _emit(node)[0]
-
-
-def _number(value: float) -> str:
-    if math.isfinite(value) and value == int(value) and abs(value) < 1e15:
-        return str(int(value))
-    return repr(value)
-
-
-def _wrap(node: ir.Expr, min_prec: int) -> str:
-    text, prec = _emit(node)
-    return f"({text})" if prec < min_prec else text
-
-
-def _emit(node: ir.Expr) -> tuple[str, int]:
-    if isinstance(node, ir.Num):
-        text = _number(node.value)
-        return (text, 9) if not text.startswith("-") else (text, _PREC["neg"])
-    if isinstance(node, ir.BoolConst):
-        return ("true" if node.value else "false"), 9
-    if isinstance(node, ir.Var):
-        return node.name, 9
-    if isinstance(node, ir.Index):
-        return f"{node.name}[{node.index}]", 9
-    if isinstance(node, ir.Call):
-        return f"{node.func}({', '.join(_emit(a)[0] for a in node.args)})", 9
-    if isinstance(node, ir.Unary):
-        return f"-{_wrap(node.operand, _PREC['neg'] + 1)}", _PREC["neg"]
-    if isinstance(node, ir.Bin):
-        p = _PREC[node.op]
-        if node.op == "**":  # right-associative
-            return f"{_wrap(node.left, p + 1)} ** {_wrap(node.right, p)}", p
-        return f"{_wrap(node.left, p)} {node.op} {_wrap(node.right, p + 1)}", p
-    if isinstance(node, ir.Cmp):
-        parts = [_wrap(node.operands[0], _PREC["cmp"] + 1)]
-        for op, operand in zip(node.ops, node.operands[1:], strict=True):
-            parts.append(f"{op} {_wrap(operand, _PREC['cmp'] + 1)}")
-        return " ".join(parts), _PREC["cmp"]
-    if isinstance(node, ir.BoolOp):
-        p = _PREC[node.op]
-        return f" {node.op} ".join(_wrap(v, p + 1) for v in node.values), p
-    return f"not {_wrap(node.operand, _PREC['not'])}", _PREC["not"]

@@ -47,10 +47,9 @@ from dataclasses import dataclass, field
 import networkx as nx
 import numpy as np
 
-from hybrid.analysis.graph import expression_text
 from hybrid.analysis.static import AutomatonFacts
 from hybrid.compose import System
-from hybrid.modes import mode_name
+from hybrid.expr.printer import expression_text
 
 __all__ = [
     "DEFAULT_MAX_STATES",
@@ -112,11 +111,7 @@ class ProductTables:
             if facts is not None
             else [AutomatonFacts(c.automaton) for c in system.components]
         )
-        owners: dict[str, list[int]] = {}
-        for i, c in enumerate(system.components):
-            for label in c.automaton.labels:
-                owners.setdefault(label, []).append(i)
-        self.owners = {a: tuple(o) for a, o in owners.items() if len(o) > 1}
+        self.owners = system.shared_labels
         self.components: list[_Component] = []
         for comp, fa in zip(system.components, facts, strict=True):
             automaton = comp.automaton
@@ -131,7 +126,7 @@ class ProductTables:
                 local.append(tuple(e.index for e in live if e.label not in self.owners))
                 per: dict[str, list[int]] = {}
                 for e in live:
-                    if e.label in self.owners:
+                    if e.label is not None and e.label in self.owners:
                         per.setdefault(e.label, []).append(e.index)
                 sync.append({a: tuple(v) for a, v in per.items()})
                 conflicts.append(fa.conflicts(name))
@@ -146,8 +141,7 @@ class ProductTables:
             self.weights.append(self.size)
             self.size *= n
         self.initial: Mode = tuple(
-            comp.index[c.automaton.initial_location]
-            for comp, c in zip(self.components, system.components, strict=True)
+            comp.index[loc] for comp, loc in zip(self.components, system.initial_mode, strict=True)
         )
         self._stuck: dict[tuple[int, int, int], bool] = {}
         self._conflict: dict[tuple[int, int, int], bool] = {}
@@ -162,20 +156,17 @@ class ProductTables:
 
     def name(self, mode: Mode) -> str:
         """``loc`` for a plain automaton, ``comp.loc|comp.loc`` for a system."""
-        return mode_name(
-            self.system, tuple(c.locations[k] for c, k in zip(self.components, mode, strict=True))
+        return self.system.mode_name(
+            tuple(c.locations[k] for c, k in zip(self.components, mode, strict=True))
         )
 
     def location_name(self, component: int, location: int) -> str:
         """A component location as the user writes it (qualified in a system)."""
-        c = self.components[component]
-        loc = c.locations[location]
-        return loc if self.system.single else f"{c.name}.{loc}"
+        return self.system.qualified(component, self.components[component].locations[location])
 
     def edge_name(self, component: int, edge: int) -> str:
-        c = self.components[component]
-        name = c.facts.automaton.edges[edge].name
-        return name if self.system.single else f"{c.name}.{name}"
+        name = self.components[component].facts.automaton.edges[edge].name
+        return self.system.qualified(component, name)
 
     def transition_name(self, transition: Transition) -> str:
         return "+".join(self.edge_name(i, e) for i, e in transition.parts)

@@ -99,7 +99,7 @@ def nnf(node: ir.Expr, *, negated: bool = False) -> ir.Expr:
     Examples
     --------
     >>> from hybrid.expr.parse import Scope, parse_expression
-    >>> from hybrid.expr.codegen import to_source
+    >>> from hybrid.expr.printer import to_source
     >>> g = parse_expression("not (x < 1 and 0 <= x <= 2)", Scope({"x": "state"}), want="bool")
     >>> to_source(nnf(g), {"x": "x"})
     'x >= 1.0 or 0.0 > x or x > 2.0'

@@ -92,14 +92,17 @@ class AutomatonFacts:
         }
         opaque = frozenset(n for n, f in automaton.functions.items() if not f.builtin)
         self.opaque = opaque
-        base = {k: bind_parameters(v, params) for k, v in automaton.signals.items()}
+        vectors = automaton.vector_sizes  # their values are a library's: unknown here
+        base = {
+            k: bind_parameters(v, params) for k, v in automaton.signals.items() if k not in vectors
+        }
         self.locations: dict[str, LocationFacts] = {}
         envs: dict[tuple[object, ...], Env] = {}  # locations with the same signals share one
         for name, loc in automaton.locations.items():
             signals = dict(base)
-            for k in loc.vectors:
-                signals.pop(k, None)
-            signals.update({k: bind_parameters(v, params) for k, v in loc.signals.items()})
+            signals.update(
+                {k: bind_parameters(v, params) for k, v in loc.signals.items() if k not in vectors}
+            )
             env_key = tuple(sorted((k, structural_key(v)) for k, v in signals.items()))
             env = envs.setdefault(env_key, Env(MappingProxyType(signals), opaque))
             invariant = bind_parameters(loc.invariant, params)
@@ -284,7 +287,7 @@ def inline_signals(
 
     Examples
     --------
-    >>> from hybrid.expr.codegen import to_source
+    >>> from hybrid.expr.printer import to_source
     >>> s = {"g": ir.Bin("*", ir.Num(2.0), ir.Var("x", "state"))}
     >>> to_source(inline_signals(ir.Var("g", "signal"), s), {"x": "x"})
     '2.0 * x'

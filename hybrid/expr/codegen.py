@@ -25,11 +25,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from hybrid.expr import ir
+from hybrid.expr.dependencies import evaluation_order
 from hybrid.expr.functions import BUILTINS, Function
+from hybrid.expr.generated import define
+from hybrid.expr.printer import SourcePrinter
 
-__all__ = ["CodeContext", "EvalFailure", "compile_function", "signal_order", "to_source"]
+__all__ = ["CodeContext", "EvalFailure", "compile_function"]
 
-_PREC = {"or": 1, "and": 2, "not": 3, "cmp": 4, "+": 5, "-": 5, "*": 6, "/": 6, "neg": 7, "**": 8}
 _ERRORS = (ArithmeticError, ValueError, TypeError)
 
 
@@ -53,78 +55,16 @@ class EvalFailure:
 class CodeContext:
     """Everything names in an expression can refer to when compiled.
 
-    ``signals`` and ``vectors`` are the signal definitions in force (scalar and
-    vector-valued); ``inputs`` gives external inputs as callables of ``t``.
+    ``signals`` are the signal definitions in force (a vector signal's is a call
+    of a multi-output function); ``inputs`` gives external inputs as callables of ``t``.
     """
 
     states: Sequence[str]
     params: Mapping[str, float] = field(default_factory=dict)
     signals: Mapping[str, ir.Expr] = field(default_factory=dict)
-    vectors: Mapping[str, ir.Call] = field(default_factory=dict)
     inputs: Mapping[str, Callable[[float], float]] = field(default_factory=dict)
     functions: Mapping[str, Function] = field(default_factory=dict)
     failure: EvalFailure = field(default_factory=EvalFailure)
-
-
-def to_source(node: ir.Expr, names: Mapping[str, str], consts: list[float] | None = None) -> str:
-    """Python source for ``node``; ``names`` maps each variable to its local name."""
-    return _Printer(names, consts if consts is not None else []).emit(node)[0]
-
-
-class _Printer:
-    def __init__(self, names: Mapping[str, str], consts: list[float]) -> None:
-        self.names = names
-        self.consts = consts
-
-    def number(self, value: float) -> str:
-        if math.isfinite(value):
-            text = repr(float(value))
-            return f"({text})" if text.startswith("-") else text
-        self.consts.append(value)
-        return f"_K[{len(self.consts) - 1}]"
-
-    def emit(self, node: ir.Expr) -> tuple[str, int]:
-        if isinstance(node, ir.Num):
-            return self.number(node.value), 9
-        if isinstance(node, ir.BoolConst):
-            return ("True" if node.value else "False"), 9
-        if isinstance(node, ir.Var):
-            if node.kind == ir.TIME:
-                return "t", 9
-            return self.names[node.name], 9
-        if isinstance(node, ir.Index):
-            return f"{self.names[node.name]}[{node.index}]", 9
-        if isinstance(node, ir.Call):
-            args = ", ".join(self.emit(a)[0] for a in node.args)
-            return f"_{node.func}({args})", 9
-        if isinstance(node, ir.Unary):
-            return f"-{self.wrap(node.operand, _PREC['neg'] + 1)}", _PREC["neg"]
-        if isinstance(node, ir.Bin):
-            p = _PREC[node.op]
-            if node.op == "**":
-                exponent = node.right
-                if isinstance(exponent, ir.Num) and exponent.value in (2.0, 3.0):
-                    base = self.wrap(node.left, 9)
-                    return f"{base} ** {int(exponent.value)}", p
-                return f"_pow({self.emit(node.left)[0]}, {self.emit(node.right)[0]})", 9
-            left = self.wrap(node.left, p)
-            right = self.wrap(node.right, p + 1)
-            return f"{left} {node.op} {right}", p
-        if isinstance(node, ir.Cmp):
-            parts = [self.wrap(node.operands[0], _PREC["cmp"] + 1)]
-            for op, operand in zip(node.ops, node.operands[1:], strict=True):
-                parts.append(f"{op} {self.wrap(operand, _PREC['cmp'] + 1)}")
-            return " ".join(parts), _PREC["cmp"]
-        if isinstance(node, ir.BoolOp):
-            p = _PREC[node.op]
-            return f" {node.op} ".join(self.wrap(v, p + 1) for v in node.values), p
-        if isinstance(node, ir.Not):
-            return f"not {self.wrap(node.operand, _PREC['not'])}", _PREC["not"]
-        raise TypeError(f"unknown IR node {node!r}")
-
-    def wrap(self, node: ir.Expr, min_prec: int) -> str:
-        text, prec = self.emit(node)
-        return f"({text})" if prec < min_prec else text
 
 
 _SAFE_CALLS = {"min", "max", "abs"}
@@ -158,39 +98,6 @@ def _state_uses(
     return uses
 
 
-def signal_order(
-    needed: set[str],
-    signals: Mapping[str, ir.Expr],
-    vectors: Mapping[str, ir.Call],
-) -> list[str]:
-    """The signals ``needed`` (and those they use), dependencies first."""
-    order: list[str] = []
-    done: set[str] = set()
-    active: set[str] = set()
-    stack: list[tuple[str, bool]] = [(name, False) for name in sorted(needed, reverse=True)]
-    while stack:
-        name, expanded = stack.pop()
-        if name in done:
-            continue
-        definition = signals.get(name) or vectors.get(name)
-        if definition is None:
-            done.add(name)
-            continue
-        if expanded:
-            done.add(name)
-            active.discard(name)
-            order.append(name)
-            continue
-        if name in active:
-            raise ValueError(f"signals form a circular definition through '{name}'")
-        active.add(name)
-        stack.append((name, True))
-        # inputs bound to another component's signal are dependencies too
-        deps = {d for d in ir.names_in(definition) if d in signals or d in vectors}
-        stack.extend((d, False) for d in sorted(deps, reverse=True) if d not in done)
-    return order
-
-
 def compile_function(
     name: str,
     outputs: Sequence[ir.Expr],
@@ -211,30 +118,26 @@ def compile_function(
     if reset_of is not None:
         exprs = [e for e in reset_of if e is not None]
     names: dict[str, str] = {s: f"x_{s}" for s in ctx.states}
-    names.update({s: f"s_{s}" for s in (*ctx.signals, *ctx.vectors)})
+    names.update({s: f"s_{s}" for s in ctx.signals})
     names.update({s: f"u_{s}" for s in ctx.inputs})
     consts: list[float] = []
-    printer = _Printer(names, consts)
+    printer = SourcePrinter(names, consts)
     for pname, value in ctx.params.items():
-        names[pname] = printer.number(float(value))
+        names[pname] = printer.literal(float(value))
 
     used: set[str] = set()
     for e in exprs:
         used |= ir.names_in(e)
-    sig_needed = {n for n in used if n in ctx.signals or n in ctx.vectors}
-    order = signal_order(sig_needed, ctx.signals, ctx.vectors)
+    order = evaluation_order(used, ctx.signals)
     all_used = set(used)
     for s in order:
-        all_used |= ir.names_in(ctx.signals.get(s) or ctx.vectors[s])
+        all_used |= ir.names_in(ctx.signals[s])
 
     body: list[str] = []
-    uses = _state_uses(exprs, [ctx.signals.get(s) or ctx.vectors[s] for s in order], ctx.states)
+    definitions = [ctx.signals[s] for s in order]
+    uses = _state_uses(exprs, definitions, ctx.states)
     tiny = all(n <= 1 for n in uses.values()) and sum(uses.values()) <= 3
-    if (
-        reset_of is None
-        and tiny
-        and _float_safe([*exprs, *(ctx.signals.get(s) or ctx.vectors[s] for s in order)])
-    ):
+    if reset_of is None and tiny and _float_safe([*exprs, *definitions]):
         # a tiny function: index the array directly (faster than converting it)
         for i, s in enumerate(ctx.states):
             names[s] = f"x[{i}]"
@@ -243,8 +146,7 @@ def compile_function(
         body.append(f"{targets}, = x.tolist()")
     for u in sorted(n for n in all_used if n in ctx.inputs):
         body.append(f"{names[u]} = _in_{u}(t)")
-    for s in order:
-        definition = ctx.signals.get(s) or ctx.vectors[s]
+    for s, definition in zip(order, definitions, strict=True):
         body.append(f"{names[s]} = {printer.emit(definition)[0]}")
 
     failed: str
@@ -274,7 +176,6 @@ def compile_function(
     source = "\n".join(lines) + "\n"
 
     scope: dict[str, Any] = {
-        "__builtins__": {},
         "_ERRORS": _ERRORS,
         "_failure": ctx.failure,
         "_nan": math.nan,
@@ -288,8 +189,6 @@ def compile_function(
         scope[f"_{fname}"] = func.fn
     for u, fn in ctx.inputs.items():
         scope[f"_in_{u}"] = fn
-    code = compile(source, f"<hybrid:{name}>", "exec")
-    exec(code, scope)
-    compiled: Callable[..., Any] = scope[name]
+    compiled = define(name, source, scope)
     compiled.__doc__ = source
     return compiled

@@ -12,7 +12,7 @@ the boolean form to decide a guard that sits exactly on its boundary.
 Examples
 --------
 >>> from hybrid.expr.parse import Scope, parse_expression
->>> from hybrid.expr.codegen import to_source
+>>> from hybrid.expr.printer import to_source
 >>> g = parse_expression("h <= 0 and v < 0", Scope({"h": "state", "v": "state"}), want="bool")
 >>> to_source(guard_to_rho(g), {"h": "h", "v": "v"})
 '_max(h, v)'

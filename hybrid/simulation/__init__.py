@@ -1,6 +1,34 @@
-"""Event-detected simulation of hybrid automata and systems."""
+"""Event-detected simulation of hybrid automata and systems.
 
-from hybrid.simulation.engine import METHODS, simulate
-from hybrid.simulation.result import CAUSES, Jump, Run, Termination
+Modules: :mod:`~hybrid.simulation.settings` (what a run is asked to do),
+:mod:`~hybrid.simulation.compiled` (the model's functions per mode),
+:mod:`~hybrid.simulation.boundary` (decisions at a point),
+:mod:`~hybrid.simulation.events` (the watch event, Ctrl-C),
+:mod:`~hybrid.simulation.loop` (the event loop), :mod:`~hybrid.simulation.recorder`
+and :mod:`~hybrid.simulation.result` (what a run returns),
+:mod:`~hybrid.simulation.zeno`, :mod:`~hybrid.simulation.failures` (messages),
+:mod:`~hybrid.simulation.engine` (``simulate``).
+"""
+
+from typing import TYPE_CHECKING
+
+from hybrid.lazy import lazy_attributes
+
+if TYPE_CHECKING:
+    from hybrid.simulation.engine import simulate
+    from hybrid.simulation.result import CAUSES, Jump, Run, Termination
+    from hybrid.simulation.settings import METHODS
 
 __all__ = ["CAUSES", "METHODS", "Jump", "Run", "Termination", "simulate"]
+
+__getattr__, __dir__ = lazy_attributes(
+    __name__,
+    {
+        "CAUSES": "hybrid.simulation.result",
+        "METHODS": "hybrid.simulation.settings",
+        "Jump": "hybrid.simulation.result",
+        "Run": "hybrid.simulation.result",
+        "Termination": "hybrid.simulation.result",
+        "simulate": "hybrid.simulation.engine",
+    },
+)

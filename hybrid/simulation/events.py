@@ -13,6 +13,8 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
+from hybrid.expr.generated import define
+
 __all__ = ["STALL_CALLS", "Interrupt", "sigint_watch", "watch_factory"]
 
 STALL_CALLS = 50
@@ -115,10 +117,7 @@ def watch_factory(signs: tuple[float, ...], armed: tuple[bool, ...]) -> Callable
         "    watch.direction = -1.0",
         "    return watch",
     ]
-    scope: dict[str, Any] = {"__builtins__": {}}
-    exec(compile("\n".join(lines) + "\n", "<hybrid:watch>", "exec"), scope)
-    factory: Callable[..., Any] = scope["make"]
-    return factory
+    return define("make", "\n".join(lines) + "\n", {})
 
 
 class Interrupt:

@@ -10,7 +10,7 @@ import pytest
 
 import hybrid
 from hybrid.analysis import location_graph, product_graph
-from hybrid.analysis.diagrams import edge_text, mermaid_escape, to_dot, to_mermaid
+from hybrid.export.diagrams import edge_text, mermaid_escape, to_dot, to_mermaid
 from hybrid.analysis.product import ProductTables
 
 # pydot's parser uses pyparsing names that newer pyparsing deprecates

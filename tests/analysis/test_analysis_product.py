@@ -12,7 +12,7 @@ from hybrid.analysis import check, product_graph
 from hybrid.analysis.product import ProductTables, explore, explore_reference
 from hybrid.analysis.static import AutomatonFacts
 from hybrid.compose import System
-from hybrid.modes import initial_mode, mode_name, transitions_of
+from hybrid.modes import transitions_of
 
 HEATER = """
 automaton: heater
@@ -94,7 +94,7 @@ def _reference_modes(system: System) -> set[str]:
     def live(tr) -> bool:
         return all(facts[i].edges[e.index].live for i, e in tr.edges)
 
-    seen = {initial_mode(system)}
+    seen = {system.initial_mode}
     queue = deque(seen)
     while queue:
         mode = queue.popleft()
@@ -102,7 +102,7 @@ def _reference_modes(system: System) -> set[str]:
             if live(tr) and tr.target not in seen:
                 seen.add(tr.target)
                 queue.append(tr.target)
-    return {mode_name(system, m) for m in seen}
+    return {system.mode_name(m) for m in seen}
 
 
 def test_product_graph_agrees_with_compose_transitions():

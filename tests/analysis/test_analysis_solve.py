@@ -8,7 +8,7 @@ import pytest
 
 import hybrid
 from hybrid.analysis.flows import derivative, exit_conditions
-from hybrid.analysis.graph import expression_text
+from hybrid.expr.printer import expression_text
 from hybrid.analysis.linear import Affine, Linearizer, Row, lp_feasible
 from hybrid.analysis.solve import Env, closure, contract, dnf, negate, nnf, satisfiable
 from hybrid.analysis.static import AutomatonFacts, inline_signals

@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from hybrid.expr import ir
-from hybrid.expr.codegen import CodeContext, compile_function, to_source
+from hybrid.expr.codegen import CodeContext, compile_function
+from hybrid.expr.printer import to_source
 from hybrid.expr.functions import BUILTINS
 from hybrid.expr.parse import ExprError, Scope, parse_expression
 

@@ -50,7 +50,7 @@ def test_mutated_specs_load_or_fail_with_a_position(text: str) -> None:
 @settings(max_examples=200, deadline=None)
 @given(st.binary(max_size=200))
 def test_random_bytes_never_escape(raw: bytes) -> None:
-    from hybrid.spec.yamlpos import read_yaml_bytes
+    from hybrid.reader.yamlpos import read_yaml_bytes
 
     with contextlib.suppress(hybrid.SpecError):
         read_yaml_bytes(raw, "b.yaml")

@@ -12,7 +12,7 @@ import jsonschema
 import pytest
 
 from hybrid.cli import main as cli_main
-from hybrid.spec.jsonschema import spec_schema
+from hybrid.reader.jsonschema import spec_schema
 
 ROOT = Path(__file__).resolve().parents[2]
 SPECS = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "specs").glob("*.yaml"))

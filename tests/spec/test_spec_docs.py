@@ -10,7 +10,7 @@ from pydantic import BaseModel
 
 from hybrid.expr.functions import BUILTINS
 from hybrid.expr.parse import MAX_DEPTH, MAX_SOURCE_CHARS
-from hybrid.spec.schema import (
+from hybrid.reader.schema import (
     AutomatonSpec,
     ComponentSpec,
     EdgeSpec,
@@ -20,7 +20,7 @@ from hybrid.spec.schema import (
     StateVarSpec,
     SystemSpec,
 )
-from hybrid.spec.yamlpos import MAX_FILE_BYTES, MAX_YAML_DEPTH
+from hybrid.reader.yamlpos import MAX_FILE_BYTES, MAX_YAML_DEPTH
 
 ROOT = Path(__file__).resolve().parents[2]
 DOC = (ROOT / "docs" / "spec-language.md").read_text(encoding="utf-8")

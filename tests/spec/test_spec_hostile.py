@@ -30,7 +30,7 @@ import pytest
 
 import hybrid
 from hybrid.cli import main as cli_main
-from hybrid.spec.yamlpos import MAX_FILE_BYTES
+from hybrid.reader.yamlpos import MAX_FILE_BYTES
 
 TIME_LIMIT = 1.0
 

@@ -10,8 +10,8 @@ import jsonschema
 import pytest
 
 import hybrid
-from hybrid.spec.jsonschema import spec_schema, spec_schema_text
-from hybrid.spec.yamlpos import read_yaml_file, read_yaml_text
+from hybrid.reader.jsonschema import spec_schema, spec_schema_text
+from hybrid.reader.yamlpos import read_yaml_file, read_yaml_text
 
 ROOT = Path(__file__).resolve().parents[2]
 SCHEMA_PATH = ROOT / "docs" / "schema" / "automaton.schema.json"
@@ -33,7 +33,7 @@ def validator(committed: dict[str, Any]) -> jsonschema.Draft7Validator:
 def test_committed_schema_is_up_to_date() -> None:
     assert SCHEMA_PATH.read_text(encoding="utf-8") == spec_schema_text(), (
         "docs/schema/automaton.schema.json is out of date; regenerate it with\n"
-        "  python -c 'from hybrid.spec.jsonschema import spec_schema_text as s; "
+        "  python -c 'from hybrid.reader.jsonschema import spec_schema_text as s; "
         'print(s(), end="")\' > docs/schema/automaton.schema.json'
     )
 

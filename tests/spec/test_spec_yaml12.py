@@ -7,7 +7,7 @@ import math
 import pytest
 
 import hybrid
-from hybrid.spec.yamlpos import read_yaml_text
+from hybrid.reader.yamlpos import read_yaml_text
 
 
 @pytest.mark.parametrize(

@@ -6,7 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from hybrid.errors import SimulationError
+from hybrid.cli.exits import EXIT_FINDINGS, EXIT_OK
+from hybrid.errors import UsageError
 from hybrid.simulation.engine import simulate
 from hybrid.simulation.result import Run
 
@@ -15,14 +16,14 @@ __all__ = ["run_simulate"]
 
 def run_simulate(args: argparse.Namespace) -> int:
     """The ``simulate`` command; returns the exit code (0, 1 or 2)."""
-    from hybrid.spec.loader import load
+    from hybrid.reader.loader import load
 
     outputs = [(flag, getattr(args, flag)) for flag in ("out", "events", "plot")]
     for flag, path in outputs:
         if path is not None and not Path(path).resolve().parent.is_dir():
-            raise SimulationError(f"--{flag}: directory of '{path}' does not exist")
+            raise UsageError(f"--{flag}: directory of '{path}' does not exist")
     if args.out is not None and Path(args.out).suffix.lower() not in (".csv", ".npz"):
-        raise SimulationError(f"--out: use a .csv or .npz file name, got '{args.out}'")
+        raise UsageError(f"--out: use a .csv or .npz file name, got '{args.out}'")
     model = load(args.file)
     parameters = dict(args.param)
     if parameters:
@@ -46,10 +47,10 @@ def run_simulate(args: argparse.Namespace) -> int:
     )
     if term.cause == "t_end":
         print(summary)
-        return 0
+        return EXIT_OK
     print(summary, file=sys.stderr)
     print(f"{args.file}: t={term.t:.9g} j={term.j}: {term.cause}: {term.message}", file=sys.stderr)
-    return 1
+    return EXIT_FINDINGS
 
 
 def _write_outputs(run: Run, args: argparse.Namespace) -> None:

@@ -1,7 +1,7 @@
 """Pydantic models of the two spec files: an automaton and a system.
 
 They check shape and types only (``extra="forbid"``); cross-references and
-expressions are checked afterwards by :mod:`hybrid.spec.build`, which knows
+expressions are checked afterwards by :mod:`hybrid.reader.build`, which knows
 positions. Expressions are kept as strings here; numbers and booleans written
 where an expression belongs are turned into their source text.
 """

@@ -25,15 +25,14 @@ from collections.abc import Sequence
 from typing import TextIO
 
 from hybrid.analysis import check, system_graph
-from hybrid.analysis.diagrams import to_dot, to_mermaid
 from hybrid.analysis.findings import Finding, Report
 from hybrid.analysis.formats import FORMATS, write
+from hybrid.cli.exits import EXIT_FINDINGS, EXIT_INVALID, EXIT_OK
 from hybrid.errors import SpecError
-from hybrid.spec.loader import load
+from hybrid.export.diagrams import DIAGRAM_FORMATS
+from hybrid.reader.loader import load
 
-__all__ = ["EXIT_FINDINGS", "EXIT_INVALID", "EXIT_OK", "run_check", "run_graph"]
-
-EXIT_OK, EXIT_FINDINGS, EXIT_INVALID = 0, 1, 2
+__all__ = ["run_check", "run_graph"]
 
 
 def run_check(
@@ -92,9 +91,9 @@ def run_graph(file: str, *, fmt: str = "dot", out: TextIO | None = None) -> int:
 
     Raises :class:`hybrid.SpecError` for an invalid spec (the CLI exits 2).
     """
-    writers = {"dot": to_dot, "mermaid": to_mermaid}
+    writers = DIAGRAM_FORMATS
     if fmt not in writers:
-        raise ValueError(f"unknown format '{fmt}'; choose from dot, mermaid")
+        raise ValueError(f"unknown format '{fmt}'; choose from {', '.join(writers)}")
     out = out or sys.stdout
     graph = system_graph(load(file))
     if not graph.graph.get("complete", True):

@@ -16,7 +16,7 @@ from typing import Any
 
 from pydantic.json_schema import models_json_schema
 
-from hybrid.spec.schema import AutomatonSpec, SystemSpec
+from hybrid.reader.schema import AutomatonSpec, SystemSpec
 
 __all__ = ["spec_schema", "spec_schema_text"]
 

@@ -12,11 +12,12 @@ import json
 import sys
 from collections.abc import Sequence
 
-from hybrid.errors import SimulationError, SpecError
+from hybrid.analysis.formats import FORMATS as REPORT_FORMATS
+from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_INVALID, EXIT_OK
+from hybrid.errors import SimulationError, SpecError, UsageError
+from hybrid.version import __version__
 
-__all__ = ["main"]
-
-EXIT_OK, EXIT_FINDINGS, EXIT_INVALID = 0, 1, 2
+__all__ = ["EXIT_FINDINGS", "EXIT_INVALID", "EXIT_OK", "build_parser", "main"]
 
 
 class _Parser(argparse.ArgumentParser):
@@ -60,8 +61,12 @@ def _count(text: str) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``hybrid`` command (the CLI reference is generated from it)."""
+    from hybrid.export.diagrams import DIAGRAM_FORMATS
+    from hybrid.simulation.settings import METHODS
+
     parser = _Parser(prog="hybrid", description="Hybrid automata: validate, check, simulate.")
-    parser.add_argument("--version", action="version", version="hybrid 0.1.0")
+    parser.add_argument("--version", action="version", version=f"hybrid {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("validate", help="parse and check the spec language only")
@@ -69,7 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("check", help="graph and property checks")
     p.add_argument("files", nargs="+", metavar="FILE")
-    p.add_argument("--format", choices=["text", "json", "github", "junit", "sarif"], default="text")
+    p.add_argument("--format", choices=tuple(REPORT_FORMATS), default="text")
     p.add_argument("--strict", action="store_true", help="warnings fail too (exit 1)")
 
     p = sub.add_parser("simulate", help="simulate a spec")
@@ -84,9 +89,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="largest solver step; lower it to catch narrow guard windows",
     )
-    p.add_argument(
-        "--method", default="RK45", choices=["RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA"]
-    )
+    p.add_argument("--method", default=METHODS[0], choices=METHODS)
     p.add_argument("--param", type=_param, action="append", default=[], metavar="NAME=VALUE")
     p.add_argument("--dt", type=_positive, default=None, help="write points on a uniform grid")
     p.add_argument("--out", help="trajectory file (.csv or .npz)")
@@ -95,7 +98,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("graph", help="print the location graph")
     p.add_argument("file", metavar="FILE")
-    p.add_argument("--format", choices=["dot", "mermaid"], default="dot")
+    p.add_argument("--format", choices=tuple(DIAGRAM_FORMATS), default="dot")
 
     sub.add_parser("schema", help="print the JSON Schema of spec files")
     return parser
@@ -108,38 +111,38 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "validate":
             return _validate(args.files)
         if args.command == "schema":
-            from hybrid.spec.jsonschema import spec_schema
+            from hybrid.reader.jsonschema import spec_schema
 
             print(json.dumps(spec_schema(), indent=2))
             return EXIT_OK
         if args.command == "check":
-            from hybrid.analysis.command import run_check
+            from hybrid.cli.check import run_check
 
             return run_check(args.files, fmt=args.format, strict=args.strict)
         if args.command == "graph":
-            from hybrid.analysis.command import run_graph
+            from hybrid.cli.check import run_graph
 
             return run_graph(args.file, fmt=args.format)
         if args.command == "simulate":
-            from hybrid.simulation.command import run_simulate
+            from hybrid.cli.simulate import run_simulate
 
             return run_simulate(args)
     except SpecError as exc:
         print(str(exc), file=sys.stderr)
         return EXIT_INVALID
-    except SimulationError as exc:
+    except (UsageError, SimulationError) as exc:
         print(f"{getattr(args, 'file', 'hybrid')}: {exc}", file=sys.stderr)
         return EXIT_INVALID
     except KeyboardInterrupt:
         print("hybrid: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_ABANDONED
     except BrokenPipeError:
         return EXIT_OK
     return EXIT_INVALID
 
 
 def _validate(files: Sequence[str]) -> int:
-    from hybrid.spec.loader import load
+    from hybrid.reader.loader import load
 
     status = EXIT_OK
     for file in files:

@@ -26,12 +26,13 @@ stateDiagram-v2
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
 
-import networkx as nx
+if TYPE_CHECKING:
+    import networkx as nx
 
-__all__ = ["edge_text", "mermaid_escape", "to_dot", "to_mermaid"]
+__all__ = ["DIAGRAM_FORMATS", "edge_text", "mermaid_escape", "to_dot", "to_mermaid"]
 
 _MERMAID = {
     "#": "#35;",
@@ -85,6 +86,7 @@ def to_dot(graph: nx.MultiDiGraph) -> str:
 
     Examples
     --------
+    >>> import networkx as nx
     >>> g = nx.MultiDiGraph(name="demo")
     >>> g.add_node("a", initial=True)
     >>> _ = g.add_edge("a", "a", key="e", name="e", guard='x < "1"')
@@ -163,3 +165,10 @@ def to_mermaid(graph: nx.MultiDiGraph) -> str:
         label = mermaid_escape(" / ".join(edge_text(data)))
         out.append(f"    {ids[src]} --> {ids[dst]} : {label}")
     return "\n".join(out)
+
+
+DIAGRAM_FORMATS: dict[str, Callable[[nx.MultiDiGraph], str]] = {
+    "dot": to_dot,
+    "mermaid": to_mermaid,
+}
+"""The writers of ``hybrid graph --format``."""

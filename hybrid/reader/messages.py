@@ -1,7 +1,7 @@
 """Pydantic validation errors rewritten to point at the user's text.
 
 Each error's ``loc`` is a path of keys and indices into the YAML document; the
-:class:`~hybrid.spec.yamlpos.PositionMap` turns it into ``file:line:column``.
+:class:`~hybrid.reader.yamlpos.PositionMap` turns it into ``file:line:column``.
 An unknown key points at the key and suggests the closest valid one; a missing
 key points at its parent mapping.
 """
@@ -14,7 +14,7 @@ from typing import Annotated, Any, Union, get_args, get_origin
 from pydantic import BaseModel, ValidationError
 
 from hybrid.errors import Position, did_you_mean
-from hybrid.spec.yamlpos import PositionMap
+from hybrid.reader.yamlpos import PositionMap
 
 __all__ = ["closest", "describe_path", "validation_problems"]
 

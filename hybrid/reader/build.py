@@ -12,12 +12,13 @@ from __future__ import annotations
 import ast
 import keyword
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any
 
 from hybrid.errors import Position, SpecError
 from hybrid.expr import ir
+from hybrid.expr.dependencies import find_cycle
 from hybrid.expr.functions import BUILTINS, Function, available_libraries, load_library
 from hybrid.expr.parse import (
     MAX_SOURCE_CHARS,
@@ -28,11 +29,11 @@ from hybrid.expr.parse import (
     vector_call,
 )
 from hybrid.model import Automaton, Edge, Location, Properties, StateVar
-from hybrid.spec.messages import closest
-from hybrid.spec.schema import AutomatonSpec, PropertiesSpec
-from hybrid.spec.yamlpos import PositionMap
+from hybrid.reader.messages import closest
+from hybrid.reader.schema import AutomatonSpec, PropertiesSpec
+from hybrid.reader.yamlpos import PositionMap
 
-__all__ = ["build_automaton", "build_properties", "find_cycle", "find_dependency_cycle"]
+__all__ = ["build_automaton", "build_properties"]
 
 RESERVED = {"t", "pi", "true", "false", *BUILTINS, *keyword.kwlist, *keyword.softkwlist}
 _KIND_TEXT = {"param": "parameter", "state": "state variable", "signal": "signal", "input": "input"}
@@ -65,7 +66,7 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
     sizes = _vector_sizes(spec, functions)
     scope = Scope(variables=kinds, functions=functions, vectors=sizes)
 
-    signals, vectors = _signals(spec.signals, ("signals",), scope, problems, sizes)
+    signals = _signals(spec.signals, ("signals",), scope, problems, sizes)
     states = _states(spec, positions, problems)
     state_names = [s.name for s in states]
 
@@ -89,27 +90,25 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
                     f"override declared signals{closest(var, list(spec.signals))}",
                 )
         local = {k: v for k, v in loc.signals.items() if k in spec.signals}
-        loc_signals, loc_vectors = _signals(local, (*base, "signals"), scope, problems, sizes)
+        loc_signals = _signals(local, (*base, "signals"), scope, problems, sizes)
         invariant = problems.expression((*base, "invariant"), loc.invariant, scope, "bool")
         locations[lname] = Location(
             name=lname,
             flow=MappingProxyType(flow),
             signals=MappingProxyType(loc_signals),
-            vectors=MappingProxyType(loc_vectors),
             invariant=invariant,
             invariant_source=loc.invariant,
             position=positions.key(base),
             invariant_position=positions.value((*base, "invariant")),
         )
-        merged: dict[str, ir.Expr] = {**signals, **vectors, **loc_signals, **loc_vectors}
-        cycle = find_cycle(merged)
-        if cycle and not find_cycle({**signals, **vectors}):
+        cycle = find_cycle({**signals, **loc_signals})
+        if cycle and not find_cycle(signals):
             problems.at_key(
                 (*base, "signals", cycle[0]) if cycle[0] in local else ("signals", cycle[0]),
                 f"signals form a circular definition in location '{lname}': "
                 + " -> ".join([*cycle, cycle[0]]),
             )
-    cycle = find_cycle({**signals, **vectors})
+    cycle = find_cycle(signals)
     if cycle:
         problems.at_key(
             ("signals", cycle[0]),
@@ -127,7 +126,7 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
         parameters=MappingProxyType(dict(spec.parameters)),
         states=tuple(states),
         signals=MappingProxyType(signals),
-        vectors=MappingProxyType(vectors),
+        vector_sizes=MappingProxyType(sizes),
         signal_names=tuple(spec.signals),
         inputs=tuple(spec.inputs),
         labels=tuple(spec.labels),
@@ -223,9 +222,9 @@ def _signals(
     scope: Scope,
     problems: _Problems,
     sizes: Mapping[str, int],
-) -> tuple[dict[str, ir.Expr], dict[str, ir.Call]]:
-    scalars: dict[str, ir.Expr] = {}
-    vectors: dict[str, ir.Call] = {}
+) -> dict[str, ir.Expr]:
+    """Parsed signal definitions; a vector signal's keeps the shape of its declaration."""
+    definitions: dict[str, ir.Expr] = {}
     for name, source in sources.items():
         path = (*base, name)
         try:
@@ -239,7 +238,7 @@ def _signals(
                 problems.at_value(
                     path, f"signal '{name}' must keep the shape of its declaration in `signals`"
                 )
-            vectors[name] = call
+            definitions[name] = call
         elif name in sizes:
             problems.at_value(
                 path,
@@ -247,8 +246,8 @@ def _signals(
                 "its override must be one too",
             )
         else:
-            scalars[name] = problems.expression(path, source, scope, "number")
-    return scalars, vectors
+            definitions[name] = problems.expression(path, source, scope, "number")
+    return definitions
 
 
 def _states(spec: AutomatonSpec, positions: PositionMap, problems: _Problems) -> list[StateVar]:
@@ -386,43 +385,3 @@ def build_properties(
         deterministic=spec.deterministic,
         positions=MappingProxyType(where),
     )
-
-
-def find_cycle(definitions: Mapping[str, ir.Expr]) -> list[str] | None:
-    """A list of signal names forming a cycle of definitions, or ``None``."""
-    return find_dependency_cycle(
-        {n: ir.names_in(e, ir.SIGNAL) & definitions.keys() for n, e in definitions.items()}
-    )
-
-
-def find_dependency_cycle(deps: Mapping[str, Iterable[str]]) -> list[str] | None:
-    """A cycle in a dependency graph (name -> names it uses), or ``None``.
-
-    Examples
-    --------
-    >>> find_dependency_cycle({"a": ["b"], "b": ["a"], "c": []})
-    ['a', 'b']
-    """
-    edges = {n: sorted(d for d in ds if d in deps) for n, ds in deps.items()}
-    color: dict[str, int] = {}
-    for start in edges:
-        if color.get(start):
-            continue
-        stack: list[tuple[str, int]] = [(start, 0)]
-        path: list[str] = []
-        while stack:
-            node, i = stack.pop()
-            if i == 0:
-                color[node] = 1
-                path.append(node)
-            if i < len(edges[node]):
-                stack.append((node, i + 1))
-                nxt = edges[node][i]
-                if color.get(nxt) == 1:
-                    return path[path.index(nxt) :]
-                if not color.get(nxt):
-                    stack.append((nxt, 0))
-            else:
-                color[node] = 2
-                path.pop()
-    return None

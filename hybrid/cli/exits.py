@@ -1,0 +1,14 @@
+"""Exit codes of the ``hybrid`` command (CONTRACT.md).
+
+- 0: success (``simulate`` reached t-end; ``check`` found no error);
+- 1: findings (``check``), a run that ended otherwise or violated a requirement;
+- 2: an invalid spec or invalid usage;
+- 130: stopped by a second Ctrl-C (the first one ends a run cleanly).
+"""
+
+__all__ = ["EXIT_ABANDONED", "EXIT_FINDINGS", "EXIT_INVALID", "EXIT_OK"]
+
+EXIT_OK = 0
+EXIT_FINDINGS = 1
+EXIT_INVALID = 2
+EXIT_ABANDONED = 130

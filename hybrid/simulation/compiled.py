@@ -1,0 +1,221 @@
+"""The compiled model: per mode, the Python functions the simulator calls.
+
+For a mode (one location per component) this compiles, once and lazily:
+the right-hand side ``rhs(t, x) -> list`` (signals computed in dependency
+order, then the derivative of every state variable), the output function
+giving every signal column, and per transition and invariant a ``rho``
+function (``<= 0`` iff it holds), a boolean ``holds`` function and a reset.
+
+Evaluation errors (a math domain error, an overflow, a division by zero) never
+raise: the compiled function records them and returns NaN. The right-hand side
+records into :attr:`CompiledModel.flow_failure`, everything else into
+:attr:`CompiledModel.failure`, because the solver also tries the right-hand
+side at trial points it then rejects: a failure there is only fatal if the
+solver gives up. :func:`hybrid.simulation.failures.describe_failure` turns a
+recorded failure into the message a user reads.
+
+Examples
+--------
+>>> import hybrid
+>>> ball = hybrid.load("specs/bouncing_ball.yaml")
+>>> compiled = CompiledModel(ball)
+>>> mode = compiled.mode(compiled.initial_key)
+>>> import numpy as np
+>>> [float(v) for v in mode.rhs(0.0, np.array([10.0, 0.0]))]
+[0.0, -9.81]
+>>> bool(mode.transitions[0].rho(0.0, np.array([0.0, -1.0])) <= 0)
+True
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+from hybrid.compose import System, as_system
+from hybrid.errors import UsageError
+from hybrid.expr import ir
+from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
+from hybrid.expr.rho import guard_to_rho
+from hybrid.model import Automaton
+from hybrid.modes import Mode, ModeView, TransitionView, mode_of
+
+__all__ = [
+    "CompiledCondition",
+    "CompiledMode",
+    "CompiledModel",
+    "CompiledTransition",
+    "LatestFailure",
+    "Source",
+]
+
+Fn = Callable[[float, Any], Any]
+
+
+@dataclass
+class CompiledCondition:
+    """A guard or invariant: ``rho(t, x) <= 0`` iff ``holds(t, x)`` (off the boundary)."""
+
+    name: str
+    rho: Fn
+    holds: Fn
+
+
+@dataclass
+class CompiledTransition(CompiledCondition):
+    view: TransitionView
+    reset: Fn
+
+
+@dataclass
+class CompiledMode:
+    key: Mode
+    name: str
+    rhs: Fn
+    outputs: Fn
+    invariants: list[CompiledCondition]
+    transitions: list[CompiledTransition]
+
+
+@dataclass(frozen=True)
+class Source:
+    """What a generated function computes, for messages: its role and its expressions."""
+
+    what: str
+    exprs: tuple[ir.Expr, ...]
+    context: CodeContext
+
+
+class LatestFailure(EvalFailure):
+    """An :class:`EvalFailure` that keeps the latest failure, not the first.
+
+    The solver retries the right-hand side at points ever closer to where the
+    solution leaves the domain; the last try is the most telling.
+    """
+
+    def record(self, error: BaseException, t: float, where: str) -> None:
+        self.error, self.t, self.where = error, t, where
+
+
+class CompiledModel:
+    """Lazily compiled modes of a model, with external inputs bound.
+
+    ``inputs`` maps an automaton's declared input names to callables of ``t``.
+    ``failure`` records evaluation errors of conditions, signals and resets;
+    ``flow_failure`` those of the right-hand side (see the module docstring).
+    """
+
+    def __init__(
+        self,
+        model: Automaton | System,
+        inputs: Mapping[str, Callable[[float], float]] | None = None,
+    ) -> None:
+        self.system = as_system(model)
+        self.failure = EvalFailure()
+        self.flow_failure: EvalFailure = LatestFailure()
+        self.inputs = dict(inputs or {})
+        external = self._external_inputs()
+        missing = [n for n in external if n not in self.inputs]
+        if missing:
+            raise UsageError(
+                f"input '{missing[0]}' needs a value: pass inputs={{'{missing[0]}': f}} "
+                "with f a function of t"
+            )
+        unknown = [n for n in self.inputs if n not in external]
+        if unknown:
+            raise UsageError(
+                f"'{unknown[0]}' is not a declared input of {self.system.name} "
+                f"(inputs: {', '.join(external) or 'none'})"
+            )
+        self.state_names = self.system.state_names
+        self.columns = self.system.signal_columns
+        self.initial_key = self.system.initial_mode
+        self.sources: dict[str, Source] = {}
+        self._modes: dict[Mode, CompiledMode] = {}
+
+    def _external_inputs(self) -> list[str]:
+        if not self.system.single:
+            return []
+        return list(self.system.components[0].automaton.inputs)
+
+    def mode(self, key: Mode) -> CompiledMode:
+        """The compiled mode ``key`` (compiled on first use, then cached)."""
+        compiled = self._modes.get(key)
+        if compiled is None:
+            compiled = self._compile(mode_of(self.system, key))
+            self._modes[key] = compiled
+        return compiled
+
+    def _function(
+        self, name: str, what: str, exprs: list[ir.Expr], ctx: CodeContext, **kwargs: Any
+    ) -> Fn:
+        self.sources[name] = Source(what, tuple(exprs), ctx)
+        return compile_function(name, exprs, ctx, **kwargs)
+
+    def _compile(self, view: ModeView) -> CompiledMode:
+        ctx = CodeContext(
+            states=self.state_names,
+            signals=view.signals,
+            inputs=self.inputs,
+            functions=self.system.functions,
+            failure=self.failure,
+        )
+        tag = _identifier(view.name)
+        flows = [view.flow.get(s, ir.Num(0.0)) for s in self.state_names]
+        rhs = self._function(
+            f"rhs_{tag}",
+            f"the flow of {view.name}",
+            flows,
+            replace(ctx, failure=self.flow_failure),
+            shape="list",
+        )
+        outputs_ir: list[ir.Expr] = []
+        for c in self.system.components:
+            sizes = c.automaton.vector_sizes
+            for name in c.automaton.signal_names:
+                if name in sizes:
+                    outputs_ir.extend(ir.Index(name, k) for k in range(sizes[name]))
+                else:
+                    outputs_ir.append(ir.Var(name, ir.SIGNAL))
+        outputs = self._function(
+            f"out_{tag}", f"the signals of {view.name}", outputs_ir, ctx, shape="tuple"
+        )
+        invariants = []
+        for i, (name, expr) in enumerate(view.invariants):
+            what = f"the invariant of {name}"
+            invariants.append(
+                CompiledCondition(
+                    name,
+                    self._function(
+                        f"inv_{tag}_{i}", what, [guard_to_rho(expr)], ctx, shape="scalar"
+                    ),
+                    self._function(f"invb_{tag}_{i}", what, [expr], ctx, shape="scalar"),
+                )
+            )
+        transitions = []
+        for i, tr in enumerate(view.transitions):
+            what = f"the guard of {tr.name}"
+            reset_of = [tr.reset.get(s) for s in self.state_names]
+            transitions.append(
+                CompiledTransition(
+                    name=tr.name,
+                    rho=self._function(
+                        f"g_{tag}_{i}", what, [guard_to_rho(tr.guard)], ctx, shape="scalar"
+                    ),
+                    holds=self._function(f"gb_{tag}_{i}", what, [tr.guard], ctx, shape="scalar"),
+                    view=tr,
+                    reset=self._function(
+                        f"r_{tag}_{i}",
+                        f"the reset of {tr.name}",
+                        [e for e in reset_of if e is not None],
+                        ctx,
+                        reset_of=reset_of,
+                    ),
+                )
+            )
+        return CompiledMode(view.key, view.name, rhs, outputs, invariants, transitions)
+
+
+def _identifier(name: str) -> str:
+    return "".join(ch if ch.isalnum() else "_" for ch in name)
