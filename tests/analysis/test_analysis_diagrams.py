@@ -10,8 +10,8 @@ import pytest
 
 import hybrid
 from hybrid.analysis import location_graph, product_graph
-from hybrid.export.diagrams import edge_text, mermaid_escape, to_dot, to_mermaid
 from hybrid.analysis.product import ProductTables
+from hybrid.export.diagrams import edge_text, mermaid_escape, to_dot, to_mermaid
 
 # pydot's parser uses pyparsing names that newer pyparsing deprecates
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")

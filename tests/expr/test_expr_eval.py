@@ -16,9 +16,9 @@ import pytest
 
 from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext, compile_function
-from hybrid.expr.printer import to_source
 from hybrid.expr.functions import BUILTINS
 from hybrid.expr.parse import ExprError, Scope, parse_expression
+from hybrid.expr.printer import to_source
 
 A, B, C = 1.7, -0.45, 3.2
 SCOPE = Scope(
