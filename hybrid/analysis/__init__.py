@@ -20,10 +20,10 @@ from hybrid.lazy import lazy_attributes
 
 if TYPE_CHECKING:
     from hybrid.analysis.api import check, system_graph
-    from hybrid.analysis.checks import Analysis, analyse, run_checks
+    from hybrid.analysis.checks import run_checks
+    from hybrid.analysis.context import Analysis, analyse
     from hybrid.analysis.findings import RULES, Finding, Report
-    from hybrid.analysis.graph import location_graph
-    from hybrid.analysis.product import product_graph
+    from hybrid.analysis.graph import location_graph, product_graph
 
 __all__ = [
     "RULES",
@@ -42,13 +42,13 @@ __getattr__, __dir__ = lazy_attributes(
     __name__,
     {
         "RULES": "hybrid.analysis.findings",
-        "Analysis": "hybrid.analysis.checks",
+        "Analysis": "hybrid.analysis.context",
         "Finding": "hybrid.analysis.findings",
         "Report": "hybrid.analysis.findings",
-        "analyse": "hybrid.analysis.checks",
+        "analyse": "hybrid.analysis.context",
         "check": "hybrid.analysis.api",
         "location_graph": "hybrid.analysis.graph",
-        "product_graph": "hybrid.analysis.product",
+        "product_graph": "hybrid.analysis.graph",
         "run_checks": "hybrid.analysis.checks",
         "system_graph": "hybrid.analysis.api",
     },

@@ -13,10 +13,12 @@ from __future__ import annotations
 import networkx as nx
 
 from hybrid.allocation import gc_paused
-from hybrid.analysis.checks import analyse, run_checks
+from hybrid.analysis.checks import run_checks
+from hybrid.analysis.context import analyse
+from hybrid.analysis.explore import DEFAULT_MAX_STATES
 from hybrid.analysis.findings import Report
-from hybrid.analysis.graph import location_graph
-from hybrid.analysis.product import DEFAULT_MAX_STATES, ProductTables, product_graph
+from hybrid.analysis.graph import location_graph, product_graph
+from hybrid.analysis.product import ProductTables
 from hybrid.compose import System
 from hybrid.model import Automaton
 

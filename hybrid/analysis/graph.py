@@ -20,11 +20,13 @@ from __future__ import annotations
 
 import networkx as nx
 
+from hybrid.analysis.explore import explore
+from hybrid.analysis.product import ProductTables, Transition
 from hybrid.analysis.static import AutomatonFacts
 from hybrid.expr.printer import expression_text
 from hybrid.model import Automaton
 
-__all__ = ["live_subgraph", "location_graph"]
+__all__ = ["live_subgraph", "location_graph", "product_graph"]
 
 
 def location_graph(automaton: Automaton, facts: AutomatonFacts | None = None) -> nx.MultiDiGraph:
@@ -71,3 +73,49 @@ def location_graph(automaton: Automaton, facts: AutomatonFacts | None = None) ->
 def live_subgraph(graph: nx.MultiDiGraph) -> nx.MultiDiGraph:
     """A view of ``graph`` keeping only the edges whose guard can hold."""
     return nx.subgraph_view(graph, filter_edge=lambda u, v, k: graph.edges[u, v, k]["live"])
+
+
+def product_graph(tables: ProductTables, max_states: int = 10_000) -> nx.MultiDiGraph:
+    """The reachable product as a :class:`networkx.MultiDiGraph` (live transitions only).
+
+    Nodes are the modes the explorer (:func:`hybrid.analysis.explore.explore`)
+    reaches, named ``comp.loc|comp.loc``, with an ``initial`` attribute; edges are keyed by transition name and carry
+    ``label``, ``guard``, ``reset``, ``priority`` and ``parts`` (the
+    component edges). Exploration stops after ``max_states`` modes; the graph's
+    ``complete`` attribute says whether it did.
+    """
+    exploration = explore(tables, max_states)
+    graph = nx.MultiDiGraph(name=tables.system.name, complete=exploration.complete)
+    modes = [tables.decode(code) for code in exploration.modes]
+    for mode in modes:
+        graph.add_node(tables.name(mode), initial=mode == tables.initial)
+    for mode in modes:
+        src = tables.name(mode)
+        for tr in tables.successors(mode):
+            if tables.name(tr.target) in graph:
+                _add_transition(graph, tables, src, tr)
+    return graph
+
+
+def _add_transition(
+    graph: nx.MultiDiGraph, tables: ProductTables, src: str, tr: Transition
+) -> None:
+    edges = [tables.components[i].facts.automaton.edges[e] for i, e in tr.parts]
+    guards = [e.guard_source for e in edges if e.guard_source.strip() != "true"]
+    reset: dict[str, str] = {}
+    for e in edges:
+        reset.update({k: expression_text(v) for k, v in e.reset.items()})
+    name = tables.transition_name(tr)
+    graph.add_edge(
+        src,
+        tables.name(tr.target),
+        key=name,
+        name=name,
+        label=tr.label,
+        guard=" and ".join(f"({g})" if len(guards) > 1 else g for g in guards) or "true",
+        reset=reset,
+        priority=max(e.priority for e in edges),
+        parts=tuple(tables.edge_name(i, e) for i, e in tr.parts),
+        position=edges[0].position,
+        live=True,
+    )

@@ -16,7 +16,8 @@ over-approximation: a verdict "infeasible" is a proof.
 Examples
 --------
 >>> from hybrid.expr.parse import Scope, parse_expression
->>> from hybrid.expr.interval import Interval, IntervalEvaluator
+>>> from hybrid.expr.interval import Interval
+>>> from hybrid.expr.ranges import IntervalEvaluator
 >>> scope = Scope({"x": "state", "y": "state"})
 >>> box = {"x": Interval(0.0, 10.0), "y": Interval(0.0, 10.0)}
 >>> lin = Linearizer(IntervalEvaluator(box))
@@ -36,7 +37,8 @@ import numpy as np
 
 from hybrid.expr import ir
 from hybrid.expr.functions import BUILTINS
-from hybrid.expr.interval import ENTIRE, Interval, IntervalEvaluator
+from hybrid.expr.interval import ENTIRE, Interval
+from hybrid.expr.ranges import IntervalEvaluator
 
 __all__ = ["STRICT_MARGIN", "Affine", "Linearizer", "Row", "lp_feasible", "structural_key"]
 

@@ -40,7 +40,8 @@ from dataclasses import dataclass, field
 
 from hybrid.analysis.linear import Linearizer, lp_feasible, structural_key
 from hybrid.expr import ir
-from hybrid.expr.interval import ENTIRE, Interval, IntervalEvaluator
+from hybrid.expr.interval import ENTIRE, Interval
+from hybrid.expr.ranges import IntervalEvaluator
 
 __all__ = [
     "DNF_CAP",

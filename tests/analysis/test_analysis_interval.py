@@ -11,8 +11,9 @@ from hypothesis import strategies as st
 
 from hybrid.expr import ir
 from hybrid.expr.functions import BUILTINS
-from hybrid.expr.interval import ENTIRE, Interval, IntervalEvaluator, can_fail, can_hold, evaluate
+from hybrid.expr.interval import ENTIRE, Interval
 from hybrid.expr.parse import ExprError, Scope, parse_expression
+from hybrid.expr.ranges import IntervalEvaluator, can_fail, can_hold, evaluate
 
 SCOPE = Scope({"x": "state", "y": "state", "u": "input", "s": "signal"})
 

@@ -9,7 +9,8 @@ import pytest
 
 import hybrid
 from hybrid.analysis import check, product_graph
-from hybrid.analysis.product import ProductTables, explore, explore_reference
+from hybrid.analysis.explore import explore, explore_reference
+from hybrid.analysis.product import ProductTables
 from hybrid.analysis.static import AutomatonFacts
 from hybrid.compose import System
 from hybrid.modes import transitions_of
@@ -194,7 +195,7 @@ def test_numpy_and_reference_explorers_agree(seed, monkeypatch):
     assert fast.deadlocks == slow.deadlocks and fast.conflicts == slow.conflicts
     assert set(product_graph(tables).nodes) == _reference_modes(system)
     # the sparse visited set (used for very large products) gives the same answer
-    monkeypatch.setattr("hybrid.analysis.product.DENSE_LIMIT", 0)
+    monkeypatch.setattr("hybrid.analysis.explore.DENSE_LIMIT", 0)
     assert explore(tables).states == fast.states
     # every witness is a real path of live transitions ending where it should
     for (i, k), code in fast.first_reach.items():

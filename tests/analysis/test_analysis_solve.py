@@ -12,9 +12,10 @@ from hybrid.analysis.linear import Affine, Linearizer, Row, lp_feasible
 from hybrid.analysis.solve import Env, closure, contract, dnf, negate, nnf, satisfiable
 from hybrid.analysis.static import AutomatonFacts, inline_signals
 from hybrid.expr import ir
-from hybrid.expr.interval import Interval, IntervalEvaluator
+from hybrid.expr.interval import Interval
 from hybrid.expr.parse import Scope, parse_expression
 from hybrid.expr.printer import expression_text
+from hybrid.expr.ranges import IntervalEvaluator
 
 SCOPE = Scope({"x": "state", "y": "state", "u": "input", "g": "signal"})
 BOX = {"x": Interval(0.0, 10.0), "y": Interval(0.0, 10.0)}
