@@ -23,7 +23,7 @@ demo: $(STAMP_DEMO)
 	$(BIN)/python -m uvms_model.demo out
 
 lint: $(STAMP_TEST)
-	$(BIN)/ruff check hybrid uvms_model tests bench
+	$(BIN)/ruff check hybrid uvms_model tests bench conftest.py
 
 typecheck: $(STAMP_TEST)
 	$(BIN)/mypy hybrid uvms_model

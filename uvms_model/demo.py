@@ -10,6 +10,7 @@ from pathlib import Path
 
 import hybrid
 from hybrid.export.trajectory import write_csv, write_events
+from hybrid.version import install_hint
 from uvms_model.missions import ABLATIONS, MISSIONS, run_mission, specs_dir
 
 __all__ = ["main"]
@@ -41,7 +42,7 @@ def main(argv: list[str] | None = None) -> int:
             figures = write_figures(result, out, name)
         except ImportError:
             figures = []
-            print("  (matplotlib missing: no figures; pip install 'hybrid[plot]')")
+            print(f"  (matplotlib missing: no figures; {install_hint('plot')})")
         print(result.summary())
         for fig in figures:
             print(f"  figure: {fig}")

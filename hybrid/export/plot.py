@@ -16,9 +16,10 @@ from typing import Any
 
 import numpy as np
 
-from hybrid.errors import SimulationError
+from hybrid.errors import SimulationError, UsageError
 from hybrid.export.atomic import atomic_write
 from hybrid.simulation.result import Run
+from hybrid.version import install_hint
 
 __all__ = ["MAX_JUMP_LINES", "figure_of", "plot_run"]
 
@@ -33,7 +34,7 @@ def _pyplot() -> Any:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        raise SimulationError("--plot needs matplotlib: pip install 'hybrid[plot]'") from None
+        raise UsageError(f"--plot needs matplotlib: {install_hint('plot')}") from None
     return plt
 
 

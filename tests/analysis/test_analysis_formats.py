@@ -9,12 +9,12 @@ from pathlib import Path
 
 import jsonschema
 import pytest
+from support import REPO as ROOT
 
 from hybrid.analysis.findings import RULES
 from hybrid.cli import main
 
 DATA = Path(__file__).resolve().parents[1] / "data"
-ROOT = Path(__file__).resolve().parents[2]
 
 # one error (sink), warnings (dead edge, unreachable), a message with quotes and a colon
 FAULTY = """\

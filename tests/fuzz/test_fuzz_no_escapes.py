@@ -9,15 +9,14 @@ simulation must end with one of the documented causes.
 from __future__ import annotations
 
 import contextlib
-from pathlib import Path
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from support import REPO as ROOT
 
 import hybrid
 from hybrid.simulation import CAUSES
 
-ROOT = Path(__file__).resolve().parents[2]
 SPECS = [(ROOT / "specs" / name).read_text() for name in ("bouncing_ball.yaml", "thermostat.yaml")]
 ALPHABET = st.sampled_from(list(":{}[]-,. #'\"\n\t*&!|>%@`0123456789abcxyzhvgte()+/<="))
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from sim_helpers import REPO, assert_no_traceback, read_csv, read_json
+from support import REPO, assert_no_traceback, read_csv, read_json
 
 # A fast oscillator, x = cos(10 t); with a tiny max step it would run for hours.
 OSCILLATOR = """

@@ -10,11 +10,10 @@ from typing import Any
 
 import matplotlib.image
 import pytest
+from support import REPO as ROOT
 
 import hybrid
 from hybrid.export.plot import figure_of, plot_run
-
-ROOT = Path(__file__).resolve().parents[2]
 
 
 def _dashed_lines(ax: Any) -> list[float]:
@@ -78,5 +77,5 @@ def test_without_matplotlib_the_error_says_what_to_install(
 
     monkeypatch.setattr(builtins, "__import__", no_matplotlib)
     run = hybrid.simulate(hybrid.load(ROOT / "specs/thermostat.yaml"), t_end=5.0)
-    with pytest.raises(hybrid.SimulationError, match=r"pip install 'hybrid\[plot\]'"):
+    with pytest.raises(hybrid.SimulationError, match=r"pip install 'hybrid-automata\[plot\]'"):
         figure_of(run)

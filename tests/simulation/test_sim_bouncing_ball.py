@@ -16,7 +16,6 @@ import math
 
 import numpy as np
 import pytest
-from sim_helpers import SPECS
 
 import hybrid
 
@@ -30,13 +29,9 @@ def impact_time(k: np.ndarray) -> np.ndarray:
     return T1 * (1 + 2 * E * (1 - E ** (k - 1)) / (1 - E))
 
 
-@pytest.fixture(scope="module")
-def ball() -> hybrid.Automaton:
-    model = hybrid.load(SPECS / "bouncing_ball.yaml")
-    assert isinstance(model, hybrid.Automaton)
-    assert model.parameters["g"] == G and model.parameters["e"] == E
-    assert model.initial_vector() == [H0, 0.0]
-    return model
+def test_the_spec_is_the_closed_form_s_ball(ball: hybrid.Automaton) -> None:
+    assert ball.parameters["g"] == G and ball.parameters["e"] == E
+    assert ball.initial_vector() == [H0, 0.0]
 
 
 @pytest.fixture(scope="module")

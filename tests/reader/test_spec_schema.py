@@ -8,12 +8,12 @@ from typing import Any
 
 import jsonschema
 import pytest
+from support import REPO as ROOT
 
 import hybrid
 from hybrid.reader.jsonschema import spec_schema, spec_schema_text
 from hybrid.reader.yamlpos import read_yaml_file, read_yaml_text
 
-ROOT = Path(__file__).resolve().parents[2]
 SCHEMA_PATH = ROOT / "docs" / "schema" / "automaton.schema.json"
 SPECS = sorted((ROOT / "specs").rglob("*.yaml"))
 MODELINE = "# yaml-language-server: $schema=../docs/schema/automaton.schema.json"

@@ -7,15 +7,14 @@ import json
 import re
 import shlex
 import tomllib
-from pathlib import Path
 
 import jsonschema
 import pytest
 import yaml
+from support import REPO as ROOT
 
 from hybrid.cli import main
 
-ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "tests" / "data"
 
 

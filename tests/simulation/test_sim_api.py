@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from sim_helpers import SPECS
+from support import SPECS
 
 import hybrid
 
@@ -20,13 +20,6 @@ signals: {doubled: 2*u}
 locations:
   A: {flow: {x: u}}
 """
-
-
-@pytest.fixture(scope="module")
-def ball() -> hybrid.Automaton:
-    model = hybrid.load(SPECS / "bouncing_ball.yaml")
-    assert isinstance(model, hybrid.Automaton)
-    return model
 
 
 def test_parameter_overrides(ball: hybrid.Automaton) -> None:

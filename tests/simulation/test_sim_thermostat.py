@@ -13,7 +13,6 @@ import math
 
 import numpy as np
 import pytest
-from sim_helpers import SPECS
 
 import hybrid
 
@@ -26,14 +25,6 @@ def heating_time(a: float, t_heat: float, t_from: float, t_to: float) -> float:
     return math.log((t_heat - t_from) / (t_heat - t_to)) / a
 
 
-@pytest.fixture(scope="module")
-def thermostat() -> hybrid.Automaton:
-    model = hybrid.load(SPECS / "thermostat.yaml")
-    assert isinstance(model, hybrid.Automaton)
-    assert model.initial_location == "off" and model.initial_vector() == [20.0]
-    return model
-
-
 def switching_times(p: dict[str, float], n: int, start: float = 20.0) -> list[float]:
     a, t_out, t_heat, low, high = (p[k] for k in ("a", "T_out", "T_heat", "T_low", "T_high"))
     times = [cooling_time(a, t_out, start, low)]
@@ -43,6 +34,10 @@ def switching_times(p: dict[str, float], n: int, start: float = 20.0) -> list[fl
         else:  # off: cool from T_high to T_low
             times.append(times[-1] + cooling_time(a, t_out, high, low))
     return times
+
+
+def test_the_spec_starts_where_the_closed_form_does(thermostat: hybrid.Automaton) -> None:
+    assert thermostat.initial_location == "off" and thermostat.initial_vector() == [20.0]
 
 
 def test_ten_periods_of_switching(thermostat: hybrid.Automaton) -> None:

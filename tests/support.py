@@ -1,4 +1,4 @@
-"""Shared helpers of the simulation tests: paths, running the CLI, reading its files."""
+"""Helpers the tests import: paths, running the CLI (in a process or in-process), reading its files."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[1]
 SPECS = REPO / "specs"
 DOCS = REPO / "docs"
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from sim_helpers import assert_no_traceback, read_csv, read_json, run_cli
+from support import assert_no_traceback, read_csv, read_json, run_cli
 
 import hybrid
 

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import pytest
 from pydantic import BaseModel
+from support import REPO as ROOT
 
 from hybrid.expr.functions import BUILTINS
 from hybrid.expr.parse import MAX_DEPTH, MAX_SOURCE_CHARS
@@ -22,7 +22,6 @@ from hybrid.reader.schema import (
 )
 from hybrid.reader.yamlpos import MAX_FILE_BYTES, MAX_YAML_DEPTH
 
-ROOT = Path(__file__).resolve().parents[2]
 DOC = (ROOT / "docs" / "spec-language.md").read_text(encoding="utf-8")
 
 

@@ -10,11 +10,11 @@ from pathlib import Path
 
 import jsonschema
 import pytest
+from support import REPO as ROOT
 
 from hybrid.cli import main as cli_main
 from hybrid.reader.jsonschema import spec_schema
 
-ROOT = Path(__file__).resolve().parents[2]
 SPECS = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "specs").glob("*.yaml"))
 
 COMMANDS = {

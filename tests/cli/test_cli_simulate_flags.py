@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from sim_helpers import SPECS, assert_no_traceback, main_in_process, run_cli
+from support import SPECS, assert_no_traceback, main_in_process, run_cli
 
 BALL = str(SPECS / "bouncing_ball.yaml")
 

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from sim_helpers import REPO, SPECS, main_in_process, read_csv, read_json
+from support import REPO, SPECS, main_in_process, read_csv, read_json
 
 import hybrid
 from hybrid.export import atomic_write, write_csv, write_events, write_npz

@@ -10,7 +10,7 @@ import re
 from pathlib import Path
 
 import pytest
-from sim_helpers import DOCS, main_in_process, read_json
+from support import DOCS, main_in_process, read_json
 
 import hybrid
 
