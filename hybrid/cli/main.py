@@ -101,6 +101,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--format", choices=tuple(DIAGRAM_FORMATS), default="dot")
 
     sub.add_parser("schema", help="print the JSON Schema of spec files")
+
+    from hybrid.cli.interchange import add_interchange_commands
+
+    add_interchange_commands(sub)
     return parser
 
 
@@ -127,6 +131,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             from hybrid.cli.simulate import run_simulate
 
             return run_simulate(args)
+        if args.command in ("import", "export"):
+            from hybrid.cli.interchange import run_export, run_import
+
+            return run_import(args) if args.command == "import" else run_export(args)
     except SpecError as exc:
         print(str(exc), file=sys.stderr)
         return EXIT_INVALID

@@ -134,10 +134,8 @@ class _Builder:
         self.count = 0
 
     def here(self) -> tuple[int, int]:
-        """Expat's current (line, 1-based column), the column in characters."""
-        line = self.parser.CurrentLineNumber
-        column = self.parser.CurrentColumnNumber
-        return line, _char_column(self.lines, line, column) + 1
+        """Expat's current (line, 1-based column); expat counts columns in characters."""
+        return self.parser.CurrentLineNumber, self.parser.CurrentColumnNumber + 1
 
     def refuse(self, message: str) -> None:
         raise _Refused(message, *self.here())
@@ -189,7 +187,7 @@ class _Builder:
 
 
 def _char_column(lines: list[bytes], line: int, byte_column: int) -> int:
-    """Expat counts columns in bytes; turn a UTF-8 byte column into characters."""
+    """A UTF-8 byte column (found in the raw bytes) in characters."""
     if 1 <= line <= len(lines):
         raw = lines[line - 1][:byte_column]
         if raw.isascii():
@@ -229,7 +227,7 @@ def parse_xml_bytes(raw: bytes, file: str, *, max_bytes: int = MAX_XML_BYTES) ->
         raise SpecError(exc.message, Position(file, exc.line, exc.column)) from None
     except expat.ExpatError as exc:
         line = exc.lineno or 1
-        column = _char_column(builder.lines, line, exc.offset or 0) + 1
+        column = (exc.offset or 0) + 1
         message = expat.errors.messages.get(exc.code, str(exc)) if exc.code else str(exc)
         raise SpecError(f"malformed XML: {message}", Position(file, line, column)) from None
     except (ValueError, LookupError) as exc:  # unknown encoding names and the like

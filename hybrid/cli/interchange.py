@@ -1,0 +1,84 @@
+"""``hybrid import spaceex`` and ``hybrid export spaceex``.
+
+Import writes one YAML file per translated component into ``--out`` and
+prints the path of the top-level spec; export writes ``MODEL.xml`` and
+``MODEL.cfg`` beside it. Notes on what the translation did go to stderr as
+``file: note: ...``. Files are written whole or not at all.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from hybrid.cli.exits import EXIT_OK
+from hybrid.errors import UsageError
+from hybrid.export.atomic import atomic_write
+
+__all__ = ["add_interchange_commands", "run_export", "run_import"]
+
+
+def add_interchange_commands(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``import`` and ``export`` command groups to the ``hybrid`` parser."""
+    p = sub.add_parser("import", help="translate a model from another tool into YAML specs")
+    formats = p.add_subparsers(dest="format", required=True, parser_class=type(p))
+    q = formats.add_parser("spaceex", help="a SpaceEx model (.xml) and its configuration (.cfg)")
+    q.add_argument("file", metavar="MODEL.xml")
+    q.add_argument("--cfg", metavar="MODEL.cfg", help="default: MODEL.cfg beside MODEL.xml, if any")
+    q.add_argument("--system", metavar="NAME", help="the component to translate")
+    q.add_argument("--out", metavar="DIR", required=True, help="directory for the YAML specs")
+    p = sub.add_parser("export", help="write a spec in another tool's format")
+    formats = p.add_subparsers(dest="format", required=True, parser_class=type(p))
+    q = formats.add_parser("spaceex", help="SpaceEx model (.xml) and configuration (.cfg)")
+    q.add_argument("file", metavar="FILE")
+    q.add_argument("--out", metavar="MODEL.xml", required=True, help="MODEL.cfg is written beside")
+
+
+def _write(path: Path, text: str) -> None:
+    try:
+        with atomic_write(path) as handle:
+            handle.write(text.encode("utf-8"))
+    except OSError as exc:
+        raise UsageError(f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+def run_import(args: argparse.Namespace) -> int:
+    """``hybrid import spaceex``: exit 0, or a SpecError (exit 2) for a refused model."""
+    from hybrid.interchange import import_spaceex
+
+    xml = Path(args.file)
+    cfg = Path(args.cfg) if args.cfg else None
+    if cfg is None and xml.with_suffix(".cfg").is_file():
+        cfg = xml.with_suffix(".cfg")
+        print(f"{xml}: note: using the configuration {cfg}", file=sys.stderr)
+    result = import_spaceex(xml, cfg, args.system)
+    out = Path(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(f"cannot create the directory {out}: {exc.strerror or exc}") from None
+    for name, text in result.files.items():
+        _write(out / name, text)
+    for note in result.notes:
+        print(f"{xml}: note: {note}", file=sys.stderr)
+    print(out / result.top)
+    return EXIT_OK
+
+
+def run_export(args: argparse.Namespace) -> int:
+    """``hybrid export spaceex``: exit 0, or a SpecError (exit 2) for what SpaceEx lacks."""
+    from hybrid.interchange import export_spaceex
+    from hybrid.reader.loader import load
+
+    result = export_spaceex(load(args.file))
+    xml = Path(args.out)
+    if xml.suffix.lower() != ".xml":
+        raise UsageError(f"--out must name a .xml file, got '{xml}'")
+    _write(xml, result.xml)
+    _write(xml.with_suffix(".cfg"), result.cfg)
+    for note in result.notes:
+        print(f"{args.file}: note: {note}", file=sys.stderr)
+    print(xml)
+    print(xml.with_suffix(".cfg"))
+    return EXIT_OK
