@@ -27,19 +27,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from hybrid.errors import Position, SpecError
-from hybrid.expr.interval import Interval
-from hybrid.expr.ranges import can_fail, can_hold
-from hybrid.interchange import sxexpr as sx
+from hybrid.errors import SpecError
 from hybrid.interchange.cfg import SpaceExConfig, parse_cfg, read_cfg
 from hybrid.interchange.emit import SEMANTICS, automaton_text
 from hybrid.interchange.flatten import Flat, Leaf, flatten
 from hybrid.interchange.initial import InitialSet, Resolver, forbidden_set, initial_set
-from hybrid.interchange.naming import system_names
+from hybrid.interchange.naming import ours, system_names
 from hybrid.interchange.safexml import parse_xml_file, parse_xml_text
+from hybrid.interchange.starts import exact_comment, location_name, start_of
 from hybrid.interchange.sxmodel import SpaceExModel, read_model
 from hybrid.interchange.template import Template, analyse
-from hybrid.interchange.translate import condition_ir
 from hybrid.interchange.yamltext import dump
 
 __all__ = ["SEMANTICS", "ImportResult", "import_spaceex", "import_spaceex_text"]
@@ -133,82 +130,95 @@ def _translate(
         notes.extend(init.notes)
     _close_constants(flat, init, config)
     names = system_names(flat.variable_ids)
-    label_names = system_names(flat.label_ids)
-    forbidden: list[dict[str, Any]] = []
-    if config is not None and config.forbidden is not None:
-        for entry in forbidden_set(config.forbidden, resolver, lambda i: names.get(i, i)):
-            item: dict[str, Any] = {}
-            locs = {
-                flat.leaves[k].name: _location_name(
-                    templates[flat.leaves[k].component.id], v, config
-                )
-                for k, v in entry.locations.items()
-            }
-            if locs:
-                item.update(
-                    {"location": next(iter(locs.values()))}
-                    if _single(flat)
-                    else {"locations": locs}
-                )
-            if entry.when:
-                item["when"] = entry.when
-            forbidden.append(item)
-    files: dict[str, str] = {}
-    header_extra = f"From {Path(model.file).name}" + (
+    forbidden = _forbidden(flat, templates, resolver, names, config)
+    source = f"From {Path(model.file).name}" + (
         f" and {Path(config.file).name}" if config is not None else ""
     )
     if _single(flat):
         leaf = flat.leaves[0]
         t = templates[leaf.component.id]
-        start = _start(leaf, t, init, config)
+        start = start_of(leaf, t, init, config)
         if start["exact"]:
-            start["exact_comment"] = _exact_comment(start["exact"])
+            start["exact_comment"] = exact_comment(start["exact"])
         if forbidden and config is not None and config.forbidden is not None:
             start["forbidden_comment"] = f"forbidden set of the .cfg: {config.forbidden.text}"
-        files[t.file] = automaton_text(t, leaf, start, forbidden, header_extra, top=True)
+        files = {t.file: automaton_text(t, leaf, start, forbidden, source, top=True)}
         return ImportResult(files, t.file, notes)
+    files, top = _system_files(flat, templates, names, init, config, forbidden, source)
+    return ImportResult(files, top, notes)
+
+
+def _forbidden(
+    flat: Flat,
+    templates: dict[str, Template],
+    resolver: Resolver,
+    names: dict[str, str],
+    config: SpaceExConfig | None,
+) -> list[dict[str, Any]]:
+    """The ``properties.forbidden`` entries of the ``.cfg``'s forbidden set."""
+    if config is None or config.forbidden is None:
+        return []
+    found: list[dict[str, Any]] = []
+    for entry in forbidden_set(config.forbidden, resolver, lambda i: names.get(i, i)):
+        item: dict[str, Any] = {}
+        locations = {
+            flat.leaves[k].name: location_name(templates[flat.leaves[k].component.id], v, config)
+            for k, v in entry.locations.items()
+        }
+        if locations and _single(flat):
+            item["location"] = next(iter(locations.values()))
+        elif locations:
+            item["locations"] = locations
+        if entry.when:
+            item["when"] = entry.when
+        found.append(item)
+    return found
+
+
+def _system_files(
+    flat: Flat,
+    templates: dict[str, Template],
+    names: dict[str, str],
+    init: InitialSet,
+    config: SpaceExConfig | None,
+    forbidden: list[dict[str, Any]],
+    source: str,
+) -> tuple[dict[str, str], str]:
+    """The automaton files of the base components and the system file (its name last)."""
+    files: dict[str, str] = {}
+    label_names = system_names(flat.label_ids)
     components: list[dict[str, Any]] = []
     comments: dict[tuple[str | int, ...], str] = {}
     for leaf in flat.leaves:
         t = templates[leaf.component.id]
         if t.file not in files:
-            files[t.file] = automaton_text(t, leaf, None, [], header_extra, top=False)
+            files[t.file] = automaton_text(t, leaf, None, [], source, top=False)
         block: dict[str, Any] = {"spec": t.file, "as": leaf.name}
-        rename = {t.names[k]: names[v] for k, v in leaf.variables.items() if t.names[k] != names[v]}
-        rename |= {
-            t.names[k]: label_names[v]
-            for k, v in leaf.labels.items()
-            if t.names[k] != label_names[v]
-        }
+        rename = {t.names[k]: names[v] for k, v in leaf.variables.items()}
+        rename |= {t.names[k]: label_names[v] for k, v in leaf.labels.items()}
+        rename = {k: v for k, v in rename.items() if k != v}
         if rename:
             block["rename"] = rename
         if leaf.constants:
             block["parameters"] = {t.names[k]: v for k, v in leaf.constants.items()}
-        start = _start(leaf, t, init, config)
+        start = start_of(leaf, t, init, config)
         block["initial"] = {"location": start["location"], "state": start["state"]}
         if start["exact"]:
-            comments[("components", len(components), "initial")] = _exact_comment(start["exact"])
+            comments[("components", len(components), "initial")] = exact_comment(start["exact"])
         components.append(block)
-    data: dict[str, Any] = {"system": _system_name(flat), "description": _description(flat)}
+    name = _system_name(flat)
+    data: dict[str, Any] = {"system": name, "description": _description(flat)}
     data["components"] = components
-    if forbidden:
+    if forbidden and config is not None and config.forbidden is not None:
         data["properties"] = {"forbidden": forbidden}
-        comments[("properties",)] = (
-            f"forbidden set of the .cfg: {config.forbidden.text if config and config.forbidden else ''}"
-        )
-    top = f"{_system_name(flat)}.yaml"
-    if top in files:
-        top = f"{_system_name(flat)}_system.yaml"
-    header = f"Imported by `hybrid import spaceex`. {header_extra}, network component '{flat.system.id}'.\n{SEMANTICS}"
-    files[top] = dump(data, comments, header)
-    return ImportResult(files, top, notes)
-
-
-def _exact_comment(exact: list[str]) -> str:
-    return (
-        "the .cfg's initial set " + " and ".join(exact) + " is not a box: these intervals are "
-        "its bounding box, nominal its centre"
+        comments[("properties",)] = f"forbidden set of the .cfg: {config.forbidden.text}"
+    top = f"{name}.yaml" if f"{name}.yaml" not in files else f"{name}_system.yaml"
+    header = (
+        f"Imported by `hybrid import spaceex`. {source}, network component "
+        f"'{flat.system.id}'.\n{SEMANTICS}"
     )
+    files[top] = dump(data, comments, header)
+    return files, top
 
 
 def _single(flat: Flat) -> bool:
@@ -216,8 +226,6 @@ def _single(flat: Flat) -> bool:
 
 
 def _system_name(flat: Flat) -> str:
-    from hybrid.interchange.naming import ours
-
     return ours(flat.system.id)
 
 
@@ -287,95 +295,3 @@ def _close_constants(flat: Flat, init: InitialSet, config: SpaceExConfig | None)
                     where,
                 )
             leaf.constants[inner] = init.constants[outer]
-
-
-def _location_name(t: Template, spaceex_name: str, config: SpaceExConfig | None) -> str:
-    loc = t.location(spaceex_name)
-    if loc is None:
-        where = (
-            config.values["forbidden"].where(0)
-            if config and "forbidden" in config.values
-            else Position(t.component.position.file)
-        )
-        raise SpecError(
-            f"component '{t.component.id}' has no location '{spaceex_name}' (locations: "
-            f"{', '.join(loc.spaceex_name for loc in t.locations)})",
-            where,
-        )
-    return loc.name
-
-
-def _start(
-    leaf: Leaf, t: Template, init: InitialSet, config: SpaceExConfig | None
-) -> dict[str, Any]:
-    """``{location: ..., state: {...}}`` for one instance, from the initial set."""
-    state: dict[str, Any] = {}
-    box: dict[str, Interval] = {}
-    point: dict[str, Interval] = {}
-    for inner in t.states:
-        outer = leaf.variables[inner]
-        ours = t.names[inner]
-        if config is None or config.initially is None:
-            lo = hi = 0.0
-        elif outer in init.bounds:
-            lo, hi = init.bounds[outer]
-        else:
-            lo, hi = float("-inf"), float("inf")
-        if not (lo > float("-inf") and hi < float("inf")):
-            where = config.initially.where(0) if config and config.initially else Position("<cfg>")
-            raise SpecError(
-                f"the initial set leaves '{outer}' {'unbounded' if lo > float('-inf') or hi < float('inf') else 'free (any real number)'}: "
-                f"bound it in the .cfg's initially (e.g. {outer} == 0, or lo <= {outer} & {outer} <= hi)",
-                where,
-            )
-        nominal = init.nominal.get(outer, (lo + hi) / 2) + 0.0  # no -0.0
-        if lo == hi:
-            state[ours] = lo
-        elif outer in init.nominal:
-            state[ours] = {"initial": [lo, hi], "nominal": nominal}
-        else:
-            state[ours] = [lo, hi]
-        box[ours] = Interval(lo, hi)
-        point[ours] = Interval(nominal, nominal)
-    for inner, (lo, hi) in t.ranges.items():
-        box[t.names[inner]] = Interval(lo, hi)
-        point[t.names[inner]] = Interval((lo + hi) / 2, (lo + hi) / 2)
-    chosen = _initial_locations(leaf, t, init, box, point, config)
-    exact = sorted(
-        {init.exact[leaf.variables[s]] for s in t.states if leaf.variables[s] in init.exact}
-    )
-    return {
-        "location": chosen[0] if len(chosen) == 1 else chosen,
-        "state": state,
-        "exact": exact,
-    }
-
-
-def _initial_locations(
-    leaf: Leaf,
-    t: Template,
-    init: InitialSet,
-    box: dict[str, Interval],
-    point: dict[str, Interval],
-    config: SpaceExConfig | None,
-) -> list[str]:
-    if leaf.index in init.locations:
-        return [_location_name(t, init.locations[leaf.index], config)]
-    if config is None or config.initially is None:
-        return [t.locations[0].name]
-    rename = {**t.names, **{k: repr(v) for k, v in leaf.constants.items() if v is not None}}
-
-    def name(n: str) -> str:
-        return rename[n]
-
-    possible: list[tuple[bool, str]] = []
-    for loc in t.locations:
-        cond = condition_ir(sx.And(tuple(loc.invariant), leaf.component.position), name)
-        if can_hold(cond, box):
-            possible.append((not can_fail(cond, point), loc.name))
-    if not possible:
-        raise SpecError(
-            f"no location of '{leaf.name}' has an invariant that the initial set meets",
-            config.initially.where(0),
-        )
-    return [n for holds, n in possible if holds] + [n for holds, n in possible if not holds]
