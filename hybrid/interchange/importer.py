@@ -122,7 +122,8 @@ def _translate(
         notes.extend(t.notes)
     open_constants = {c for leaf in flat.leaves for c in leaf.open_constants.values()}
     resolver = Resolver(
-        [*flat.variable_ids, *sorted(open_constants)], [".".join(leaf.path) for leaf in flat.leaves]
+        [*flat.variable_ids, *sorted(open_constants)],
+        [".".join(leaf.path) or leaf.component.id for leaf in flat.leaves],
     )
     init = InitialSet()
     if config is not None and config.initially is not None:
@@ -162,7 +163,9 @@ def _forbidden(
     for entry in forbidden_set(config.forbidden, resolver, lambda i: names.get(i, i)):
         item: dict[str, Any] = {}
         locations = {
-            flat.leaves[k].name: location_name(templates[flat.leaves[k].component.id], v, config)
+            flat.leaves[k].name: location_name(
+                templates[flat.leaves[k].component.id], v, entry.positions[k]
+            )
             for k, v in entry.locations.items()
         }
         if locations and _single(flat):

@@ -42,7 +42,7 @@ class Resolver:
 
     ids: list[str]
     leaves: list[str]
-    """Each leaf's instance path joined by ``.`` (``""`` for a lone base component)."""
+    """Each leaf's instance path joined by ``.`` (a lone base component: its id)."""
 
     def variable(self, name: str) -> str:
         if name in self.ids:
@@ -63,7 +63,7 @@ class Resolver:
         found = exact or [i for i, p in enumerate(self.leaves) if p.endswith("." + name)]
         if len(found) == 1:
             return found[0]
-        known = ", ".join(p or "(the system)" for p in self.leaves)
+        known = ", ".join(self.leaves)
         raise SpecError(
             f"loc({name}): {'ambiguous' if found else 'no such component'} (components: {known})",
             where,
@@ -78,6 +78,7 @@ class InitialSet:
     """Variable id -> the non-box constraint its interval comes from, as written."""
     locations: dict[int, str] = field(default_factory=dict)
     """Leaf index -> the SpaceEx name of its initial location."""
+    location_positions: dict[int, Position] = field(default_factory=dict)
     constants: dict[str, float] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
 
@@ -86,6 +87,7 @@ class InitialSet:
 class ForbiddenEntry:
     locations: dict[int, str]
     when: str | None
+    positions: dict[int, Position] = field(default_factory=dict)
 
 
 Affine = tuple[str | None, float, float]
@@ -241,6 +243,7 @@ def initial_set(text: SourceText, resolver: Resolver, open_constants: set[str]) 
             if index in init.locations and init.locations[index] != loc:
                 raise SpecError("the initial set names two locations of one component", where)
             init.locations[index] = loc
+            init.location_positions[index] = where
             continue
         if isinstance(item, sx.Cmp):
             if all(_pair(init, a, op, b, resolve) for op, a, b in _pairs(item)):
@@ -307,6 +310,7 @@ def forbidden_set(
 
     for part in parts:
         locations: dict[int, str] = {}
+        positions: dict[int, Position] = {}
         rest: list[sx.Node] = []
         for item in sx.conjuncts(part):
             found = _location(item) if isinstance(item, sx.Cmp) and item.ops == ("==",) else None
@@ -319,6 +323,7 @@ def forbidden_set(
                     "this part of the forbidden set names two locations of one component", found[2]
                 )
             locations[index] = found[1]
+            positions[index] = found[2]
         when = condition_text(sx.And(tuple(rest), part.position), name) if rest else None
-        entries.append(ForbiddenEntry(locations, when))
+        entries.append(ForbiddenEntry(locations, when, positions))
     return entries

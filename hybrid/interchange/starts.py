@@ -32,15 +32,10 @@ def exact_comment(exact: list[str]) -> str:
     )
 
 
-def location_name(t: Template, spaceex_name: str, config: SpaceExConfig | None) -> str:
-    """Our name of the location SpaceEx calls ``spaceex_name`` (for ``loc(...) == name``)."""
+def location_name(t: Template, spaceex_name: str, where: Position) -> str:
+    """Our name of the location SpaceEx calls ``spaceex_name`` (``loc(...) == name`` at ``where``)."""
     loc = t.location(spaceex_name)
     if loc is None:
-        where = (
-            config.values["forbidden"].where(0)
-            if config and "forbidden" in config.values
-            else Position(t.component.position.file)
-        )
         raise SpecError(
             f"component '{t.component.id}' has no location '{spaceex_name}' (locations: "
             f"{', '.join(loc.spaceex_name for loc in t.locations)})",
@@ -105,7 +100,7 @@ def _initial_locations(
     config: SpaceExConfig | None,
 ) -> list[str]:
     if leaf.index in init.locations:
-        return [location_name(t, init.locations[leaf.index], config)]
+        return [location_name(t, init.locations[leaf.index], init.location_positions[leaf.index])]
     if config is None or config.initially is None:
         return [t.locations[0].name]
     rename = {**t.names, **{k: repr(v) for k, v in leaf.constants.items() if v is not None}}
