@@ -8,7 +8,6 @@ Exit codes: 0 success; 1 findings (check) or a run that ended before t-end
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Sequence
 
@@ -63,6 +62,7 @@ def _count(text: str) -> int:
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``hybrid`` command (the CLI reference is generated from it)."""
     from hybrid.export.diagrams import DIAGRAM_FORMATS
+    from hybrid.export.render import RENDERED_FORMATS
     from hybrid.simulation.settings import METHODS
 
     parser = _Parser(prog="hybrid", description="Hybrid automata: validate, check, simulate.")
@@ -98,9 +98,16 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("graph", help="print the location graph")
     p.add_argument("file", metavar="FILE")
-    p.add_argument("--format", choices=tuple(DIAGRAM_FORMATS), default="dot")
+    p.add_argument(
+        "--format",
+        choices=(*DIAGRAM_FORMATS, *RENDERED_FORMATS),
+        default="dot",
+        help="dot and mermaid are text; svg and png are drawn by Graphviz (the 'graph' extra)",
+    )
+    p.add_argument("--out", metavar="FILE", help="write to FILE instead of stdout")
 
-    sub.add_parser("schema", help="print the JSON Schema of spec files")
+    p = sub.add_parser("schema", help="print the JSON Schema of spec files")
+    p.add_argument("--out", metavar="FILE", help="write it to FILE (for the modeline of specs)")
     return parser
 
 
@@ -111,10 +118,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "validate":
             return _validate(args.files)
         if args.command == "schema":
-            from hybrid.reader.jsonschema import spec_schema
+            from hybrid.cli.schema import run_schema
 
-            print(json.dumps(spec_schema(), indent=2))
-            return EXIT_OK
+            return run_schema(args.out)
         if args.command == "check":
             from hybrid.cli.check import run_check
 
@@ -122,7 +128,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "graph":
             from hybrid.cli.check import run_graph
 
-            return run_graph(args.file, fmt=args.format)
+            return run_graph(args.file, fmt=args.format, path=args.out)
         if args.command == "simulate":
             from hybrid.cli.simulate import run_simulate
 
