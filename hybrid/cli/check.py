@@ -31,7 +31,7 @@ from hybrid.cli.exits import EXIT_FINDINGS, EXIT_INVALID, EXIT_OK
 from hybrid.errors import SpecError, UsageError
 from hybrid.export.atomic import atomic_write
 from hybrid.export.diagrams import DIAGRAM_FORMATS
-from hybrid.export.render import RENDERED_FORMATS, render
+from hybrid.export.pictures import RENDERED_FORMATS, render
 from hybrid.reader.loader import load
 
 __all__ = ["run_check", "run_graph"]
@@ -93,7 +93,7 @@ def run_graph(
 ) -> int:
     """Print the location graph of ``file`` (the reachable product of a system).
 
-    ``svg`` and ``png`` are drawn by Graphviz (:mod:`hybrid.export.render`);
+    ``svg`` and ``png`` are drawn by Graphviz (:mod:`hybrid.export.pictures`);
     ``path`` writes the output to that file (atomically) instead of ``out``.
     Raises :class:`hybrid.SpecError` for an invalid spec (the CLI exits 2) and
     :class:`hybrid.UsageError` when Graphviz is missing.

@@ -62,7 +62,7 @@ def _count(text: str) -> int:
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``hybrid`` command (the CLI reference is generated from it)."""
     from hybrid.export.diagrams import DIAGRAM_FORMATS
-    from hybrid.export.render import RENDERED_FORMATS
+    from hybrid.export.pictures import RENDERED_FORMATS
     from hybrid.simulation.settings import METHODS
 
     parser = _Parser(prog="hybrid", description="Hybrid automata: validate, check, simulate.")
