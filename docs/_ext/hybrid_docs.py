@@ -27,7 +27,7 @@ import shutil
 import traceback
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 from docutils import nodes
 from docutils.parsers.rst import directives
@@ -76,8 +76,10 @@ def _argument(action: argparse.Action) -> tuple[str, str, str]:
         default = f"`{action.default}`"
     meaning = action.help or ""
     if action.choices:
-        meaning = (meaning + "; " if meaning else "") + "one of " + ", ".join(
-            f"`{c}`" for c in action.choices
+        meaning = (
+            (meaning + "; " if meaning else "")
+            + "one of "
+            + ", ".join(f"`{c}`" for c in action.choices)
         )
     if action.nargs in ("+", "*") and not action.option_strings:
         meaning = (meaning + "; " if meaning else "") + "one or more"
@@ -95,7 +97,10 @@ def cli_reference() -> str:
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     helps = {c.dest: c.help for c in sub._choices_actions}
     out += ["| command | does |", "|---|---|"]
-    out += [f"| [`hybrid {name}`](#hybrid-{name}) | {_cell(helps.get(name, ''))} |" for name in sub.choices]
+    out += [
+        f"| [`hybrid {name}`](#hybrid-{name}) | {_cell(helps.get(name, ''))} |"
+        for name in sub.choices
+    ]
     for name, command in sub.choices.items():
         out += ["", f"## `hybrid {name}`", "", _cell(helps.get(name, "")), ""]
         out += [f"```text\n{_usage(command)}\n```", ""]
@@ -174,7 +179,10 @@ class HybridPlot(SphinxDirective):
     """```{hybrid-plot}``` code: shown, run from the repository root, its figures shown."""
 
     has_content = True
-    option_spec = {"alt": directives.unchanged, "hide-code": directives.flag}
+    option_spec: ClassVar[dict[str, Any]] = {
+        "alt": directives.unchanged,
+        "hide-code": directives.flag,
+    }
 
     def run(self) -> list[nodes.Node]:
         code = "\n".join(self.content)
@@ -194,7 +202,9 @@ class HybridPlot(SphinxDirective):
             exec(compile(code, f"{self.env.docname}.md", "exec"), namespace)  # our own pages
         except Exception:
             LOG.warning(
-                "hybrid-plot block failed:\n%s", traceback.format_exc(), location=self.get_location()
+                "hybrid-plot block failed:\n%s",
+                traceback.format_exc(),
+                location=self.get_location(),
             )
             return result
         finally:

@@ -70,34 +70,41 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("validate", help="parse and check the spec language only")
-    p.add_argument("files", nargs="+", metavar="FILE")
+    p.add_argument("files", nargs="+", metavar="FILE", help="spec or system files")
 
     p = sub.add_parser("check", help="graph and property checks")
-    p.add_argument("files", nargs="+", metavar="FILE")
-    p.add_argument("--format", choices=tuple(REPORT_FORMATS), default="text")
+    p.add_argument("files", nargs="+", metavar="FILE", help="spec or system files")
+    p.add_argument("--format", choices=tuple(REPORT_FORMATS), default="text", help="report format")
     p.add_argument("--strict", action="store_true", help="warnings fail too (exit 1)")
 
     p = sub.add_parser("simulate", help="simulate a spec")
-    p.add_argument("file", metavar="FILE")
+    p.add_argument("file", metavar="FILE", help="spec or system file")
     p.add_argument("--t-end", type=_positive, required=True, help="end time")
-    p.add_argument("--max-jumps", type=_count, default=10_000)
-    p.add_argument("--rtol", type=_positive, default=1e-6)
-    p.add_argument("--atol", type=_positive, default=1e-9)
+    p.add_argument("--max-jumps", type=_count, default=10_000, help="stop after this many jumps")
+    p.add_argument("--rtol", type=_positive, default=1e-6, help="relative tolerance of the solver")
+    p.add_argument("--atol", type=_positive, default=1e-9, help="absolute tolerance of the solver")
     p.add_argument(
         "--max-step",
         type=_positive,
         default=None,
         help="largest solver step; lower it to catch narrow guard windows",
     )
-    p.add_argument("--method", default=METHODS[0], choices=METHODS)
-    p.add_argument("--param", type=_param, action="append", default=[], metavar="NAME=VALUE")
+    p.add_argument("--method", default=METHODS[0], choices=METHODS, help="solve_ivp method")
+    p.add_argument(
+        "--param",
+        type=_param,
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override a parameter (comp.NAME in a system)",
+    )
     p.add_argument("--dt", type=_positive, default=None, help="write points on a uniform grid")
     p.add_argument("--out", help="trajectory file (.csv or .npz)")
     p.add_argument("--events", help="events JSON file")
     p.add_argument("--plot", help="figure file (needs the 'plot' extra)")
 
     p = sub.add_parser("graph", help="print the location graph")
-    p.add_argument("file", metavar="FILE")
+    p.add_argument("file", metavar="FILE", help="spec or system file")
     p.add_argument(
         "--format",
         choices=(*DIAGRAM_FORMATS, *RENDERED_FORMATS),

@@ -13,8 +13,8 @@ from hybrid.lazy import lazy_attributes
 if TYPE_CHECKING:
     from hybrid.export.atomic import atomic_write
     from hybrid.export.diagrams import to_dot, to_mermaid
-    from hybrid.export.plot import figure_of, figures_of, plot_run, save_figure
     from hybrid.export.pictures import render
+    from hybrid.export.plot import figure_of, figures_of, plot_run, save_figure
     from hybrid.export.trajectory import events_document, write_csv, write_events, write_npz
 
 __all__ = [

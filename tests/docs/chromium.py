@@ -10,6 +10,7 @@ errors, uncaught exceptions, failed requests and requests that left the machine.
 from __future__ import annotations
 
 import base64
+import contextlib
 import fcntl
 import json
 import os
@@ -60,7 +61,9 @@ class _Pipe:
         self.next_id = 0
         self.events: list[dict[str, Any]] = []
 
-    def send(self, method: str, params: dict[str, Any] | None = None, session: str | None = None) -> Any:
+    def send(
+        self, method: str, params: dict[str, Any] | None = None, session: str | None = None
+    ) -> Any:
         self.next_id += 1
         message: dict[str, Any] = {"id": self.next_id, "method": method, "params": params or {}}
         if session:
@@ -89,7 +92,9 @@ class _Pipe:
 
     def wait_for(self, method: str, session: str, timeout: float) -> None:
         deadline = time.monotonic() + timeout
-        while not any(e.get("method") == method and e.get("sessionId") == session for e in self.events):
+        while not any(
+            e.get("method") == method and e.get("sessionId") == session for e in self.events
+        ):
             self.events.append(self._receive(max(0.01, deadline - time.monotonic())))
 
     def drain(self, seconds: float) -> None:
@@ -107,7 +112,9 @@ def _high(fd: int) -> int:
     return moved
 
 
-def _problems(events: list[dict[str, Any]], session: str, origin: str) -> tuple[list[str], list[str]]:
+def _problems(
+    events: list[dict[str, Any]], session: str, origin: str
+) -> tuple[list[str], list[str]]:
     errors, outside = [], []
     for event in events:
         if event.get("sessionId") != session:
@@ -115,13 +122,19 @@ def _problems(events: list[dict[str, Any]], session: str, origin: str) -> tuple[
         method, params = event.get("method"), event.get("params", {})
         if method == "Runtime.exceptionThrown":
             details = params.get("exceptionDetails", {})
-            errors.append(f"exception: {details.get('exception', {}).get('description') or details.get('text')}")
+            errors.append(
+                f"exception: {details.get('exception', {}).get('description') or details.get('text')}"
+            )
         elif method == "Runtime.consoleAPICalled" and params.get("type") in ("error", "assert"):
-            args = " ".join(str(a.get("value", a.get("description", ""))) for a in params.get("args", []))
+            args = " ".join(
+                str(a.get("value", a.get("description", ""))) for a in params.get("args", [])
+            )
             errors.append(f"console.{params['type']}: {args}")
         elif method == "Log.entryAdded" and params.get("entry", {}).get("level") == "error":
             entry = params["entry"]
-            errors.append(f"log ({entry.get('source')}): {entry.get('text')} {entry.get('url', '')}".strip())
+            errors.append(
+                f"log ({entry.get('source')}): {entry.get('text')} {entry.get('url', '')}".strip()
+            )
         elif method == "Network.loadingFailed" and not params.get("canceled"):
             errors.append(f"request failed: {params.get('errorText')}")
         elif method == "Network.requestWillBeSent":
@@ -131,7 +144,9 @@ def _problems(events: list[dict[str, Any]], session: str, origin: str) -> tuple[
     return errors, outside
 
 
-def render(urls: list[str], width: int = 1280, height: int = 900, settle: float = 1.0) -> list[Page]:
+def render(
+    urls: list[str], width: int = 1280, height: int = 900, settle: float = 1.0
+) -> list[Page]:
     """Open each URL in headless Chromium; its screenshot and what went wrong."""
     if CHROMIUM is None:
         raise RuntimeError("Chromium is not installed")
@@ -146,7 +161,7 @@ def render(urls: list[str], width: int = 1280, height: int = 900, settle: float 
         process = subprocess.Popen(
             [CHROMIUM, *FLAGS, f"--user-data-dir={profile}", f"--window-size={width},{height}"],
             pass_fds=(3, 4, to_chrome_r, from_chrome_w),
-            preexec_fn=wire,  # noqa: PLW1509 - single-threaded test process
+            preexec_fn=wire,
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
@@ -176,12 +191,16 @@ def render(urls: list[str], width: int = 1280, height: int = 900, settle: float 
 
                 def evaluate(expression: str, session: str = session) -> str:
                     result = pipe.send(
-                        "Runtime.evaluate", {"expression": expression, "returnByValue": True}, session=session
+                        "Runtime.evaluate",
+                        {"expression": expression, "returnByValue": True},
+                        session=session,
                     )
                     return str(result.get("result", {}).get("value", ""))
 
                 page.title = evaluate("document.title")
-                page.heading = evaluate("(document.querySelector('article h1') || {}).textContent || ''")
+                page.heading = evaluate(
+                    "(document.querySelector('article h1') || {}).textContent || ''"
+                )
                 shot = pipe.send("Page.captureScreenshot", {"format": "png"}, session=session)
                 page.screenshot = base64.b64decode(shot["data"])
                 page.errors, page.outside_requests = _problems(
@@ -189,10 +208,8 @@ def render(urls: list[str], width: int = 1280, height: int = 900, settle: float 
                 )
                 pipe.send("Target.closeTarget", {"targetId": target})
                 pages.append(page)
-            try:
+            with contextlib.suppress(RuntimeError, TimeoutError):
                 pipe.send("Browser.close")
-            except (RuntimeError, TimeoutError):
-                pass
         finally:
             os.close(to_chrome_w)
             os.close(from_chrome_r)

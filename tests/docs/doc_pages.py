@@ -26,6 +26,7 @@ __all__ = [
     "code_blocks",
     "heading_slugs",
     "links",
+    "outside_fences",
     "pages",
 ]
 
@@ -36,16 +37,16 @@ RUNNABLE = frozenset({"python", "py", "{hybrid-plot}"})
 NO_RUN = re.compile(r"^<!--\s*docs:\s*no-run\b(?P<reason>.*?)-->\s*$")
 
 _FENCE = re.compile(r"^(?P<indent> {0,3})(?P<fence>`{3,}|~{3,})(?P<info>[^`]*)$")
-_LINK = re.compile(r"(?<!!)\[(?P<text>[^\]]*)\]\((?P<target>[^)\s]+)\)|!\[[^\]]*\]\((?P<image>[^)\s]+)\)")
+_LINK = re.compile(
+    r"(?<!!)\[(?P<text>[^\]]*)\]\((?P<target>[^)\s]+)\)|!\[[^\]]*\]\((?P<image>[^)\s]+)\)"
+)
 _HEADING = re.compile(r"^(#{1,6})\s+(?P<title>.+?)\s*#*\s*$")
 
 
 def pages() -> list[Path]:
     """Every hand-written page under docs/, sorted."""
     return sorted(
-        p
-        for p in DOCS.rglob("*.md")
-        if not (set(p.relative_to(DOCS).parts[:-1]) & GENERATED)
+        p for p in DOCS.rglob("*.md") if not (set(p.relative_to(DOCS).parts[:-1]) & GENERATED)
     )
 
 
@@ -90,7 +91,9 @@ def code_blocks(text: str) -> list[Block]:
                 body.pop(0)
         code = "\n".join(body)
         blocks.append(
-            Block(language, code + "\n", i + 2, marker.group("reason").strip(" :") if marker else None)
+            Block(
+                language, code + "\n", i + 2, marker.group("reason").strip(" :") if marker else None
+            )
         )
         i = j + 1
     return blocks
@@ -109,7 +112,7 @@ def _closes(match: re.Match[str], fence: str) -> bool:
     return found[0] == fence[0] and len(found) >= len(fence) and not match.group("info").strip()
 
 
-def _outside_fences(text: str) -> list[tuple[int, str]]:
+def outside_fences(text: str) -> list[tuple[int, str]]:
     """``(line number, line)`` of every line that is not inside a fenced block."""
     out = []
     fence: str | None = None
@@ -129,7 +132,7 @@ def _outside_fences(text: str) -> list[tuple[int, str]]:
 def links(text: str) -> list[Link]:
     """Every link and image target outside code."""
     found = []
-    for number, line in _outside_fences(text):
+    for number, line in outside_fences(text):
         for match in _LINK.finditer(re.sub(r"`[^`]*`", "", line)):
             found.append(Link(match.group("target") or match.group("image"), number))
     return found
@@ -145,7 +148,7 @@ def slug(title: str) -> str:
 def heading_slugs(text: str) -> set[str]:
     """The anchors of every heading of a page (outside code)."""
     slugs = set()
-    for _, line in _outside_fences(text):
+    for _, line in outside_fences(text):
         match = _HEADING.match(line)
         if match:
             slugs.add(slug(match.group("title")))

@@ -37,7 +37,9 @@ def _broken(page: Path) -> list[str]:
             continue
         if parts.fragment and target.suffix == ".md":
             target_text = target.read_text(encoding="utf-8")
-            if GENERATED_MARK not in target_text and parts.fragment not in heading_slugs(target_text):
+            if GENERATED_MARK not in target_text and parts.fragment not in heading_slugs(
+                target_text
+            ):
                 found.append(f"{where}: no heading with that anchor")
     return found
 

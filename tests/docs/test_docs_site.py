@@ -37,8 +37,20 @@ from hybrid.cli.main import build_parser
 def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("site")
     result = subprocess.run(
-        [sys.executable, "-m", "sphinx", "-b", "html", "-W", "--keep-going", "-q", "-d",
-         str(out / "doctrees"), str(DOCS), str(out / "html")],
+        [
+            sys.executable,
+            "-m",
+            "sphinx",
+            "-b",
+            "html",
+            "-W",
+            "--keep-going",
+            "-q",
+            "-d",
+            str(out / "doctrees"),
+            str(DOCS),
+            str(out / "html"),
+        ],
         capture_output=True,
         text=True,
         cwd=REPO,
@@ -50,8 +62,19 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_the_site_builds_with_warnings_as_errors(site: Path) -> None:
-    for page in ("index", "getting-started", "composition", "export", "plots", "api",
-                 "cli-reference", "schema", "uvms", "semantics", "spec-language"):
+    for page in (
+        "index",
+        "getting-started",
+        "composition",
+        "export",
+        "plots",
+        "api",
+        "cli-reference",
+        "schema",
+        "uvms",
+        "semantics",
+        "spec-language",
+    ):
         assert (site / f"{page}.html").is_file(), page
 
 
@@ -95,9 +118,12 @@ def test_every_internal_link_of_the_built_site_resolves(site: Path) -> None:
                 target = target / "index.html"
             if not target.exists():
                 broken.append(f"{page.relative_to(site)}: {href}")
-            elif parts.fragment and target.suffix == ".html":
-                if unquote(parts.fragment) not in _parsed(target).ids:
-                    broken.append(f"{page.relative_to(site)}: {href} (no such anchor)")
+            elif (
+                parts.fragment
+                and target.suffix == ".html"
+                and unquote(parts.fragment) not in _parsed(target).ids
+            ):
+                broken.append(f"{page.relative_to(site)}: {href} (no such anchor)")
     assert not broken, "broken links:\n" + "\n".join(broken[:40])
 
 
@@ -171,7 +197,9 @@ def served(site: Path) -> Iterator[str]:
     server.server_close()
 
 
-@pytest.mark.skipif(CHROMIUM is None, reason="Chromium is not installed (Debian: apt-get install chromium)")
+@pytest.mark.skipif(
+    CHROMIUM is None, reason="Chromium is not installed (Debian: apt-get install chromium)"
+)
 def test_pages_render_in_chromium_without_errors(served: str, tmp_path: Path) -> None:
     pages = render([served + "index.html", served + "getting-started.html"])
     for page, title in zip(pages, ("hybrid", "Getting started"), strict=True):
@@ -182,4 +210,6 @@ def test_pages_render_in_chromium_without_errors(served: str, tmp_path: Path) ->
         picture = matplotlib.image.imread(io.BytesIO(page.screenshot), format="png")
         assert picture.shape[:2] == (900, 1280)
         assert float(np.std(picture[..., :3])) > 0.05  # something is drawn
-        (tmp_path / Path(urlsplit(page.url).path).with_suffix(".png").name).write_bytes(page.screenshot)
+        (tmp_path / Path(urlsplit(page.url).path).with_suffix(".png").name).write_bytes(
+            page.screenshot
+        )

@@ -110,7 +110,9 @@ def test_a_report_prints_its_findings_and_escapes_them_in_html() -> None:
     tank = hybrid.load("docs/examples/tank.yaml").with_parameters({"high": 4.0})
     report = hybrid.check(tank)
     text = repr(report)
-    assert text.startswith("<Report tank (docs/examples/tank.yaml): failed, 1 error, 1 warning, 0 notes")
+    assert text.startswith(
+        "<Report tank (docs/examples/tank.yaml): failed, 1 error, 1 warning, 0 notes"
+    )
     for finding in report.findings:
         assert finding.text() in text
     html = report._repr_html_()

@@ -42,7 +42,9 @@ def test_svg_of_the_uvms_automaton(tmp_path: Path) -> None:
     for g in root.iter(f"{SVG}g"):
         title = g.find(f"{SVG}title")
         text = " ".join(t.text or "" for t in g.iter(f"{SVG}text"))
-        groups.setdefault(g.get("class"), []).append((title.text if title is not None else "", text))
+        groups.setdefault(g.get("class"), []).append(
+            (title.text if title is not None else "", text)
+        )
     nodes = {title for title, _ in groups["node"] if title != "__start__"}
     assert nodes == set(spec["locations"])
     edges = [text for title, text in groups["edge"] if not title.startswith("__start__")]
@@ -54,7 +56,12 @@ def test_svg_of_the_uvms_automaton(tmp_path: Path) -> None:
 @needs_dot
 def test_png_of_a_system_product(tmp_path: Path) -> None:
     out = tmp_path / "mission.png"
-    assert main_in_process("graph", REPO / "specs/uvms_mission_1.yaml", "--format", "png", "--out", out) == 0
+    assert (
+        main_in_process(
+            "graph", REPO / "specs/uvms_mission_1.yaml", "--format", "png", "--out", out
+        )
+        == 0
+    )
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     svg = render(location_graph(hybrid.load(REPO / "specs/thermostat.yaml")), "svg")
     assert b"turn_on" in svg and b"turn_off" in svg

@@ -60,7 +60,11 @@ def test_axis_labels_carry_the_units_of_the_spec(ball_run: hybrid.Run) -> None:
     state = _spec("specs/bouncing_ball.yaml")["state"]
     fig = figure_of(ball_run)
     labels = [ax.get_ylabel() for ax in fig.axes]
-    assert labels == ["location", *(f"{name} [{var['unit']}]" for name, var in state.items()), "signals"]
+    assert labels == [
+        "location",
+        *(f"{name} [{var['unit']}]" for name, var in state.items()),
+        "signals",
+    ]
     assert fig.axes[-1].get_xlabel() == "t"
 
 
@@ -105,7 +109,9 @@ def test_curves_break_at_every_jump(dense: bool) -> None:
 
 
 def test_the_location_lane_shows_each_stay_at_the_closed_form() -> None:
-    run = hybrid.simulate(hybrid.load(ROOT / "specs/thermostat.yaml"), t_end=12.0, rtol=1e-10, atol=1e-12)
+    run = hybrid.simulate(
+        hybrid.load(ROOT / "specs/thermostat.yaml"), t_end=12.0, rtol=1e-10, atol=1e-12
+    )
     lane = figure_of(run).axes[0]
     assert [t.get_text() for t in lane.get_yticklabels()] == ["off", "on"]
     spans: dict[str, list[tuple[float, float]]] = {}
@@ -194,7 +200,9 @@ def test_run_plot_returns_the_figure_and_shows_or_saves_nothing_unless_asked(
 
 
 def test_mistakes_are_clear(ball_run: hybrid.Run) -> None:
-    with pytest.raises(hybrid.UsageError, match="no state variable or signal 'hh'; did you mean 'h'"):
+    with pytest.raises(
+        hybrid.UsageError, match="no state variable or signal 'hh'; did you mean 'h'"
+    ):
         ball_run.plot("hh")
     with pytest.raises(hybrid.UsageError, match="against must be one of t, j, both"):
         ball_run.plot(against="x")
@@ -213,8 +221,17 @@ def test_many_jumps_mark_only_the_first(ball: hybrid.Automaton) -> None:
 def test_cli_writes_a_png(tmp_path: Path) -> None:
     out = tmp_path / "ball.png"
     result = subprocess.run(
-        [sys.executable, "-m", "hybrid", "simulate", str(ROOT / "specs/bouncing_ball.yaml"),
-         "--t-end", "3", "--plot", str(out)],
+        [
+            sys.executable,
+            "-m",
+            "hybrid",
+            "simulate",
+            str(ROOT / "specs/bouncing_ball.yaml"),
+            "--t-end",
+            "3",
+            "--plot",
+            str(out),
+        ],
         capture_output=True,
         text=True,
         timeout=120,
@@ -255,6 +272,8 @@ def test_import_hybrid_loads_neither_matplotlib_nor_pandas() -> None:
         "run = hybrid.simulate(hybrid.load('specs/bouncing_ball.yaml'), t_end=1.0)\n"
         "print(sorted(m for m in ('matplotlib', 'pandas', 'graphviz') if m in sys.modules))"
     )
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=120
+    )
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "[]"
