@@ -1,11 +1,12 @@
-# Two entry points: `make demo` and `make test`; each bootstraps .venv on a fresh machine.
+# Entry points: `make demo`, `make test` and `make docs`; each bootstraps .venv on a fresh machine.
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP_DEMO := $(VENV)/.installed-demo
 STAMP_TEST := $(VENV)/.installed-test
+STAMP_DOCS := $(VENV)/.installed-docs
 
-.PHONY: demo test lint typecheck check-specs bench clean
+.PHONY: demo test docs lint typecheck check-specs bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -19,11 +20,15 @@ $(STAMP_TEST): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e '.[test,plot]'
 	touch $@
 
+$(STAMP_DOCS): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[docs]'
+	touch $@
+
 demo: $(STAMP_DEMO)
 	$(BIN)/python -m uvms_model.demo out
 
 lint: $(STAMP_TEST)
-	$(BIN)/ruff check hybrid uvms_model tests bench conftest.py
+	$(BIN)/ruff check hybrid uvms_model tests bench conftest.py docs/conf.py docs/_ext
 
 typecheck: $(STAMP_TEST)
 	$(BIN)/mypy hybrid uvms_model
@@ -35,8 +40,14 @@ check-specs: $(STAMP_TEST)
 test: lint typecheck check-specs
 	$(BIN)/python -m pytest -q
 
+# The site, from scratch, every warning an error (docs/writing-docs.md); open docs/_build/html/index.html.
+docs: $(STAMP_DOCS)
+	rm -rf docs/_build/html docs/_build/doctrees
+	$(BIN)/python -m sphinx -b html -W --keep-going -q -d docs/_build/doctrees docs docs/_build/html
+	@echo "built docs/_build/html/index.html"
+
 bench: $(STAMP_TEST)
 	$(BIN)/python -m bench
 
 clean:
-	rm -rf $(VENV) out .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) out .pytest_cache .mypy_cache .ruff_cache docs/_build docs/api docs/_generated

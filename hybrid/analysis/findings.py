@@ -206,3 +206,13 @@ class Report:
 
     def by_rule(self, rule: str) -> list[Finding]:
         return [f for f in self.findings if f.rule == rule]
+
+    def __repr__(self) -> str:
+        from hybrid.analysis.display import report_text
+
+        return report_text(self)
+
+    def _repr_html_(self) -> str:
+        from hybrid.analysis.display import report_html
+
+        return report_html(self)

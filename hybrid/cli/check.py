@@ -28,8 +28,10 @@ from hybrid.analysis import check, system_graph
 from hybrid.analysis.findings import Finding, Report
 from hybrid.analysis.formats import FORMATS, write
 from hybrid.cli.exits import EXIT_FINDINGS, EXIT_INVALID, EXIT_OK
-from hybrid.errors import SpecError
+from hybrid.errors import SpecError, UsageError
+from hybrid.export.atomic import atomic_write
 from hybrid.export.diagrams import DIAGRAM_FORMATS
+from hybrid.export.pictures import RENDERED_FORMATS, render
 from hybrid.reader.loader import load
 
 __all__ = ["run_check", "run_graph"]
@@ -86,15 +88,23 @@ def run_check(
     return EXIT_OK
 
 
-def run_graph(file: str, *, fmt: str = "dot", out: TextIO | None = None) -> int:
+def run_graph(
+    file: str, *, fmt: str = "dot", out: TextIO | None = None, path: str | None = None
+) -> int:
     """Print the location graph of ``file`` (the reachable product of a system).
 
-    Raises :class:`hybrid.SpecError` for an invalid spec (the CLI exits 2).
+    ``svg`` and ``png`` are drawn by Graphviz (:mod:`hybrid.export.pictures`);
+    ``path`` writes the output to that file (atomically) instead of ``out``.
+    Raises :class:`hybrid.SpecError` for an invalid spec (the CLI exits 2) and
+    :class:`hybrid.UsageError` when Graphviz is missing.
     """
     writers = DIAGRAM_FORMATS
-    if fmt not in writers:
-        raise ValueError(f"unknown format '{fmt}'; choose from {', '.join(writers)}")
+    if fmt not in writers and fmt not in RENDERED_FORMATS:
+        choices = (*writers, *RENDERED_FORMATS)
+        raise ValueError(f"unknown format '{fmt}'; choose from {', '.join(choices)}")
     out = out or sys.stdout
+    if fmt == "png" and path is None and out.isatty():
+        raise UsageError("--format png is binary: write it with --out FILE or redirect stdout")
     graph = system_graph(load(file))
     if not graph.graph.get("complete", True):
         print(
@@ -102,5 +112,13 @@ def run_graph(file: str, *, fmt: str = "dot", out: TextIO | None = None) -> int:
             f"{graph.number_of_nodes()}",
             file=sys.stderr,
         )
-    print(writers[fmt](graph), file=out)
+    data = render(graph, fmt) if fmt in RENDERED_FORMATS else (writers[fmt](graph) + "\n").encode()
+    if path is not None:
+        with atomic_write(path) as handle:
+            handle.write(data)
+    elif fmt == "png":
+        out.flush()
+        out.buffer.write(data)
+    else:
+        out.write(data.decode("utf-8"))
     return EXIT_OK

@@ -8,7 +8,6 @@ Exit codes: 0 success; 1 findings (check) or a run that ended before t-end
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Sequence
 
@@ -63,6 +62,7 @@ def _count(text: str) -> int:
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``hybrid`` command (the CLI reference is generated from it)."""
     from hybrid.export.diagrams import DIAGRAM_FORMATS
+    from hybrid.export.pictures import RENDERED_FORMATS
     from hybrid.simulation.settings import METHODS
 
     parser = _Parser(prog="hybrid", description="Hybrid automata: validate, check, simulate.")
@@ -70,37 +70,51 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("validate", help="parse and check the spec language only")
-    p.add_argument("files", nargs="+", metavar="FILE")
+    p.add_argument("files", nargs="+", metavar="FILE", help="spec or system files")
 
     p = sub.add_parser("check", help="graph and property checks")
-    p.add_argument("files", nargs="+", metavar="FILE")
-    p.add_argument("--format", choices=tuple(REPORT_FORMATS), default="text")
+    p.add_argument("files", nargs="+", metavar="FILE", help="spec or system files")
+    p.add_argument("--format", choices=tuple(REPORT_FORMATS), default="text", help="report format")
     p.add_argument("--strict", action="store_true", help="warnings fail too (exit 1)")
 
     p = sub.add_parser("simulate", help="simulate a spec")
-    p.add_argument("file", metavar="FILE")
+    p.add_argument("file", metavar="FILE", help="spec or system file")
     p.add_argument("--t-end", type=_positive, required=True, help="end time")
-    p.add_argument("--max-jumps", type=_count, default=10_000)
-    p.add_argument("--rtol", type=_positive, default=1e-6)
-    p.add_argument("--atol", type=_positive, default=1e-9)
+    p.add_argument("--max-jumps", type=_count, default=10_000, help="stop after this many jumps")
+    p.add_argument("--rtol", type=_positive, default=1e-6, help="relative tolerance of the solver")
+    p.add_argument("--atol", type=_positive, default=1e-9, help="absolute tolerance of the solver")
     p.add_argument(
         "--max-step",
         type=_positive,
         default=None,
         help="largest solver step; lower it to catch narrow guard windows",
     )
-    p.add_argument("--method", default=METHODS[0], choices=METHODS)
-    p.add_argument("--param", type=_param, action="append", default=[], metavar="NAME=VALUE")
+    p.add_argument("--method", default=METHODS[0], choices=METHODS, help="solve_ivp method")
+    p.add_argument(
+        "--param",
+        type=_param,
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override a parameter (comp.NAME in a system)",
+    )
     p.add_argument("--dt", type=_positive, default=None, help="write points on a uniform grid")
     p.add_argument("--out", help="trajectory file (.csv or .npz)")
     p.add_argument("--events", help="events JSON file")
     p.add_argument("--plot", help="figure file (needs the 'plot' extra)")
 
     p = sub.add_parser("graph", help="print the location graph")
-    p.add_argument("file", metavar="FILE")
-    p.add_argument("--format", choices=tuple(DIAGRAM_FORMATS), default="dot")
+    p.add_argument("file", metavar="FILE", help="spec or system file")
+    p.add_argument(
+        "--format",
+        choices=(*DIAGRAM_FORMATS, *RENDERED_FORMATS),
+        default="dot",
+        help="dot and mermaid are text; svg and png are drawn by Graphviz (the 'graph' extra)",
+    )
+    p.add_argument("--out", metavar="FILE", help="write to FILE instead of stdout")
 
-    sub.add_parser("schema", help="print the JSON Schema of spec files")
+    p = sub.add_parser("schema", help="print the JSON Schema of spec files")
+    p.add_argument("--out", metavar="FILE", help="write it to FILE (for the modeline of specs)")
 
     from hybrid.cli.interchange import add_interchange_commands
 
@@ -115,10 +129,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "validate":
             return _validate(args.files)
         if args.command == "schema":
-            from hybrid.reader.jsonschema import spec_schema
+            from hybrid.cli.schema import run_schema
 
-            print(json.dumps(spec_schema(), indent=2))
-            return EXIT_OK
+            return run_schema(args.out)
         if args.command == "check":
             from hybrid.cli.check import run_check
 
@@ -126,7 +139,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "graph":
             from hybrid.cli.check import run_graph
 
-            return run_graph(args.file, fmt=args.format)
+            return run_graph(args.file, fmt=args.format, path=args.out)
         if args.command == "simulate":
             from hybrid.cli.simulate import run_simulate
 

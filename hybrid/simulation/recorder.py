@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from hybrid.simulation.compiled import CompiledMode, CompiledModel, CompiledTransition
+from hybrid.simulation.layout import run_layout
 from hybrid.simulation.result import Jump, Run, Termination
 from hybrid.simulation.settings import Settings
 
@@ -110,4 +111,5 @@ class Recorder:
             termination=termination,
             settings=self.settings.as_dict(),
             segments=self.segments,
+            **run_layout(self.compiled.system),
         )

@@ -12,17 +12,23 @@ Examples
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CAUSES", "Jump", "Run", "Termination"]
+__all__ = ["CAUSES", "PLOT_BACKEND", "Jump", "Run", "Termination"]
 
 CAUSES = ("t_end", "max_jumps", "zeno", "blocked", "nonfinite", "solver_failure", "interrupted")
 """Every way a run can end; only ``t_end`` is a normal end."""
+
+PLOT_BACKEND = "hybrid.export.plot"
+"""The module that draws :meth:`Run.plot` (named, like pandas' plotting backend, because
+figures belong to the export layer above the simulator: docs/architecture.md)."""
 
 
 @dataclass(frozen=True)
@@ -106,6 +112,10 @@ class Run:
     settings: dict[str, Any] = field(default_factory=dict)
     segments: list[tuple[int, float, float, Any]] = field(default_factory=list, repr=False)
     """With ``dense=True``: ``(j, t0, t1, interpolant)`` per stay in a mode."""
+    units: Mapping[str, str] = field(default_factory=dict)
+    """The ``unit:`` of each state variable that declares one (axis labels of plots)."""
+    components: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    """In a system: each component's name and its columns; empty for an automaton."""
 
     def __getitem__(self, name: str) -> NDArray[np.float64]:
         if name in self.state_names:
@@ -128,3 +138,96 @@ class Run:
     @property
     def jump_times(self) -> NDArray[np.float64]:
         return np.array([jump.t for jump in self.jumps], dtype=float)
+
+    def plot(
+        self,
+        *names: str,
+        component: str | None = None,
+        against: str = "t",
+        signals: bool = True,
+        path: str | Path | None = None,
+        show: bool = False,
+    ) -> Any:
+        """Draw the run over hybrid time and return the matplotlib figure.
+
+        Needs the ``plot`` extra (matplotlib). Nothing is shown or saved unless asked.
+
+        Parameters
+        ----------
+        *names : str
+            State variables and signals to draw (default: all of them).
+        component : str, optional
+            In a system, draw only this component (default: one section per component).
+        against : {"t", "j", "both"}
+            Draw values against time ``t``, against the jump count ``j``, or both side
+            by side (the hybrid-time view).
+        signals : bool
+            Draw the signals too (one panel, a legend entry per signal).
+        path : str or Path, optional
+            Also write the figure there (format from the suffix: ``.png``, ``.svg``,
+            ``.pdf``), atomically.
+        show : bool
+            Also show it in a window (``matplotlib.pyplot.show``).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            A location lane on top, a panel per state variable (its ``unit:`` on the
+            axis), the signals; jumps marked before (hollow) and after (filled).
+
+        Examples
+        --------
+        >>> import hybrid
+        >>> run = hybrid.simulate(hybrid.load("specs/bouncing_ball.yaml"), t_end=3.0)
+        >>> fig = run.plot()
+        >>> [ax.get_ylabel() for ax in fig.axes]
+        ['location', 'h [m]', 'v [m/s]', 'signals']
+        """
+        backend = importlib.import_module(PLOT_BACKEND)
+        return backend.plot(
+            self,
+            *names,
+            component=component,
+            against=against,
+            signals=signals,
+            path=path,
+            show=show,
+        )
+
+    def to_pandas(self) -> Any:
+        """The trajectory as a :class:`pandas.DataFrame` (needs pandas).
+
+        Columns ``t``, ``j``, ``location``, then the state variables and the signals,
+        as in the CSV file: one row per stored point, two rows (same ``t``, ``j`` and
+        ``j + 1``) per jump.
+
+        Examples
+        --------
+        >>> import hybrid
+        >>> run = hybrid.simulate(hybrid.load("specs/bouncing_ball.yaml"), t_end=2.0)
+        >>> frame = run.to_pandas()
+        >>> list(frame.columns)
+        ['t', 'j', 'location', 'h', 'v', 'energy']
+        >>> frame.groupby("j").size().tolist() == [int((run.j == k).sum()) for k in (0, 1)]
+        True
+        """
+        try:
+            import pandas as pd
+        except ImportError:
+            from hybrid.errors import UsageError
+            from hybrid.version import install_hint
+
+            raise UsageError(f"to_pandas needs pandas: {install_hint('pandas')}") from None
+        time = pd.DataFrame({"t": self.t, "j": self.j, "location": self.location.astype(str)})
+        values = pd.DataFrame(np.hstack([self.states, self.signals]), columns=list(self.columns))
+        return pd.concat([time, values], axis=1)
+
+    def __repr__(self) -> str:
+        from hybrid.simulation.display import run_text
+
+        return run_text(self)
+
+    def _repr_html_(self) -> str:
+        from hybrid.simulation.display import run_html
+
+        return run_html(self)

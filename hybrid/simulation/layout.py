@@ -1,0 +1,48 @@
+"""Which trajectory columns belong to which component, and the units of the state.
+
+A :class:`~hybrid.simulation.result.Run` keeps these facts of its model so that
+it can be drawn (one figure per component of a system, axis labels with the
+``unit:`` of each state variable) without the model at hand.
+
+Examples
+--------
+>>> import hybrid
+>>> layout = run_layout(hybrid.load("specs/uvms_mission_1.yaml"))
+>>> [name for name, _ in layout["components"]]
+['uvms', 'polarization']
+>>> layout["components"][1][1]
+('theta_p',)
+>>> run_layout(hybrid.load("specs/bouncing_ball.yaml"))
+{'units': {'h': 'm', 'v': 'm/s'}, 'components': ()}
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from hybrid.compose import as_system
+
+if TYPE_CHECKING:
+    from hybrid.compose import System
+    from hybrid.model import Automaton
+
+__all__ = ["run_layout"]
+
+
+def run_layout(model: Automaton | System) -> dict[str, Any]:
+    """``units`` (state variable to its ``unit:``) and ``components`` (per component of a
+    system: its name and its columns, state variables first, then signal columns;
+    empty for a plain automaton): the keyword arguments a :class:`Run` takes."""
+    system = as_system(model)
+    units = {s.name: s.unit for s in system.states if s.unit}
+    if system.single:
+        return {"units": units, "components": ()}
+    components = []
+    for component in system.components:
+        automaton = component.automaton
+        columns = [s.name for s in automaton.states]
+        for name in automaton.signal_names:
+            size = automaton.vector_sizes.get(name)
+            columns.extend([name] if size is None else [f"{name}[{k}]" for k in range(size)])
+        components.append((component.name, tuple(columns)))
+    return {"units": units, "components": tuple(components)}
