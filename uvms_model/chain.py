@@ -50,7 +50,7 @@ from typing import NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-from uvms_model.screws import prismatic, revolute
+from uvms_model.screws import Twist, prismatic, revolute
 
 __all__ = [
     "EE_SECONDARY",
@@ -73,6 +73,8 @@ __all__ = [
     "det_ns",
     "end_effector_pose",
     "forward_kinematics",
+    "joint_points",
+    "network_columns",
     "network_matrix",
     "primary_indices",
     "solve_partition",
@@ -98,6 +100,8 @@ EE_SECONDARY: tuple[int, int, int] = (XE, YE, PHIE)
 
 _X_AXIS = prismatic((1.0, 0.0))
 _Y_AXIS = prismatic((0.0, 1.0))
+_MINUS_X_AXIS: Twist = (-_X_AXIS[0], -_X_AXIS[1], -_X_AXIS[2])
+_MINUS_Y_AXIS: Twist = (-_Y_AXIS[0], -_Y_AXIS[1], -_Y_AXIS[2])
 
 
 @dataclass(frozen=True)
@@ -145,8 +149,59 @@ def _unpack(config: Config) -> tuple[float, float, float, float, float, float]:
     return x, y, phi, q1, q2, q3
 
 
+def joint_points(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[float, float, float, float, float, float, float, float, float]:
+    """Forward kinematics on scalars: the one implementation of the chain's geometry.
+
+    :func:`forward_kinematics` wraps it for a :class:`Chain`; the functions the specs
+    call (:mod:`uvms_model.functions`) use it directly, at every solver stage.
+
+    Parameters
+    ----------
+    x, y, phi : float
+        Vehicle point P0 and heading.
+    q1, q2, q3 : float
+        Arm joint angles, rad.
+    a1, a2, a3 : float
+        Link lengths, m.
+    bx, by : float
+        Arm base offset in the vehicle frame, m.
+
+    Returns
+    -------
+    tuple of float
+        ``(p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, phie)`` with ``phie = phi + q1 + q2 + q3``.
+
+    Examples
+    --------
+    >>> p = joint_points(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.25, 0.5, 0.0)
+    >>> [round(v, 12) for v in p]
+    [0.5, 0.0, 1.5, 0.0, 2.5, 0.0, 2.75, 0.0, 0.0]
+    """
+    c, s = math.cos(phi), math.sin(phi)
+    p1x, p1y = x + c * bx - s * by, y + s * bx + c * by
+    t1 = phi + q1
+    t2 = t1 + q2
+    t3 = t2 + q3
+    p2x, p2y = p1x + a1 * math.cos(t1), p1y + a1 * math.sin(t1)
+    p3x, p3y = p2x + a2 * math.cos(t2), p2y + a2 * math.sin(t2)
+    ex, ey = p3x + a3 * math.cos(t3), p3y + a3 * math.sin(t3)
+    return p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, t3
+
+
 def forward_kinematics(chain: Chain, config: Config) -> ChainPose:
-    """Points P0..P3, E and the end-effector pose (plain ``math``, per-step safe).
+    """Points P0..P3, E and the end-effector pose (by :func:`joint_points`).
 
     Parameters
     ----------
@@ -159,18 +214,61 @@ def forward_kinematics(chain: Chain, config: Config) -> ChainPose:
     -------
     ChainPose
         Points and ``(xe, ye, phie)`` with ``phie = phi + q1 + q2 + q3``.
+
+    Examples
+    --------
+    >>> pose = forward_kinematics(Chain(), (0.0, 0.0, 0.0, 0.0, math.pi / 2, 0.0))
+    >>> [round(v, 12) for v in pose.p3]
+    [1.5, 1.0]
     """
     x, y, phi, q1, q2, q3 = _unpack(config)
-    c, s = math.cos(phi), math.sin(phi)
-    bx, by = chain.b
-    p1x, p1y = x + c * bx - s * by, y + s * bx + c * by
-    t1 = phi + q1
-    t2 = t1 + q2
-    t3 = t2 + q3
-    p2x, p2y = p1x + chain.a1 * math.cos(t1), p1y + chain.a1 * math.sin(t1)
-    p3x, p3y = p2x + chain.a2 * math.cos(t2), p2y + chain.a2 * math.sin(t2)
-    ex, ey = p3x + chain.a3 * math.cos(t3), p3y + chain.a3 * math.sin(t3)
+    p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, t3 = joint_points(
+        x, y, phi, q1, q2, q3, chain.a1, chain.a2, chain.a3, chain.b[0], chain.b[1]
+    )
     return ChainPose((x, y), (p1x, p1y), (p2x, p2y), (p3x, p3y), (ex, ey), ex, ey, t3)
+
+
+def network_columns(
+    x: float,
+    y: float,
+    p1: tuple[float, float],
+    p2: tuple[float, float],
+    p3: tuple[float, float],
+    e: tuple[float, float],
+) -> tuple[Twist, ...]:
+    """The nine columns of N from the joint points: the one implementation of N.
+
+    Parameters
+    ----------
+    x, y : float
+        Vehicle point P0 (axis of the heading joint).
+    p1, p2, p3 : tuple of float
+        Axes of the arm joints q1, q2, q3.
+    e : tuple of float
+        End-effector point E (axis of the closing chain's revolute).
+
+    Returns
+    -------
+    tuple of Twist
+        ``($x, $y, $phi, $q1, $q2, $q3, -$xe, -$ye, -$phie)``.
+
+    Examples
+    --------
+    >>> network_columns(0.0, 0.0, (1, 0), (2, 0), (3, 0), (4, 0))[8]
+    (-1.0, -0.0, 4.0)
+    """
+    phie = revolute(e)
+    return (
+        _X_AXIS,
+        _Y_AXIS,
+        revolute((x, y)),
+        revolute(p1),
+        revolute(p2),
+        revolute(p3),
+        _MINUS_X_AXIS,
+        _MINUS_Y_AXIS,
+        (-phie[0], -phie[1], -phie[2]),
+    )
 
 
 def end_effector_pose(chain: Chain, config: Config) -> tuple[float, float, float]:
@@ -208,17 +306,7 @@ def network_matrix(chain: Chain, config: Config) -> FloatArray:
         ``N`` with the closing chain (xe, ye, phie) counted negatively.
     """
     pose = forward_kinematics(chain, config)
-    cols = (
-        _X_AXIS,
-        _Y_AXIS,
-        revolute(pose.p0),
-        revolute(pose.p1),
-        revolute(pose.p2),
-        revolute(pose.p3),
-        tuple(-v for v in _X_AXIS),
-        tuple(-v for v in _Y_AXIS),
-        tuple(-v for v in revolute(pose.e)),
-    )
+    cols = network_columns(pose.p0[0], pose.p0[1], pose.p1, pose.p2, pose.p3, pose.e)
     return np.array(cols, dtype=np.float64).T
 
 

@@ -34,6 +34,8 @@ from __future__ import annotations
 import math
 from typing import Literal, NamedTuple
 
+from uvms_model.indices import alpha, w_hat
+
 __all__ = [
     "GAMMA_MIN",
     "Activation",
@@ -112,10 +114,10 @@ def functional_machine_units(
     FMUnits
         ``(x1, x2, weight, y1, y2, s)``.
     """
-    a = 1.0 / gamma
+    a = alpha(gamma)
     x1 = a
     x2 = abs(a - gamma_min)
-    w = (a - gamma) / gamma
+    w = w_hat(gamma)
     y1 = _activate(w * x1 + theta_p, activation)
     y2 = _activate(w * x2 + theta_p, activation)
     return FMUnits(x1, x2, w, y1, y2, 0.5 * (y1 + y2))

@@ -2,12 +2,15 @@ r"""The functions the UVMS specs call, registered under ``hybrid.functions``.
 
 ``pyproject.toml`` declares the entry point ``uvms_model = uvms_model.functions:registry``;
 a spec says ``uses: [uvms_model]`` to call them. Every function takes and returns
-plain floats (tuples for vector results, marked with ``hybrid_outputs``) and is
-written with :mod:`math` on scalars, because the simulator calls them at every
-solver stage.
+plain floats (tuples for vector results, marked with ``hybrid_outputs``), because
+the simulator calls them at every solver stage. Each formula has one implementation
+elsewhere in the package (forward kinematics and the columns of N in
+:mod:`uvms_model.chain`, the quintic law in :mod:`uvms_model.quintic`, the FM in
+:mod:`uvms_model.functional_machine`); only the 3 x 3 solve has a fast scalar form
+here (Cramer's rule) beside the numpy reference (:func:`uvms_model.chain.solve_partition`),
+and the tests compare the two.
 
-The kinematic solves are Davies' method (``uvms_model.chain`` has the
-reference implementation with numpy): the network matrix
+The kinematic solves are Davies' method: the network matrix
 :math:`N = [\$_x\ \$_y\ \$_\phi\ \$_{q1}\ \$_{q2}\ \$_{q3}\ -\$_{xe}\ -\$_{ye}\ -\$_{\phi e}]`
 (columns in that order), :math:`N\Psi = 0` split into secondary and primary
 columns, :math:`N_s \Psi_s = -N_p \Psi_p` solved by Cramer's rule.
@@ -23,13 +26,14 @@ Examples
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from functools import lru_cache
 from typing import Any
 
+from uvms_model.chain import joint_points, network_columns
 from uvms_model.functional_machine import functional_machine_clipped
 from uvms_model.paths import DeformedCircle
+from uvms_model.quintic import quintic_state
 
 __all__ = [
     "SINGULAR_TOL",
@@ -48,30 +52,6 @@ SINGULAR_TOL = 1e-9
 Column = tuple[float, float, float]
 
 
-def _points(
-    x: float,
-    y: float,
-    phi: float,
-    q1: float,
-    q2: float,
-    q3: float,
-    a1: float,
-    a2: float,
-    a3: float,
-    bx: float,
-    by: float,
-) -> tuple[float, ...]:
-    c, s = math.cos(phi), math.sin(phi)
-    p1x, p1y = x + c * bx - s * by, y + s * bx + c * by
-    t1 = phi + q1
-    t2 = t1 + q2
-    t3 = t2 + q3
-    p2x, p2y = p1x + a1 * math.cos(t1), p1y + a1 * math.sin(t1)
-    p3x, p3y = p2x + a2 * math.cos(t2), p2y + a2 * math.sin(t2)
-    ex, ey = p3x + a3 * math.cos(t3), p3y + a3 * math.sin(t3)
-    return p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, t3
-
-
 def uvms_ee(
     x: float,
     y: float,
@@ -85,8 +65,8 @@ def uvms_ee(
     bx: float,
     by: float,
 ) -> tuple[float, float, float]:
-    """End-effector pose ``(xe, ye, phie)`` by forward kinematics."""
-    *_, ex, ey, t3 = _points(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    """End-effector pose ``(xe, ye, phie)`` by forward kinematics (:func:`joint_points`)."""
+    *_, ex, ey, t3 = joint_points(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
     return ex, ey, t3
 
 
@@ -102,20 +82,12 @@ def _columns(
     a3: float,
     bx: float,
     by: float,
-) -> list[Column]:
-    """The nine columns of N (screws of the closed chain, closing chain negated)."""
-    p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, _ = _points(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
-    return [
-        (0.0, 1.0, 0.0),  # $x: prismatic along X
-        (0.0, 0.0, 1.0),  # $y: prismatic along Y
-        (1.0, y, -x),  # $phi: revolute at P0
-        (1.0, p1y, -p1x),  # $q1
-        (1.0, p2y, -p2x),  # $q2
-        (1.0, p3y, -p3x),  # $q3
-        (0.0, -1.0, 0.0),  # -$xe
-        (0.0, 0.0, -1.0),  # -$ye
-        (-1.0, -ey, ex),  # -$phie: revolute at E
-    ]
+) -> tuple[Column, ...]:
+    """The nine columns of N (:func:`network_columns` at :func:`joint_points`)."""
+    p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, _ = joint_points(
+        x, y, phi, q1, q2, q3, a1, a2, a3, bx, by
+    )
+    return network_columns(x, y, (p1x, p1y), (p2x, p2y), (p3x, p3y), (ex, ey))
 
 
 def _det3(a: Column, b: Column, c: Column) -> float:
@@ -127,7 +99,7 @@ def _det3(a: Column, b: Column, c: Column) -> float:
 
 
 def _solve(
-    columns: list[Column], secondary: tuple[int, int, int], primary: dict[int, float]
+    columns: tuple[Column, ...], secondary: tuple[int, int, int], primary: dict[int, float]
 ) -> tuple[float, float, float]:
     rhs = [0.0, 0.0, 0.0]
     for k, value in primary.items():
@@ -237,26 +209,10 @@ def quintic(
 ) -> tuple[float, float, float]:
     """Quintic law (eq. 9) from ``(p0, v0, a0)`` at ``t0`` to ``(pf, 0, 0)`` at ``t0 + duration``.
 
-    Returns ``(p, v, a)``; held at ``(pf, 0, 0)`` after the end and at the start
-    values before it.
+    Returns ``(p, v, a)`` by :func:`uvms_model.quintic.quintic_state` (held at
+    ``(pf, 0, 0)`` after the end).
     """
-    T = duration
-    if not T > 0.0:
-        raise ValueError("quintic duration must be > 0")
-    tau = t - t0
-    if tau <= 0.0:
-        return p0, v0, a0
-    if tau >= T:
-        return pf, 0.0, 0.0
-    d = pf - p0
-    c3 = (20.0 * d - 12.0 * v0 * T - 3.0 * a0 * T * T) / (2.0 * T**3)
-    c4 = (-30.0 * d + 16.0 * v0 * T + 3.0 * a0 * T * T) / (2.0 * T**4)
-    c5 = (12.0 * d - 6.0 * v0 * T - a0 * T * T) / (2.0 * T**5)
-    c2 = 0.5 * a0
-    p = p0 + tau * (v0 + tau * (c2 + tau * (c3 + tau * (c4 + tau * c5))))
-    v = v0 + tau * (2.0 * c2 + tau * (3.0 * c3 + tau * (4.0 * c4 + tau * 5.0 * c5)))
-    a = 2.0 * c2 + tau * (6.0 * c3 + tau * (12.0 * c4 + tau * 20.0 * c5))
-    return p, v, a
+    return quintic_state(t, t0, p0, v0, a0, t0 + duration, pf)
 
 
 def _mark(fn: Callable[..., Any], arity: int, outputs: int = 1) -> Callable[..., Any]:

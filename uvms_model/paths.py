@@ -50,6 +50,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from uvms_model.quintic import quintic_state
+
 __all__ = [
     "MISSION1_CENTRE_OFFSET",
     "MISSION2_CENTRE_OFFSET",
@@ -90,14 +92,16 @@ def smoothstep5(tau: float) -> tuple[float, float]:
     Returns
     -------
     tuple of float
-        ``(sigma, dsigma/dtau)`` with ``sigma = 10 tau^3 - 15 tau^4 + 6 tau^5``.
+        ``(sigma, dsigma/dtau)`` with ``sigma = 10 tau^3 - 15 tau^4 + 6 tau^5``, the quintic
+        law from rest at 0 to rest at 1 (:func:`uvms_model.quintic.quintic_state`).
+
+    Examples
+    --------
+    >>> smoothstep5(0.5)
+    (0.5, 1.875)
     """
-    if tau <= 0.0:
-        return 0.0, 0.0
-    if tau >= 1.0:
-        return 1.0, 0.0
-    t2 = tau * tau
-    return t2 * tau * (10.0 + tau * (-15.0 + 6.0 * tau)), 30.0 * t2 * (1.0 - tau) ** 2
+    sigma, dsigma, _ = quintic_state(tau, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
+    return sigma, dsigma
 
 
 @dataclass(frozen=True)
