@@ -20,8 +20,10 @@ Examples
 >>> q1d, q2d, q3d = uvms_q0(0, 0, 0, 0.3, 1.2, -0.4, 0, 0, 0, 0.1, 0.0, 0.0, 1, 1, 0.25, 0.5, 0)
 >>> round(q1d + q2d + q3d, 12)   # end-effector heading rate 0, vehicle still
 0.0
->>> sorted(registry())
-['quintic', 'uvms_ee', 'uvms_fm', 'uvms_path', 'uvms_q0', 'uvms_state3']
+>>> sorted(registry())  # doctest: +NORMALIZE_WHITESPACE
+['quintic', 'uvms_ee', 'uvms_fm', 'uvms_fm_rate', 'uvms_fm_raw', 'uvms_path', 'uvms_q0',
+ 'uvms_q0_acc', 'uvms_state3', 'uvms_state3_acc', 'uvms_target', 'uvms_vehicle',
+ 'uvms_vehicle_rate']
 """
 
 from __future__ import annotations
@@ -30,10 +32,20 @@ from collections.abc import Callable
 from functools import lru_cache
 from typing import Any
 
-from uvms_model.chain import joint_points, network_columns
-from uvms_model.functional_machine import functional_machine_clipped
+from uvms_model.chain import (
+    joint_point_rates,
+    joint_points,
+    network_column_rates,
+    network_columns,
+)
+from uvms_model.functional_machine import (
+    functional_machine,
+    functional_machine_output,
+    functional_machine_rate,
+)
 from uvms_model.paths import DeformedCircle
-from uvms_model.quintic import quintic_state
+from uvms_model.quintic import quintic_state, transition_target
+from uvms_model.vehicle import limited_velocity, limited_velocity_rate
 
 __all__ = [
     "SINGULAR_TOL",
@@ -41,9 +53,16 @@ __all__ = [
     "registry",
     "uvms_ee",
     "uvms_fm",
+    "uvms_fm_rate",
+    "uvms_fm_raw",
     "uvms_path",
     "uvms_q0",
+    "uvms_q0_acc",
     "uvms_state3",
+    "uvms_state3_acc",
+    "uvms_target",
+    "uvms_vehicle",
+    "uvms_vehicle_rate",
 ]
 
 SINGULAR_TOL = 1e-9
@@ -99,9 +118,13 @@ def _det3(a: Column, b: Column, c: Column) -> float:
 
 
 def _solve(
-    columns: tuple[Column, ...], secondary: tuple[int, int, int], primary: dict[int, float]
+    columns: tuple[Column, ...],
+    secondary: tuple[int, int, int],
+    primary: dict[int, float],
+    bias: Column = (0.0, 0.0, 0.0),
 ) -> tuple[float, float, float]:
-    rhs = [0.0, 0.0, 0.0]
+    """Cramer's rule for ``Ns Psi_s = -(Np Psi_p + bias)``."""
+    rhs = [-bias[0], -bias[1], -bias[2]]
     for k, value in primary.items():
         col = columns[k]
         rhs[0] -= col[0] * value
@@ -163,6 +186,115 @@ def uvms_state3(
     return _solve(cols, (0, 1, 4), {2: phid, 3: q1d, 5: q3d, 6: xed, 7: yed, 8: phied})
 
 
+def _acceleration_setup(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    xd: float,
+    yd: float,
+    phid: float,
+    q1d: float,
+    q2d: float,
+    q3d: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[tuple[Column, ...], Column]:
+    """Columns of N and the bias ``N' Psi`` of the second-order closure."""
+    cols = _columns(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    p1xd, p1yd, p2xd, p2yd, p3xd, p3yd, exd, eyd = joint_point_rates(
+        x, y, phi, q1, q2, q3, xd, yd, phid, q1d, q2d, q3d, a1, a2, a3, bx, by
+    )
+    rates = network_column_rates(xd, yd, (p1xd, p1yd), (p2xd, p2yd), (p3xd, p3yd), (exd, eyd))
+    psi = (xd, yd, phid, q1d, q2d, q3d, exd, eyd, phid + q1d + q2d + q3d)
+    bias = (
+        sum(col[0] * v for col, v in zip(rates, psi, strict=True)),
+        sum(col[1] * v for col, v in zip(rates, psi, strict=True)),
+        sum(col[2] * v for col, v in zip(rates, psi, strict=True)),
+    )
+    return cols, bias
+
+
+def uvms_q0_acc(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    xd: float,
+    yd: float,
+    phid: float,
+    q1d: float,
+    q2d: float,
+    q3d: float,
+    xdd: float,
+    ydd: float,
+    phidd: float,
+    xedd: float,
+    yedd: float,
+    phiedd: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[float, float, float]:
+    """Location q0 (and q2): joint accelerations ``(q1dd, q2dd, q3dd)``.
+
+    From the configuration, the six rates of the chain and the accelerations of the
+    primary magnitudes (vehicle and end effector), by the second-order closure
+    ``Ns Psi_s' = -(Np Psi_p' + N' Psi)`` (:mod:`uvms_model.chain`).
+    """
+    cols, bias = _acceleration_setup(
+        x, y, phi, q1, q2, q3, xd, yd, phid, q1d, q2d, q3d, a1, a2, a3, bx, by
+    )
+    primary = {0: xdd, 1: ydd, 2: phidd, 6: xedd, 7: yedd, 8: phiedd}
+    return _solve(cols, (3, 4, 5), primary, bias)
+
+
+def uvms_state3_acc(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    xd: float,
+    yd: float,
+    phid: float,
+    q1d: float,
+    q2d: float,
+    q3d: float,
+    phidd: float,
+    q1dd: float,
+    q3dd: float,
+    xedd: float,
+    yedd: float,
+    phiedd: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[float, float, float]:
+    """Kinematic state 3 (location q1): accelerations ``(xdd, ydd, q2dd)``.
+
+    From the configuration, the six rates of the chain and the accelerations of the
+    primary magnitudes (heading, q1, q3, end effector).
+    """
+    cols, bias = _acceleration_setup(
+        x, y, phi, q1, q2, q3, xd, yd, phid, q1d, q2d, q3d, a1, a2, a3, bx, by
+    )
+    primary = {2: phidd, 3: q1dd, 5: q3dd, 6: xedd, 7: yedd, 8: phiedd}
+    return _solve(cols, (0, 1, 4), primary, bias)
+
+
 @lru_cache(maxsize=64)
 def _path(
     turns: float,
@@ -174,9 +306,12 @@ def _path(
     epsilon: float,
     heading: float,
     direction: float,
+    follow: float,
 ) -> DeformedCircle:
     sense = 1 if direction >= 0 else -1
-    return DeformedCircle((sx, sy), (off_x, off_y), turns, duration, epsilon, 0.0, sense, heading)
+    return DeformedCircle(
+        (sx, sy), (off_x, off_y), turns, duration, epsilon, 0.0, sense, heading, 0.0, follow
+    )
 
 
 def uvms_path(
@@ -190,18 +325,54 @@ def uvms_path(
     epsilon: float,
     heading: float,
     direction: float,
-) -> tuple[float, float, float, float, float, float]:
-    """Commanded end-effector ``(xe, ye, phie, vxe, vye, wphie)`` on the mission path.
+    follow: float = 0.0,
+) -> tuple[float, ...]:
+    """Commanded end effector on the mission path (:class:`uvms_model.paths.DeformedCircle`).
 
-    ``direction`` >= 0 runs counter-clockwise, < 0 clockwise.
+    Returns ``(xe, ye, phie, vxe, vye, wphie, axe, aye, dwphie)``; ``direction`` >= 0
+    runs counter-clockwise, < 0 clockwise; ``follow`` 1 turns the heading with the path.
     """
-    path = _path(turns, off_x, off_y, sx, sy, duration, epsilon, heading, direction)
-    return tuple(path(t))  # type: ignore[return-value]
+    path = _path(turns, off_x, off_y, sx, sy, duration, epsilon, heading, direction, follow)
+    return tuple(path(t))
 
 
-def uvms_fm(gamma: float, theta_p: float, gamma_min: float) -> float:
-    """Functional machine output s in [0, 1] (tanh units, clipped; see functional_machine)."""
-    return functional_machine_clipped(gamma, theta_p, gamma_min, "tanh", 0.0, 1.0)
+def uvms_fm(gamma: float, theta_p: float, gamma_min: float, ramp: float = 0.0) -> float:
+    """Functional machine output s >= 0 (tanh units; :func:`functional_machine_output`)."""
+    return functional_machine_output(gamma, theta_p, gamma_min, "tanh", ramp)
+
+
+def uvms_fm_raw(gamma: float, theta_p: float, gamma_min: float) -> float:
+    """Functional machine's hidden sum before the output unit (negative: the FM rests)."""
+    return functional_machine(gamma, theta_p, gamma_min, "tanh")
+
+
+def uvms_fm_rate(
+    gamma: float,
+    gamma_dot: float,
+    theta_p: float,
+    theta_dot: float,
+    gamma_min: float,
+    ramp: float = 0.0,
+) -> float:
+    """Rate of :func:`uvms_fm` (:func:`uvms_model.functional_machine.functional_machine_rate`)."""
+    return functional_machine_rate(gamma, gamma_dot, theta_p, theta_dot, gamma_min, "tanh", ramp)
+
+
+def uvms_vehicle(cx: float, cy: float, v_max: float) -> tuple[float, float]:
+    """Vehicle velocity: the command ``s alpha v_E`` under the smooth speed limit."""
+    return limited_velocity(cx, cy, v_max)
+
+
+def uvms_vehicle_rate(
+    cx: float, cy: float, cx_dot: float, cy_dot: float, v_max: float
+) -> tuple[float, float]:
+    """Vehicle acceleration: the rate of :func:`uvms_vehicle`."""
+    return limited_velocity_rate(cx, cy, cx_dot, cy_dot, v_max)
+
+
+def uvms_target(p_i: float, gamma_j: float) -> float:
+    """Eq. 9's final position ``alpha_j p_i`` (:func:`uvms_model.quintic.transition_target`)."""
+    return transition_target(p_i, gamma_j)
 
 
 def quintic(
@@ -215,8 +386,10 @@ def quintic(
     return quintic_state(t, t0, p0, v0, a0, t0 + duration, pf)
 
 
-def _mark(fn: Callable[..., Any], arity: int, outputs: int = 1) -> Callable[..., Any]:
-    fn.hybrid_arity = (arity, arity)  # type: ignore[attr-defined]
+def _mark(
+    fn: Callable[..., Any], arity: int, outputs: int = 1, optional: int = 0
+) -> Callable[..., Any]:
+    fn.hybrid_arity = (arity - optional, arity)  # type: ignore[attr-defined]
     fn.hybrid_outputs = outputs  # type: ignore[attr-defined]
     return fn
 
@@ -227,7 +400,14 @@ def registry() -> dict[str, Callable[..., Any]]:
         "uvms_ee": _mark(uvms_ee, 11, 3),
         "uvms_q0": _mark(uvms_q0, 17, 3),
         "uvms_state3": _mark(uvms_state3, 17, 3),
-        "uvms_path": _mark(uvms_path, 10, 6),
-        "uvms_fm": _mark(uvms_fm, 3),
+        "uvms_q0_acc": _mark(uvms_q0_acc, 23, 3),
+        "uvms_state3_acc": _mark(uvms_state3_acc, 23, 3),
+        "uvms_path": _mark(uvms_path, 11, 9, optional=1),
+        "uvms_fm": _mark(uvms_fm, 4, optional=1),
+        "uvms_fm_raw": _mark(uvms_fm_raw, 3),
+        "uvms_fm_rate": _mark(uvms_fm_rate, 6, optional=1),
+        "uvms_vehicle": _mark(uvms_vehicle, 3, 2),
+        "uvms_vehicle_rate": _mark(uvms_vehicle_rate, 5, 2),
+        "uvms_target": _mark(uvms_target, 2),
         "quintic": _mark(quintic, 7, 3),
     }
