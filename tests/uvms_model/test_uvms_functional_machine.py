@@ -71,7 +71,9 @@ def test_smooth_ramp_is_c2_and_a_ramp(u: float, width: float) -> None:
 
 
 @given(st.floats(0.3, 1.4), st.floats(-1.0, 1.0), st.floats(-1.0, 2.0), st.floats(-1.0, 1.0))
-def test_rate_is_the_time_derivative(g: float, g_dot: float, theta: float, theta_dot: float) -> None:
+def test_rate_is_the_time_derivative(
+    g: float, g_dot: float, theta: float, theta_dot: float
+) -> None:
     h = 1e-6
 
     def s(dt: float) -> float:

@@ -112,7 +112,11 @@ def test_registered_path_rates_are_derivatives() -> None:
     args = (1.5, 1.25, 0.0, 1.97, 0.17, 60.0, 0.1, 3.06, 1.0, 1.0)
     h = 1e-5
     for t in (5.0, 23.0, 41.0):
-        p, plus, minus = fn.uvms_path(t, *args), fn.uvms_path(t + h, *args), fn.uvms_path(t - h, *args)
+        p, plus, minus = (
+            fn.uvms_path(t, *args),
+            fn.uvms_path(t + h, *args),
+            fn.uvms_path(t - h, *args),
+        )
         for k in range(3):
             assert (plus[k] - minus[k]) / (2 * h) == pytest.approx(p[3 + k], abs=1e-7)
             assert (plus[3 + k] - minus[3 + k]) / (2 * h) == pytest.approx(p[6 + k], abs=1e-7)
