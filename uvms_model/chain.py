@@ -38,6 +38,18 @@ Named partitions and their determinants (secondary columns in the order listed):
 * kinematic state 3 (location q1), secondary :math:`(x, y, q_2)`:
   :math:`\det N_s = \det[[0,0,1],[1,0,P_{2y}],[0,1,-P_{2x}]] = +1`;
 * forward kinematics, secondary :math:`(x_e, y_e, \phi_e)`: :math:`\det N_s = -1`.
+
+Accelerations (second order): differentiating :math:`N\Psi = 0` along the motion,
+
+.. math::
+
+    N\dot\Psi + \dot N\Psi = 0,\qquad
+    N_s \dot\Psi_s = -(N_p \dot\Psi_p + \dot N \Psi),
+
+where the column of a revolute joint through a point moving at :math:`\dot P` changes at
+:math:`\dot\$_R(P) = [0, \dot P_y, -\dot P_x]` and prismatic columns are constant. The
+same :math:`N_s` is inverted, so the accelerations of the secondary magnitudes are as
+well defined as their rates.
 """
 
 from __future__ import annotations
@@ -50,7 +62,7 @@ from typing import NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-from uvms_model.screws import prismatic, revolute
+from uvms_model.screws import Twist, prismatic, revolute
 
 __all__ = [
     "EE_SECONDARY",
@@ -73,9 +85,15 @@ __all__ = [
     "det_ns",
     "end_effector_pose",
     "forward_kinematics",
+    "joint_point_rates",
+    "joint_points",
+    "network_column_rates",
+    "network_columns",
     "network_matrix",
+    "network_matrix_rate",
     "primary_indices",
     "solve_partition",
+    "solve_partition_acceleration",
     "solve_q0",
     "solve_state3",
 ]
@@ -98,6 +116,8 @@ EE_SECONDARY: tuple[int, int, int] = (XE, YE, PHIE)
 
 _X_AXIS = prismatic((1.0, 0.0))
 _Y_AXIS = prismatic((0.0, 1.0))
+_MINUS_X_AXIS: Twist = (-_X_AXIS[0], -_X_AXIS[1], -_X_AXIS[2])
+_MINUS_Y_AXIS: Twist = (-_Y_AXIS[0], -_Y_AXIS[1], -_Y_AXIS[2])
 
 
 @dataclass(frozen=True)
@@ -145,8 +165,59 @@ def _unpack(config: Config) -> tuple[float, float, float, float, float, float]:
     return x, y, phi, q1, q2, q3
 
 
+def joint_points(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[float, float, float, float, float, float, float, float, float]:
+    """Forward kinematics on scalars: the one implementation of the chain's geometry.
+
+    :func:`forward_kinematics` wraps it for a :class:`Chain`; the functions the specs
+    call (:mod:`uvms_model.functions`) use it directly, at every solver stage.
+
+    Parameters
+    ----------
+    x, y, phi : float
+        Vehicle point P0 and heading.
+    q1, q2, q3 : float
+        Arm joint angles, rad.
+    a1, a2, a3 : float
+        Link lengths, m.
+    bx, by : float
+        Arm base offset in the vehicle frame, m.
+
+    Returns
+    -------
+    tuple of float
+        ``(p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, phie)`` with ``phie = phi + q1 + q2 + q3``.
+
+    Examples
+    --------
+    >>> p = joint_points(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.25, 0.5, 0.0)
+    >>> [round(v, 12) for v in p]
+    [0.5, 0.0, 1.5, 0.0, 2.5, 0.0, 2.75, 0.0, 0.0]
+    """
+    c, s = math.cos(phi), math.sin(phi)
+    p1x, p1y = x + c * bx - s * by, y + s * bx + c * by
+    t1 = phi + q1
+    t2 = t1 + q2
+    t3 = t2 + q3
+    p2x, p2y = p1x + a1 * math.cos(t1), p1y + a1 * math.sin(t1)
+    p3x, p3y = p2x + a2 * math.cos(t2), p2y + a2 * math.sin(t2)
+    ex, ey = p3x + a3 * math.cos(t3), p3y + a3 * math.sin(t3)
+    return p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, t3
+
+
 def forward_kinematics(chain: Chain, config: Config) -> ChainPose:
-    """Points P0..P3, E and the end-effector pose (plain ``math``, per-step safe).
+    """Points P0..P3, E and the end-effector pose (by :func:`joint_points`).
 
     Parameters
     ----------
@@ -159,18 +230,162 @@ def forward_kinematics(chain: Chain, config: Config) -> ChainPose:
     -------
     ChainPose
         Points and ``(xe, ye, phie)`` with ``phie = phi + q1 + q2 + q3``.
+
+    Examples
+    --------
+    >>> pose = forward_kinematics(Chain(), (0.0, 0.0, 0.0, 0.0, math.pi / 2, 0.0))
+    >>> [round(v, 12) for v in pose.p3]
+    [1.5, 1.0]
     """
     x, y, phi, q1, q2, q3 = _unpack(config)
-    c, s = math.cos(phi), math.sin(phi)
-    bx, by = chain.b
-    p1x, p1y = x + c * bx - s * by, y + s * bx + c * by
-    t1 = phi + q1
-    t2 = t1 + q2
-    t3 = t2 + q3
-    p2x, p2y = p1x + chain.a1 * math.cos(t1), p1y + chain.a1 * math.sin(t1)
-    p3x, p3y = p2x + chain.a2 * math.cos(t2), p2y + chain.a2 * math.sin(t2)
-    ex, ey = p3x + chain.a3 * math.cos(t3), p3y + chain.a3 * math.sin(t3)
+    p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, t3 = joint_points(
+        x, y, phi, q1, q2, q3, chain.a1, chain.a2, chain.a3, chain.b[0], chain.b[1]
+    )
     return ChainPose((x, y), (p1x, p1y), (p2x, p2y), (p3x, p3y), (ex, ey), ex, ey, t3)
+
+
+def network_columns(
+    x: float,
+    y: float,
+    p1: tuple[float, float],
+    p2: tuple[float, float],
+    p3: tuple[float, float],
+    e: tuple[float, float],
+) -> tuple[Twist, ...]:
+    """The nine columns of N from the joint points: the one implementation of N.
+
+    Parameters
+    ----------
+    x, y : float
+        Vehicle point P0 (axis of the heading joint).
+    p1, p2, p3 : tuple of float
+        Axes of the arm joints q1, q2, q3.
+    e : tuple of float
+        End-effector point E (axis of the closing chain's revolute).
+
+    Returns
+    -------
+    tuple of Twist
+        ``($x, $y, $phi, $q1, $q2, $q3, -$xe, -$ye, -$phie)``.
+
+    Examples
+    --------
+    >>> network_columns(0.0, 0.0, (1, 0), (2, 0), (3, 0), (4, 0))[8]
+    (-1.0, -0.0, 4.0)
+    """
+    phie = revolute(e)
+    return (
+        _X_AXIS,
+        _Y_AXIS,
+        revolute((x, y)),
+        revolute(p1),
+        revolute(p2),
+        revolute(p3),
+        _MINUS_X_AXIS,
+        _MINUS_Y_AXIS,
+        (-phie[0], -phie[1], -phie[2]),
+    )
+
+
+def joint_point_rates(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    xd: float,
+    yd: float,
+    phid: float,
+    q1d: float,
+    q2d: float,
+    q3d: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[float, float, float, float, float, float, float, float]:
+    """Velocities of the points P1, P2, P3 and E from the chain's rates (scalars).
+
+    Each body point moves with the twist of its link: :math:`\\dot P_{k+1} = \\dot P_k +
+    \\omega_k \\hat z \times (P_{k+1} - P_k)`, :math:`\\omega_k` the link's absolute rate.
+
+    Parameters
+    ----------
+    x, y, phi, q1, q2, q3 : float
+        Configuration.
+    xd, yd, phid, q1d, q2d, q3d : float
+        Its rates.
+    a1, a2, a3, bx, by : float
+        Geometry (see :func:`joint_points`).
+
+    Returns
+    -------
+    tuple of float
+        ``(p1xd, p1yd, p2xd, p2yd, p3xd, p3yd, exd, eyd)``.
+
+    Examples
+    --------
+    >>> r = joint_point_rates(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0,
+    ...                       1.0, 1.0, 0.25, 0.5, 0.0)
+    >>> [round(v, 12) for v in r]   # the whole chain turning at 1 rad/s about P0
+    [0.0, 0.5, 0.0, 1.5, 0.0, 2.5, 0.0, 2.75]
+    """
+    p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, _ = joint_points(
+        x, y, phi, q1, q2, q3, a1, a2, a3, bx, by
+    )
+    w0 = phid
+    w1 = w0 + q1d
+    w2 = w1 + q2d
+    w3 = w2 + q3d
+    p1xd, p1yd = xd - w0 * (p1y - y), yd + w0 * (p1x - x)
+    p2xd, p2yd = p1xd - w1 * (p2y - p1y), p1yd + w1 * (p2x - p1x)
+    p3xd, p3yd = p2xd - w2 * (p3y - p2y), p2yd + w2 * (p3x - p2x)
+    exd, eyd = p3xd - w3 * (ey - p3y), p3yd + w3 * (ex - p3x)
+    return p1xd, p1yd, p2xd, p2yd, p3xd, p3yd, exd, eyd
+
+
+def network_column_rates(
+    xd: float,
+    yd: float,
+    p1d: tuple[float, float],
+    p2d: tuple[float, float],
+    p3d: tuple[float, float],
+    ed: tuple[float, float],
+) -> tuple[Twist, ...]:
+    """Time derivatives of the nine columns of N (order of :func:`network_columns`).
+
+    Parameters
+    ----------
+    xd, yd : float
+        Velocity of P0.
+    p1d, p2d, p3d, ed : tuple of float
+        Velocities of P1, P2, P3 and E (:func:`joint_point_rates`).
+
+    Returns
+    -------
+    tuple of Twist
+        ``[0, Py', -Px']`` for the revolutes, zero for the prismatic columns, negated
+        for the closing chain.
+
+    Examples
+    --------
+    >>> network_column_rates(1.0, 0.0, (0, 0), (0, 0), (0, 0), (0.0, 2.0))[2]
+    (0.0, 0.0, -1.0)
+    """
+    zero: Twist = (0.0, 0.0, 0.0)
+    return (
+        zero,
+        zero,
+        (0.0, float(yd), -float(xd)),
+        (0.0, float(p1d[1]), -float(p1d[0])),
+        (0.0, float(p2d[1]), -float(p2d[0])),
+        (0.0, float(p3d[1]), -float(p3d[0])),
+        zero,
+        zero,
+        (0.0, -float(ed[1]), float(ed[0])),
+    )
 
 
 def end_effector_pose(chain: Chain, config: Config) -> tuple[float, float, float]:
@@ -208,17 +423,34 @@ def network_matrix(chain: Chain, config: Config) -> FloatArray:
         ``N`` with the closing chain (xe, ye, phie) counted negatively.
     """
     pose = forward_kinematics(chain, config)
-    cols = (
-        _X_AXIS,
-        _Y_AXIS,
-        revolute(pose.p0),
-        revolute(pose.p1),
-        revolute(pose.p2),
-        revolute(pose.p3),
-        tuple(-v for v in _X_AXIS),
-        tuple(-v for v in _Y_AXIS),
-        tuple(-v for v in revolute(pose.e)),
-    )
+    cols = network_columns(pose.p0[0], pose.p0[1], pose.p1, pose.p2, pose.p3, pose.e)
+    return np.array(cols, dtype=np.float64).T
+
+
+def network_matrix_rate(chain: Chain, config: Config, rates: Vector) -> FloatArray:
+    """Time derivative of N (3 x 9) while the chain moves at ``rates``.
+
+    Parameters
+    ----------
+    chain : Chain
+        Geometry.
+    config : Config
+        ``(x, y, phi, q1, q2, q3)``.
+    rates : sequence of float
+        ``(xd, yd, phid, q1d, q2d, q3d)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``dN/dt``, columns in the order of ``MAGNITUDE_NAMES``.
+    """
+    x, y, phi, q1, q2, q3 = _unpack(config)
+    xd, yd, phid, q1d, q2d, q3d = _unpack(rates)
+    p1xd, p1yd, p2xd, p2yd, p3xd, p3yd, exd, eyd = joint_point_rates(
+        x, y, phi, q1, q2, q3, xd, yd, phid, q1d, q2d, q3d,
+        chain.a1, chain.a2, chain.a3, chain.b[0], chain.b[1],
+    )  # fmt: skip
+    cols = network_column_rates(xd, yd, (p1xd, p1yd), (p2xd, p2yd), (p3xd, p3yd), (exd, eyd))
     return np.array(cols, dtype=np.float64).T
 
 
@@ -299,6 +531,51 @@ def solve_partition(
     psi[list(prim)] = psi_p
     psi[list(sec)] = np.linalg.solve(ns, -(n_mat[:, list(prim)] @ psi_p))
     return psi
+
+
+def solve_partition_acceleration(
+    n_matrix: FloatArray,
+    n_rate: FloatArray,
+    secondary_indices: Sequence[int],
+    psi: Vector,
+    primary_accelerations: Vector,
+    tol: float = 1e-9,
+) -> FloatArray:
+    """Accelerations of all magnitudes, ``Ns Psi_s' = -(Np Psi_p' + N' Psi)``.
+
+    Parameters
+    ----------
+    n_matrix, n_rate : numpy.ndarray
+        N and dN/dt (d x F).
+    secondary_indices : sequence of int
+        The d secondary magnitudes.
+    psi : sequence of float
+        The full magnitude vector (rates, length F) at this instant.
+    primary_accelerations : sequence of float
+        Accelerations of the primary magnitudes, ordered as ``primary_indices``.
+    tol : float
+        Singularity tolerance on ``|det Ns|``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Psi' (length F) with ``N Psi' + N' Psi = 0``.
+    """
+    n_mat = np.asarray(n_matrix, dtype=np.float64)
+    bias = np.asarray(n_rate, dtype=np.float64) @ np.asarray(psi, dtype=np.float64)
+    d, f = n_mat.shape
+    sec = _check_secondary(d, f, secondary_indices)
+    prim = list(primary_indices(sec, f))
+    acc_p = np.asarray(primary_accelerations, dtype=np.float64)
+    if acc_p.shape != (len(prim),):
+        raise ValueError(f"need {len(prim)} primary accelerations, got shape {acc_p.shape}")
+    ns = n_mat[:, sec]
+    if not abs(float(np.linalg.det(ns))) >= tol:
+        raise ValueError("secondary matrix Ns is singular")
+    acc = np.zeros(f, dtype=np.float64)
+    acc[prim] = acc_p
+    acc[list(sec)] = np.linalg.solve(ns, -(n_mat[:, prim] @ acc_p + bias))
+    return acc
 
 
 def det_ns(chain: Chain, config: Config, secondary: Sequence[int] = Q0_SECONDARY) -> float:

@@ -34,14 +34,19 @@ from __future__ import annotations
 import math
 from typing import Literal, NamedTuple
 
+from uvms_model.indices import alpha, w_hat
+from uvms_model.quintic import quintic_state
+
 __all__ = [
     "GAMMA_MIN",
     "Activation",
     "FMUnits",
     "functional_machine",
-    "functional_machine_clipped",
+    "functional_machine_output",
+    "functional_machine_rate",
     "functional_machine_units",
     "sigmoid",
+    "smooth_ramp",
 ]
 
 Activation = Literal["sigmoid", "tanh"]
@@ -112,10 +117,10 @@ def functional_machine_units(
     FMUnits
         ``(x1, x2, weight, y1, y2, s)``.
     """
-    a = 1.0 / gamma
+    a = alpha(gamma)
     x1 = a
     x2 = abs(a - gamma_min)
-    w = (a - gamma) / gamma
+    w = w_hat(gamma)
     y1 = _activate(w * x1 + theta_p, activation)
     y2 = _activate(w * x2 + theta_p, activation)
     return FMUnits(x1, x2, w, y1, y2, 0.5 * (y1 + y2))
@@ -148,15 +153,50 @@ def functional_machine(
     return functional_machine_units(gamma, theta_p, gamma_min, activation).s
 
 
-def functional_machine_clipped(
+def smooth_ramp(u: float, width: float) -> tuple[float, float]:
+    """Output-unit activation: 0 for ``u <= 0``, ``u`` for ``u >= width``, C2 in between.
+
+    In between, ``u sigma(u / width)`` with ``sigma`` the quintic smoothstep (the law of
+    :func:`uvms_model.quintic.quintic_state` from rest at 0 to rest at 1), so value,
+    slope and curvature are continuous at both ends; ``width = 0`` is the hard ramp
+    ``max(u, 0)``.
+
+    Parameters
+    ----------
+    u : float
+        Input (the sum of the hidden units, scaled).
+    width : float
+        Width of the rounded corner (non-negative).
+
+    Returns
+    -------
+    tuple of float
+        Value and slope ``d/du``.
+
+    Examples
+    --------
+    >>> smooth_ramp(-0.3, 0.1), smooth_ramp(0.5, 0.1)
+    ((0.0, 0.0), (0.5, 1.0))
+    >>> smooth_ramp(0.05, 0.1)   # u * sigma(1/2) = 0.05 * 0.5; slope 0.5 + 0.5 * 1.875
+    (0.025, 1.4375)
+    """
+    if u <= 0.0:
+        return 0.0, 0.0
+    if u >= width:
+        return u, 1.0
+    x = u / width
+    sigma, dsigma, _ = quintic_state(x, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
+    return u * sigma, sigma + x * dsigma
+
+
+def functional_machine_output(
     gamma: float,
     theta_p: float,
     gamma_min: float = GAMMA_MIN,
     activation: Activation = "tanh",
-    s_min: float = 0.0,
-    s_max: float = 1.0,
+    ramp: float = 0.0,
 ) -> float:
-    """FM output limited to ``[s_min, s_max]``.
+    """FM output s >= 0: the output unit's activation :func:`smooth_ramp` on the hidden sum.
 
     Parameters
     ----------
@@ -167,16 +207,81 @@ def functional_machine_clipped(
     gamma_min : float
         Reference of the second input.
     activation : {"sigmoid", "tanh"}
-        Unit activation f (default tanh: exact rest for ``gamma >= 1`` when ``theta_p <= 0``).
-    s_min, s_max : float
-        Limits, ``s_min <= s_max``.
+        Hidden-unit activation f (tanh: exact rest for ``gamma >= 1`` when ``theta_p <= 0``).
+    ramp : float
+        Width of the output unit's rounded corner at 0 (0: ``max(s, 0)``).
 
     Returns
     -------
     float
-        ``min(max(s, s_min), s_max)``.
+        ``smooth_ramp(functional_machine(...), ramp)``.
+
+    Examples
+    --------
+    >>> functional_machine_output(1.2, 0.0, activation="tanh")   # gamma >= 1, no bias: rest
+    0.0
     """
-    if s_min > s_max:
-        raise ValueError("s_min must not exceed s_max")
-    s = functional_machine(gamma, theta_p, gamma_min, activation)
-    return min(max(s, s_min), s_max)
+    return smooth_ramp(functional_machine(gamma, theta_p, gamma_min, activation), ramp)[0]
+
+
+def functional_machine_rate(
+    gamma: float,
+    gamma_dot: float,
+    theta_p: float,
+    theta_dot: float,
+    gamma_min: float = GAMMA_MIN,
+    activation: Activation = "tanh",
+    ramp: float = 0.0,
+) -> float:
+    """Time derivative of :func:`functional_machine_output` along a motion.
+
+    By the chain rule through the units: with :math:`\\dot\alpha = -\alpha^2\\dot\\gamma`,
+    :math:`\\dot{\\hat w} = 2\alpha\\dot\alpha`, :math:`\\dot z_k = \\dot{\\hat w} x_k +
+    \\hat w \\dot x_k + \\dot\theta_p`, the hidden sum changes at
+    :math:`\frac12 \\sum_k f'(z_k)\\dot z_k` and the output at that times the ramp's slope.
+
+    Parameters
+    ----------
+    gamma, gamma_dot : float
+        Performance index (non-zero) and its rate.
+    theta_p, theta_dot : float
+        Polarization (bias) and its rate.
+    gamma_min : float
+        Reference of the second input.
+    activation : {"sigmoid", "tanh"}
+        Hidden-unit activation f.
+    ramp : float
+        Width of the output unit's rounded corner.
+
+    Returns
+    -------
+    float
+        ds/dt.
+
+    Examples
+    --------
+    >>> functional_machine_rate(1.2, 0.0, 0.5, 0.0)   # nothing changes: s is constant
+    0.0
+    >>> h = 1e-6
+    >>> s = lambda g: functional_machine_output(g, 0.3, activation="tanh", ramp=0.1)
+    >>> fd = (s(0.8 + h) - s(0.8 - h)) / (2 * h)
+    >>> abs(functional_machine_rate(0.8, 1.0, 0.3, 0.0, ramp=0.1) - fd) < 1e-8
+    True
+    """
+    units = functional_machine_units(gamma, theta_p, gamma_min, activation)
+    _, slope = smooth_ramp(units.s, ramp)
+    if slope == 0.0:
+        return 0.0
+    a = units.x1
+    a_dot = -a * a * gamma_dot
+    w_dot = 2.0 * a * a_dot
+    x2_dot = math.copysign(1.0, a - gamma_min) * a_dot
+    z1_dot = w_dot * units.x1 + units.weight * a_dot + theta_dot
+    z2_dot = w_dot * units.x2 + units.weight * x2_dot + theta_dot
+    hidden = 0.5 * (_slope(units.y1, activation) * z1_dot + _slope(units.y2, activation) * z2_dot)
+    return slope * hidden
+
+
+def _slope(y: float, activation: Activation) -> float:
+    """f'(z) written with y = f(z)."""
+    return 1.0 - y * y if activation == "tanh" else y * (1.0 - y)

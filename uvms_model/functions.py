@@ -2,12 +2,15 @@ r"""The functions the UVMS specs call, registered under ``hybrid.functions``.
 
 ``pyproject.toml`` declares the entry point ``uvms_model = uvms_model.functions:registry``;
 a spec says ``uses: [uvms_model]`` to call them. Every function takes and returns
-plain floats (tuples for vector results, marked with ``hybrid_outputs``) and is
-written with :mod:`math` on scalars, because the simulator calls them at every
-solver stage.
+plain floats (tuples for vector results, marked with ``hybrid_outputs``), because
+the simulator calls them at every solver stage. Each formula has one implementation
+elsewhere in the package (forward kinematics and the columns of N in
+:mod:`uvms_model.chain`, the quintic law in :mod:`uvms_model.quintic`, the FM in
+:mod:`uvms_model.functional_machine`); only the 3 x 3 solve has a fast scalar form
+here (Cramer's rule) beside the numpy reference (:func:`uvms_model.chain.solve_partition`),
+and the tests compare the two.
 
-The kinematic solves are Davies' method (``uvms_model.chain`` has the
-reference implementation with numpy): the network matrix
+The kinematic solves are Davies' method: the network matrix
 :math:`N = [\$_x\ \$_y\ \$_\phi\ \$_{q1}\ \$_{q2}\ \$_{q3}\ -\$_{xe}\ -\$_{ye}\ -\$_{\phi e}]`
 (columns in that order), :math:`N\Psi = 0` split into secondary and primary
 columns, :math:`N_s \Psi_s = -N_p \Psi_p` solved by Cramer's rule.
@@ -17,19 +20,32 @@ Examples
 >>> q1d, q2d, q3d = uvms_q0(0, 0, 0, 0.3, 1.2, -0.4, 0, 0, 0, 0.1, 0.0, 0.0, 1, 1, 0.25, 0.5, 0)
 >>> round(q1d + q2d + q3d, 12)   # end-effector heading rate 0, vehicle still
 0.0
->>> sorted(registry())
-['quintic', 'uvms_ee', 'uvms_fm', 'uvms_path', 'uvms_q0', 'uvms_state3']
+>>> sorted(registry())  # doctest: +NORMALIZE_WHITESPACE
+['quintic', 'uvms_ee', 'uvms_fm', 'uvms_fm_rate', 'uvms_fm_raw', 'uvms_path', 'uvms_q0',
+ 'uvms_q0_acc', 'uvms_state3', 'uvms_state3_acc', 'uvms_target', 'uvms_vehicle',
+ 'uvms_vehicle_rate']
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from functools import lru_cache
 from typing import Any
 
-from uvms_model.functional_machine import functional_machine_clipped
+from uvms_model.chain import (
+    joint_point_rates,
+    joint_points,
+    network_column_rates,
+    network_columns,
+)
+from uvms_model.functional_machine import (
+    functional_machine,
+    functional_machine_output,
+    functional_machine_rate,
+)
 from uvms_model.paths import DeformedCircle
+from uvms_model.quintic import quintic_state, transition_target
+from uvms_model.vehicle import limited_velocity, limited_velocity_rate
 
 __all__ = [
     "SINGULAR_TOL",
@@ -37,39 +53,22 @@ __all__ = [
     "registry",
     "uvms_ee",
     "uvms_fm",
+    "uvms_fm_rate",
+    "uvms_fm_raw",
     "uvms_path",
     "uvms_q0",
+    "uvms_q0_acc",
     "uvms_state3",
+    "uvms_state3_acc",
+    "uvms_target",
+    "uvms_vehicle",
+    "uvms_vehicle_rate",
 ]
 
 SINGULAR_TOL = 1e-9
 """``|det Ns|`` below which a solve is refused as singular (ValueError)."""
 
 Column = tuple[float, float, float]
-
-
-def _points(
-    x: float,
-    y: float,
-    phi: float,
-    q1: float,
-    q2: float,
-    q3: float,
-    a1: float,
-    a2: float,
-    a3: float,
-    bx: float,
-    by: float,
-) -> tuple[float, ...]:
-    c, s = math.cos(phi), math.sin(phi)
-    p1x, p1y = x + c * bx - s * by, y + s * bx + c * by
-    t1 = phi + q1
-    t2 = t1 + q2
-    t3 = t2 + q3
-    p2x, p2y = p1x + a1 * math.cos(t1), p1y + a1 * math.sin(t1)
-    p3x, p3y = p2x + a2 * math.cos(t2), p2y + a2 * math.sin(t2)
-    ex, ey = p3x + a3 * math.cos(t3), p3y + a3 * math.sin(t3)
-    return p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, t3
 
 
 def uvms_ee(
@@ -85,8 +84,8 @@ def uvms_ee(
     bx: float,
     by: float,
 ) -> tuple[float, float, float]:
-    """End-effector pose ``(xe, ye, phie)`` by forward kinematics."""
-    *_, ex, ey, t3 = _points(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    """End-effector pose ``(xe, ye, phie)`` by forward kinematics (:func:`joint_points`)."""
+    *_, ex, ey, t3 = joint_points(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
     return ex, ey, t3
 
 
@@ -102,20 +101,12 @@ def _columns(
     a3: float,
     bx: float,
     by: float,
-) -> list[Column]:
-    """The nine columns of N (screws of the closed chain, closing chain negated)."""
-    p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, _ = _points(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
-    return [
-        (0.0, 1.0, 0.0),  # $x: prismatic along X
-        (0.0, 0.0, 1.0),  # $y: prismatic along Y
-        (1.0, y, -x),  # $phi: revolute at P0
-        (1.0, p1y, -p1x),  # $q1
-        (1.0, p2y, -p2x),  # $q2
-        (1.0, p3y, -p3x),  # $q3
-        (0.0, -1.0, 0.0),  # -$xe
-        (0.0, 0.0, -1.0),  # -$ye
-        (-1.0, -ey, ex),  # -$phie: revolute at E
-    ]
+) -> tuple[Column, ...]:
+    """The nine columns of N (:func:`network_columns` at :func:`joint_points`)."""
+    p1x, p1y, p2x, p2y, p3x, p3y, ex, ey, _ = joint_points(
+        x, y, phi, q1, q2, q3, a1, a2, a3, bx, by
+    )
+    return network_columns(x, y, (p1x, p1y), (p2x, p2y), (p3x, p3y), (ex, ey))
 
 
 def _det3(a: Column, b: Column, c: Column) -> float:
@@ -127,9 +118,13 @@ def _det3(a: Column, b: Column, c: Column) -> float:
 
 
 def _solve(
-    columns: list[Column], secondary: tuple[int, int, int], primary: dict[int, float]
+    columns: tuple[Column, ...],
+    secondary: tuple[int, int, int],
+    primary: dict[int, float],
+    bias: Column = (0.0, 0.0, 0.0),
 ) -> tuple[float, float, float]:
-    rhs = [0.0, 0.0, 0.0]
+    """Cramer's rule for ``Ns Psi_s = -(Np Psi_p + bias)``."""
+    rhs = [-bias[0], -bias[1], -bias[2]]
     for k, value in primary.items():
         col = columns[k]
         rhs[0] -= col[0] * value
@@ -191,6 +186,115 @@ def uvms_state3(
     return _solve(cols, (0, 1, 4), {2: phid, 3: q1d, 5: q3d, 6: xed, 7: yed, 8: phied})
 
 
+def _acceleration_setup(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    xd: float,
+    yd: float,
+    phid: float,
+    q1d: float,
+    q2d: float,
+    q3d: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[tuple[Column, ...], Column]:
+    """Columns of N and the bias ``N' Psi`` of the second-order closure."""
+    cols = _columns(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    p1xd, p1yd, p2xd, p2yd, p3xd, p3yd, exd, eyd = joint_point_rates(
+        x, y, phi, q1, q2, q3, xd, yd, phid, q1d, q2d, q3d, a1, a2, a3, bx, by
+    )
+    rates = network_column_rates(xd, yd, (p1xd, p1yd), (p2xd, p2yd), (p3xd, p3yd), (exd, eyd))
+    psi = (xd, yd, phid, q1d, q2d, q3d, exd, eyd, phid + q1d + q2d + q3d)
+    bias = (
+        sum(col[0] * v for col, v in zip(rates, psi, strict=True)),
+        sum(col[1] * v for col, v in zip(rates, psi, strict=True)),
+        sum(col[2] * v for col, v in zip(rates, psi, strict=True)),
+    )
+    return cols, bias
+
+
+def uvms_q0_acc(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    xd: float,
+    yd: float,
+    phid: float,
+    q1d: float,
+    q2d: float,
+    q3d: float,
+    xdd: float,
+    ydd: float,
+    phidd: float,
+    xedd: float,
+    yedd: float,
+    phiedd: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[float, float, float]:
+    """Location q0 (and q2): joint accelerations ``(q1dd, q2dd, q3dd)``.
+
+    From the configuration, the six rates of the chain and the accelerations of the
+    primary magnitudes (vehicle and end effector), by the second-order closure
+    ``Ns Psi_s' = -(Np Psi_p' + N' Psi)`` (:mod:`uvms_model.chain`).
+    """
+    cols, bias = _acceleration_setup(
+        x, y, phi, q1, q2, q3, xd, yd, phid, q1d, q2d, q3d, a1, a2, a3, bx, by
+    )
+    primary = {0: xdd, 1: ydd, 2: phidd, 6: xedd, 7: yedd, 8: phiedd}
+    return _solve(cols, (3, 4, 5), primary, bias)
+
+
+def uvms_state3_acc(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    xd: float,
+    yd: float,
+    phid: float,
+    q1d: float,
+    q2d: float,
+    q3d: float,
+    phidd: float,
+    q1dd: float,
+    q3dd: float,
+    xedd: float,
+    yedd: float,
+    phiedd: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[float, float, float]:
+    """Kinematic state 3 (location q1): accelerations ``(xdd, ydd, q2dd)``.
+
+    From the configuration, the six rates of the chain and the accelerations of the
+    primary magnitudes (heading, q1, q3, end effector).
+    """
+    cols, bias = _acceleration_setup(
+        x, y, phi, q1, q2, q3, xd, yd, phid, q1d, q2d, q3d, a1, a2, a3, bx, by
+    )
+    primary = {2: phidd, 3: q1dd, 5: q3dd, 6: xedd, 7: yedd, 8: phiedd}
+    return _solve(cols, (0, 1, 4), primary, bias)
+
+
 @lru_cache(maxsize=64)
 def _path(
     turns: float,
@@ -202,9 +306,12 @@ def _path(
     epsilon: float,
     heading: float,
     direction: float,
+    follow: float,
 ) -> DeformedCircle:
     sense = 1 if direction >= 0 else -1
-    return DeformedCircle((sx, sy), (off_x, off_y), turns, duration, epsilon, 0.0, sense, heading)
+    return DeformedCircle(
+        (sx, sy), (off_x, off_y), turns, duration, epsilon, 0.0, sense, heading, 0.0, follow
+    )
 
 
 def uvms_path(
@@ -218,18 +325,54 @@ def uvms_path(
     epsilon: float,
     heading: float,
     direction: float,
-) -> tuple[float, float, float, float, float, float]:
-    """Commanded end-effector ``(xe, ye, phie, vxe, vye, wphie)`` on the mission path.
+    follow: float = 0.0,
+) -> tuple[float, ...]:
+    """Commanded end effector on the mission path (:class:`uvms_model.paths.DeformedCircle`).
 
-    ``direction`` >= 0 runs counter-clockwise, < 0 clockwise.
+    Returns ``(xe, ye, phie, vxe, vye, wphie, axe, aye, dwphie)``; ``direction`` >= 0
+    runs counter-clockwise, < 0 clockwise; ``follow`` 1 turns the heading with the path.
     """
-    path = _path(turns, off_x, off_y, sx, sy, duration, epsilon, heading, direction)
-    return tuple(path(t))  # type: ignore[return-value]
+    path = _path(turns, off_x, off_y, sx, sy, duration, epsilon, heading, direction, follow)
+    return tuple(path(t))
 
 
-def uvms_fm(gamma: float, theta_p: float, gamma_min: float) -> float:
-    """Functional machine output s in [0, 1] (tanh units, clipped; see functional_machine)."""
-    return functional_machine_clipped(gamma, theta_p, gamma_min, "tanh", 0.0, 1.0)
+def uvms_fm(gamma: float, theta_p: float, gamma_min: float, ramp: float = 0.0) -> float:
+    """Functional machine output s >= 0 (tanh units; :func:`functional_machine_output`)."""
+    return functional_machine_output(gamma, theta_p, gamma_min, "tanh", ramp)
+
+
+def uvms_fm_raw(gamma: float, theta_p: float, gamma_min: float) -> float:
+    """Functional machine's hidden sum before the output unit (negative: the FM rests)."""
+    return functional_machine(gamma, theta_p, gamma_min, "tanh")
+
+
+def uvms_fm_rate(
+    gamma: float,
+    gamma_dot: float,
+    theta_p: float,
+    theta_dot: float,
+    gamma_min: float,
+    ramp: float = 0.0,
+) -> float:
+    """Rate of :func:`uvms_fm` (:func:`uvms_model.functional_machine.functional_machine_rate`)."""
+    return functional_machine_rate(gamma, gamma_dot, theta_p, theta_dot, gamma_min, "tanh", ramp)
+
+
+def uvms_vehicle(cx: float, cy: float, v_max: float) -> tuple[float, float]:
+    """Vehicle velocity: the command ``s alpha v_E`` under the smooth speed limit."""
+    return limited_velocity(cx, cy, v_max)
+
+
+def uvms_vehicle_rate(
+    cx: float, cy: float, cx_dot: float, cy_dot: float, v_max: float
+) -> tuple[float, float]:
+    """Vehicle acceleration: the rate of :func:`uvms_vehicle`."""
+    return limited_velocity_rate(cx, cy, cx_dot, cy_dot, v_max)
+
+
+def uvms_target(p_i: float, gamma_j: float) -> float:
+    """Eq. 9's final position ``alpha_j p_i`` (:func:`uvms_model.quintic.transition_target`)."""
+    return transition_target(p_i, gamma_j)
 
 
 def quintic(
@@ -237,30 +380,16 @@ def quintic(
 ) -> tuple[float, float, float]:
     """Quintic law (eq. 9) from ``(p0, v0, a0)`` at ``t0`` to ``(pf, 0, 0)`` at ``t0 + duration``.
 
-    Returns ``(p, v, a)``; held at ``(pf, 0, 0)`` after the end and at the start
-    values before it.
+    Returns ``(p, v, a)`` by :func:`uvms_model.quintic.quintic_state` (held at
+    ``(pf, 0, 0)`` after the end).
     """
-    T = duration
-    if not T > 0.0:
-        raise ValueError("quintic duration must be > 0")
-    tau = t - t0
-    if tau <= 0.0:
-        return p0, v0, a0
-    if tau >= T:
-        return pf, 0.0, 0.0
-    d = pf - p0
-    c3 = (20.0 * d - 12.0 * v0 * T - 3.0 * a0 * T * T) / (2.0 * T**3)
-    c4 = (-30.0 * d + 16.0 * v0 * T + 3.0 * a0 * T * T) / (2.0 * T**4)
-    c5 = (12.0 * d - 6.0 * v0 * T - a0 * T * T) / (2.0 * T**5)
-    c2 = 0.5 * a0
-    p = p0 + tau * (v0 + tau * (c2 + tau * (c3 + tau * (c4 + tau * c5))))
-    v = v0 + tau * (2.0 * c2 + tau * (3.0 * c3 + tau * (4.0 * c4 + tau * 5.0 * c5)))
-    a = 2.0 * c2 + tau * (6.0 * c3 + tau * (12.0 * c4 + tau * 20.0 * c5))
-    return p, v, a
+    return quintic_state(t, t0, p0, v0, a0, t0 + duration, pf)
 
 
-def _mark(fn: Callable[..., Any], arity: int, outputs: int = 1) -> Callable[..., Any]:
-    fn.hybrid_arity = (arity, arity)  # type: ignore[attr-defined]
+def _mark(
+    fn: Callable[..., Any], arity: int, outputs: int = 1, optional: int = 0
+) -> Callable[..., Any]:
+    fn.hybrid_arity = (arity - optional, arity)  # type: ignore[attr-defined]
     fn.hybrid_outputs = outputs  # type: ignore[attr-defined]
     return fn
 
@@ -271,7 +400,14 @@ def registry() -> dict[str, Callable[..., Any]]:
         "uvms_ee": _mark(uvms_ee, 11, 3),
         "uvms_q0": _mark(uvms_q0, 17, 3),
         "uvms_state3": _mark(uvms_state3, 17, 3),
-        "uvms_path": _mark(uvms_path, 10, 6),
-        "uvms_fm": _mark(uvms_fm, 3),
+        "uvms_q0_acc": _mark(uvms_q0_acc, 23, 3),
+        "uvms_state3_acc": _mark(uvms_state3_acc, 23, 3),
+        "uvms_path": _mark(uvms_path, 11, 9, optional=1),
+        "uvms_fm": _mark(uvms_fm, 4, optional=1),
+        "uvms_fm_raw": _mark(uvms_fm_raw, 3),
+        "uvms_fm_rate": _mark(uvms_fm_rate, 6, optional=1),
+        "uvms_vehicle": _mark(uvms_vehicle, 3, 2),
+        "uvms_vehicle_rate": _mark(uvms_vehicle_rate, 5, 2),
+        "uvms_target": _mark(uvms_target, 2),
         "quintic": _mark(quintic, 7, 3),
     }

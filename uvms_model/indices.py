@@ -12,8 +12,10 @@ and :math:`\gamma_{max} = 1/\sin 0.78 = 1.4219` (the paper's 1.42). The inverse 
 :math:`q_2 = \arcsin(\gamma \sin\theta_{sv})` (principal branch) gives 0.475, 0.78 and
 0.831 rad for :math:`\gamma_{tol} = 0.65`, 1 and :math:`\gamma_{accel} = 1.05`.
 
-Our choice: :math:`\gamma` is signed (no absolute value), so an elbow folded through
-:math:`q_2 = 0` reads as negative performance instead of a false recovery.
+The paper defines :math:`\gamma` as the *absolute* rate of the two determinants, so
+:math:`\gamma = |\sin q_2| / \sin\theta_{sv}` here too (eq. 4 with ``|det Ns|``): both
+elbow postures, :math:`q_2` and :math:`-q_2`, have the same performance, and an elbow
+that passes through :math:`q_2 = 0` shows as :math:`\gamma \to 0`, not as a sign change.
 All functions use plain ``math`` on floats (called once per ODE step).
 """
 
@@ -36,7 +38,7 @@ THETA_SV: float = 0.78
 
 
 def gamma(q2: float, theta_sv: float = THETA_SV) -> float:
-    """Normalised performance index ``sin q2 / sin theta_sv``.
+    """Normalised performance index ``|sin q2| / sin theta_sv`` (eq. 4, an absolute rate).
 
     Parameters
     ----------
@@ -48,13 +50,18 @@ def gamma(q2: float, theta_sv: float = THETA_SV) -> float:
     Returns
     -------
     float
-        gamma (signed).
+        gamma (non-negative).
+
+    Examples
+    --------
+    >>> gamma(0.78), gamma(-0.78)
+    (1.0, 1.0)
     """
-    return math.sin(q2) / math.sin(theta_sv)
+    return abs(math.sin(q2)) / math.sin(theta_sv)
 
 
 def gamma_from_det(det: float, det_sv: float) -> float:
-    """Index from determinants, ``det Ns(q) / det Ns(q_sv)`` (eq. 4).
+    """Index from determinants, ``|det Ns(q) / det Ns(q_sv)|`` (eq. 4).
 
     Parameters
     ----------
@@ -68,7 +75,7 @@ def gamma_from_det(det: float, det_sv: float) -> float:
     float
         gamma.
     """
-    return det / det_sv
+    return abs(det / det_sv)
 
 
 def alpha(gamma_value: float) -> float:

@@ -50,6 +50,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from uvms_model.quintic import quintic_state
+
 __all__ = [
     "MISSION1_CENTRE_OFFSET",
     "MISSION2_CENTRE_OFFSET",
@@ -69,7 +71,7 @@ _PERIMETER_NODES = 4096
 
 
 class PathState(NamedTuple):
-    """Commanded end-effector pose and twist magnitudes at one instant."""
+    """Commanded end-effector pose, twist magnitudes and their rates at one instant."""
 
     xe: float
     ye: float
@@ -77,6 +79,9 @@ class PathState(NamedTuple):
     vxe: float
     vye: float
     wphie: float
+    axe: float
+    aye: float
+    dwphie: float
 
 
 def smoothstep5(tau: float) -> tuple[float, float]:
@@ -90,14 +95,16 @@ def smoothstep5(tau: float) -> tuple[float, float]:
     Returns
     -------
     tuple of float
-        ``(sigma, dsigma/dtau)`` with ``sigma = 10 tau^3 - 15 tau^4 + 6 tau^5``.
+        ``(sigma, dsigma/dtau)`` with ``sigma = 10 tau^3 - 15 tau^4 + 6 tau^5``, the quintic
+        law from rest at 0 to rest at 1 (:func:`uvms_model.quintic.quintic_state`).
+
+    Examples
+    --------
+    >>> smoothstep5(0.5)
+    (0.5, 1.875)
     """
-    if tau <= 0.0:
-        return 0.0, 0.0
-    if tau >= 1.0:
-        return 1.0, 0.0
-    t2 = tau * tau
-    return t2 * tau * (10.0 + tau * (-15.0 + 6.0 * tau)), 30.0 * t2 * (1.0 - tau) ** 2
+    sigma, dsigma, _ = quintic_state(tau, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
+    return sigma, dsigma
 
 
 @dataclass(frozen=True)
@@ -124,6 +131,9 @@ class DeformedCircle:
         Constant end-effector heading, rad.
     t_start : float
         Start time t0, s.
+    heading_follow : float
+        0 (default): the end-effector heading is held at ``heading``; 1: it turns with
+        the polar angle about the centre, ``phie = heading + (theta - theta_s)``.
     """
 
     start: tuple[float, float]
@@ -135,6 +145,7 @@ class DeformedCircle:
     direction: int = 1
     heading: float = 0.0
     t_start: float = 0.0
+    heading_follow: float = 0.0
     centre: tuple[float, float] = field(init=False)
     theta_start: float = field(init=False)
     base_radius: float = field(init=False)
@@ -188,22 +199,35 @@ class DeformedCircle:
         PathState
             ``(xe, ye, phie, vxe, vye, wphie)``.
         """
-        sigma, dsigma = smoothstep5((t - self.t_start) / self.duration)
+        sigma, dsigma, ddsigma = quintic_state(
+            (t - self.t_start) / self.duration, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0
+        )
         sweep = self.direction * 2.0 * math.pi * self.turns
         theta = self.theta_start + sweep * sigma
         theta_dot = sweep * dsigma / self.duration
+        theta_ddot = sweep * ddsigma / self.duration**2
         arg = 2.0 * (theta - self.axis_angle)
-        rho = self.base_radius * (1.0 + self.epsilon * math.cos(arg))
-        drho = -2.0 * self.base_radius * self.epsilon * math.sin(arg)
+        big_r, eps = self.base_radius, self.epsilon
+        rho = big_r * (1.0 + eps * math.cos(arg))
+        drho = -2.0 * big_r * eps * math.sin(arg)
+        ddrho = -4.0 * big_r * eps * math.cos(arg)
         c, s = math.cos(theta), math.sin(theta)
+        # p(theta) = C + rho e, e = (c, s), e_perp = (-s, c):
+        # p_theta = rho' e + rho e_perp, p_theta_theta = (rho'' - rho) e + 2 rho' e_perp
+        ptx, pty = drho * c - rho * s, drho * s + rho * c
+        pttx, ptty = (ddrho - rho) * c - 2.0 * drho * s, (ddrho - rho) * s + 2.0 * drho * c
         cx, cy = self.centre
+        follow = self.heading_follow
         return PathState(
             cx + rho * c,
             cy + rho * s,
-            self.heading,
-            (drho * c - rho * s) * theta_dot,
-            (drho * s + rho * c) * theta_dot,
-            0.0,
+            self.heading + follow * (theta - self.theta_start),
+            ptx * theta_dot,
+            pty * theta_dot,
+            follow * theta_dot,
+            pttx * theta_dot**2 + ptx * theta_ddot,
+            ptty * theta_dot**2 + pty * theta_ddot,
+            follow * theta_ddot,
         )
 
 

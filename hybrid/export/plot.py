@@ -108,10 +108,12 @@ def figures_of(run: Run, *names: str, against: str = "t", signals: bool = True) 
     Examples
     --------
     >>> import hybrid
-    >>> run = hybrid.simulate(hybrid.load("specs/uvms_mission_1.yaml"), t_end=5.0)
-    >>> figs = figures_of(run)
-    >>> list(figs), [ax.get_ylabel() for ax in figs["polarization"].axes]
-    (['uvms', 'polarization'], ['location', 'signals'])
+    >>> run = hybrid.simulate(hybrid.load("docs/examples/tank_system.yaml"), t_end=5.0)
+    >>> figs = figures_of(run)   # the controller has no state: a location lane and its signals
+    >>> list(figs), [ax.get_ylabel() for ax in figs["ctrl"].axes]
+    (['plant', 'ctrl'], ['location', 'signals'])
+    >>> [ax.get_ylabel() for ax in figs["plant"].axes]
+    ['location', 'h [m]', 'signals']
     """
     return {
         view.name: _figure(run, names, view.name if run.components else None, against, signals)

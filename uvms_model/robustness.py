@@ -1,0 +1,377 @@
+"""Robustness of the missions' outcomes to our parameter choices.
+
+Two studies, both from the specs:
+
+* :func:`one_at_a_time`: every parameter docs/uvms.md marks as ours
+  (:data:`~uvms_model.missions.OWN_PARAMETERS`) at 0.9 and 1.1 times its value, and each
+  initial joint angle moved by -0.1 and +0.1 rad, one at a time.
+* :func:`robustness_map`: a grid over two parameters, the outcome of each point
+  classified by :func:`classify`; :func:`write_map_figure` draws it.
+
+The grid is run by :func:`_run_points`, a plain loop: the one place to hand over to a
+campaign runner (``hybrid sweep``) once the toolkit has one.
+
+Run ``python -m uvms_model.robustness [OUT_DIR]`` to write the map of mission 2
+(``uvms_robustness_map.png``) and print the one-at-a-time table.
+
+Examples
+--------
+>>> outcome = Outcome("uvms_mission_2", "t_end", 2, 0.6, 0.25)
+>>> classify(outcome)
+'paper'
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+
+import hybrid
+from uvms_model.missions import INITIAL_POSTURE, OWN_PARAMETERS, run_mission, specs_dir
+
+__all__ = [
+    "OUTCOME_DT",
+    "POSTURE_STEP",
+    "Outcome",
+    "RobustnessMap",
+    "Variant",
+    "classify",
+    "main",
+    "one_at_a_time",
+    "outcome_of",
+    "robustness_map",
+    "write_map_figure",
+]
+
+POSTURE_STEP = 0.1
+"""Perturbation of each initial joint angle, rad (10% of an angle depends on its zero)."""
+
+M1_MIN_GAMMA = 0.65
+"""Mission 1 keeps the paper's outcome: no switch and min |gamma| above gamma_tol."""
+M2_MIN_GAMMA = 0.5
+"""Mission 2 keeps the paper's outcome: one to three switches, min |gamma| above this."""
+OUTCOME_DT = 0.1
+"""Recording grid of :func:`outcome_of`, s."""
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What one run of a mission did."""
+
+    mission: str
+    cause: str
+    switches: int
+    min_abs_gamma: float
+    max_vehicle_speed: float
+
+
+def classify(outcome: Outcome) -> str:
+    """``"paper"`` if the run keeps the paper's outcome for its mission, else why not.
+
+    Mission 1 (paper: the FM alone is enough): the run reaches 60 s without a switch
+    and ``min |gamma| > 0.65``. Mission 2 (paper: gamma falls below gamma_tol and the
+    automaton switches): 60 s, one to three switches, ``min |gamma| > 0.5``.
+
+    Parameters
+    ----------
+    outcome : Outcome
+        The run.
+
+    Returns
+    -------
+    str
+        ``"paper"``, ``"ended <cause>"``, ``"no switch"``, ``"switched"``,
+        ``"<n> switches"`` or ``"low gamma"``.
+    """
+    if outcome.cause != "t_end":
+        return f"ended {outcome.cause}"
+    if outcome.mission.endswith("1"):
+        if outcome.switches:
+            return "switched"
+        return "paper" if outcome.min_abs_gamma > M1_MIN_GAMMA else "low gamma"
+    if outcome.switches == 0:
+        return "no switch"
+    if outcome.switches > 3:
+        return f"{outcome.switches} switches"
+    return "paper" if outcome.min_abs_gamma > M2_MIN_GAMMA else "low gamma"
+
+
+def outcome_of(
+    mission: str,
+    parameters: Mapping[str, float] | None = None,
+    initial: Mapping[str, float] | None = None,
+    *,
+    rtol: float = 1e-7,
+    atol: float = 1e-9,
+    dt: float | None = OUTCOME_DT,
+) -> Outcome:
+    """Simulate ``mission`` with overrides and summarise it.
+
+    Parameters
+    ----------
+    mission : str
+        ``"uvms_mission_1"`` or ``"uvms_mission_2"``.
+    parameters, initial : mapping, optional
+        Overrides (see :func:`uvms_model.missions.run_mission`).
+    rtol, atol : float
+        Solver tolerances.
+    dt : float, optional
+        Recording grid, s; the smallest ``|gamma|`` is read on it (solver steps alone
+        can step over the bottom of a dip).
+
+    Returns
+    -------
+    Outcome
+        The run's end, switches, smallest ``|gamma|`` and top vehicle speed.
+    """
+    result = run_mission(mission, parameters, initial=initial, rtol=rtol, atol=atol, dt=dt)
+    return Outcome(
+        mission,
+        result.run.termination.cause,
+        len(result.switches),
+        result.min_abs_gamma,
+        result.max_vehicle_speed,
+    )
+
+
+@dataclass(frozen=True)
+class Variant:
+    """One perturbed run of :func:`one_at_a_time`."""
+
+    name: str
+    """``"uvms.v_max x0.9"``, ``"q2 -0.1 rad"``, ..."""
+    outcome: Outcome
+
+    @property
+    def verdict(self) -> str:
+        return classify(self.outcome)
+
+
+def _nominal(model: hybrid.Automaton | hybrid.System, qualified: str) -> float:
+    comp, _, name = qualified.rpartition(".")
+    if isinstance(model, hybrid.Automaton):
+        return float(model.parameters[name])
+    for component in model.components:
+        if component.name == comp:
+            return float(component.automaton.parameters[name])
+    raise KeyError(qualified)
+
+
+def _initial(model: hybrid.Automaton | hybrid.System, state: str) -> float:
+    return float(dict(zip(model.state_names, model.initial_vector(), strict=True))[state])
+
+
+def one_at_a_time(
+    mission: str,
+    parameters: Sequence[str] = OWN_PARAMETERS,
+    posture: Sequence[str] = INITIAL_POSTURE,
+    *,
+    factor: float = 0.1,
+    base: Mapping[str, float] | None = None,
+    rtol: float = 1e-7,
+    atol: float = 1e-9,
+    workers: int = 1,
+) -> list[Variant]:
+    """Each own parameter at ``1 -/+ factor`` times its value, each joint at -/+0.1 rad.
+
+    Parameters
+    ----------
+    mission : str
+        Mission spec stem.
+    parameters : sequence of str
+        Qualified parameter names to perturb.
+    posture : sequence of str
+        Initial joint angles to perturb by :data:`POSTURE_STEP`.
+    factor : float
+        Relative perturbation of the parameters.
+    base : mapping, optional
+        Parameter overrides every variant starts from (default: the specs' values).
+    rtol, atol : float
+        Solver tolerances.
+    workers : int
+        Processes to run the variants in (1: in this process).
+
+    Returns
+    -------
+    list of Variant
+        Two per parameter and two per joint, in that order.
+    """
+    base = dict(base or {})
+    model = hybrid.load(specs_dir() / f"{mission}.yaml", parameters=base)
+    points: list[tuple[str, dict[str, float], dict[str, float]]] = []
+    for name in parameters:
+        value = _nominal(model, name)
+        for f in (1.0 - factor, 1.0 + factor):
+            points.append((f"{name} x{f:g}", {**base, name: value * f}, {}))
+    for state in posture:
+        value = _initial(model, state)
+        for step in (-POSTURE_STEP, POSTURE_STEP):
+            points.append((f"{state} {step:+g} rad", dict(base), {state: value + step}))
+    outcomes = _run_points([(mission, p, i) for _, p, i in points], rtol, atol, workers)
+    return [Variant(label, o) for (label, _, _), o in zip(points, outcomes, strict=True)]
+
+
+@dataclass(frozen=True)
+class RobustnessMap:
+    """Outcomes of a mission over a grid of two parameters."""
+
+    mission: str
+    x_name: str
+    x_values: tuple[float, ...]
+    y_name: str
+    y_values: tuple[float, ...]
+    outcomes: tuple[tuple[Outcome, ...], ...]
+    """``outcomes[i][j]`` at ``(x_values[j], y_values[i])``."""
+    nominal: tuple[float, float]
+
+
+def robustness_map(
+    mission: str,
+    x_name: str,
+    x_values: Iterable[float],
+    y_name: str,
+    y_values: Iterable[float],
+    *,
+    rtol: float = 1e-7,
+    atol: float = 1e-9,
+    workers: int = 1,
+) -> RobustnessMap:
+    """Run ``mission`` on the grid ``x_values x y_values`` of two qualified parameters.
+
+    Parameters
+    ----------
+    mission : str
+        Mission spec stem.
+    x_name, y_name : str
+        Qualified parameter names (``"uvms.v_max"``, ``"polarization.theta_accel"``).
+    x_values, y_values : iterable of float
+        Grid values.
+    rtol, atol : float
+        Solver tolerances.
+    workers : int
+        Processes to run the grid in.
+
+    Returns
+    -------
+    RobustnessMap
+        The grid of outcomes and the nominal point.
+    """
+    xs, ys = tuple(float(v) for v in x_values), tuple(float(v) for v in y_values)
+    model = hybrid.load(specs_dir() / f"{mission}.yaml")
+    nominal = (_nominal(model, x_name), _nominal(model, y_name))
+    points: list[Point] = [(mission, {x_name: x, y_name: y}, {}) for y in ys for x in xs]
+    flat = _run_points(points, rtol, atol, workers)
+    rows = tuple(tuple(flat[i * len(xs) : (i + 1) * len(xs)]) for i in range(len(ys)))
+    return RobustnessMap(mission, x_name, xs, y_name, ys, rows, nominal)
+
+
+Point = tuple[str, dict[str, float], dict[str, float]]
+"""``(mission, parameter overrides, initial-state overrides)``."""
+
+
+def _run_point(point: Point, rtol: float, atol: float) -> Outcome:
+    mission, params, initial = point
+    return outcome_of(mission, params, initial, rtol=rtol, atol=atol)
+
+
+def _run_points(points: Sequence[Point], rtol: float, atol: float, workers: int) -> list[Outcome]:
+    """Run every point, in order: the campaign loop.
+
+    A plain loop (or a process pool); the one piece to replace by ``hybrid sweep``.
+    """
+    run = partial(_run_point, rtol=rtol, atol=atol)
+    if workers <= 1:
+        return [run(p) for p in points]
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        return list(pool.map(run, points))
+
+
+def write_map_figure(result: RobustnessMap, path: Path) -> Path:
+    """Draw ``result``: min |gamma| as colour, the outcome class as a mark per point.
+
+    Parameters
+    ----------
+    result : RobustnessMap
+        The grid.
+    path : Path
+        PNG file to write.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from hybrid.export.atomic import atomic_write
+
+    gamma = np.array([[o.min_abs_gamma for o in row] for row in result.outcomes])
+    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+    mesh = ax.pcolormesh(
+        result.x_values, result.y_values, gamma, shading="nearest", cmap="viridis",
+        vmin=0.0, vmax=1.0,
+    )  # fmt: skip
+    fig.colorbar(mesh, ax=ax, label="min |gamma|")
+    for i, y in enumerate(result.y_values):
+        for j, x in enumerate(result.x_values):
+            o = result.outcomes[i][j]
+            ok = classify(o) == "paper"
+            ax.text(
+                x, y, str(o.switches) if o.cause == "t_end" else "x",
+                ha="center", va="center", fontsize=8,
+                color="white" if ok else "red", fontweight="normal" if ok else "bold",
+            )  # fmt: skip
+    x0, y0 = result.nominal
+    box_x = [0.9 * x0, 1.1 * x0, 1.1 * x0, 0.9 * x0, 0.9 * x0]
+    box_y = [0.9 * y0, 0.9 * y0, 1.1 * y0, 1.1 * y0, 0.9 * y0]
+    ax.plot(box_x, box_y, color="w", ls="--", lw=1.5)
+    ax.plot([x0], [y0], marker="*", color="w", ms=14, mec="k")
+    ax.set_xlabel(result.x_name)
+    ax.set_ylabel(result.y_name)
+    ax.set_title(
+        f"{result.mission}: switches per run (white: the paper's outcome, red: not; "
+        "x: run ended early)\nstar: our values; dashed box: +-10%",
+        fontsize=9,
+    )
+    with atomic_write(path) as handle:
+        fig.savefig(handle, format="png", dpi=100)
+    plt.close(fig)
+    return path
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Write the robustness map of mission 2 and print the one-at-a-time table."""
+    args = sys.argv[1:] if argv is None else argv
+    out = Path(args[0] if args else "out")
+    out.mkdir(parents=True, exist_ok=True)
+    for mission in ("uvms_mission_1", "uvms_mission_2"):
+        variants = one_at_a_time(mission, workers=2)
+        kept = sum(v.verdict == "paper" for v in variants)
+        print(f"{mission}: {kept} of {len(variants)} one-at-a-time variants keep the outcome")
+        for v in variants:
+            o = v.outcome
+            print(
+                f"  {v.name:34s} {v.verdict:12s} switches {o.switches}  "
+                f"min |gamma| {o.min_abs_gamma:.3f}  max speed {o.max_vehicle_speed:.3f}"
+            )
+    grid = robustness_map(
+        "uvms_mission_2",
+        "uvms.v_max", [round(0.21 + 0.01 * k, 2) for k in range(13)],
+        "polarization.theta_accel", [round(0.65 + 0.05 * k, 2) for k in range(13)],
+        workers=2,
+    )  # fmt: skip
+    path = write_map_figure(grid, out / "uvms_robustness_map.png")
+    print(f"figure: {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
