@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP_DEMO := $(VENV)/.installed-demo
 STAMP_TEST := $(VENV)/.installed-test
 
-.PHONY: demo test lint typecheck check-specs bench clean
+.PHONY: demo test lint typecheck check-specs bench fuzz clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -37,6 +37,12 @@ test: lint typecheck check-specs
 
 bench: $(STAMP_TEST)
 	$(BIN)/python -m bench
+
+# The large campaigns behind the small in-suite ones: 2,000 generated models with every
+# solver method, and 20 Ctrl-C at random moments of a long run (about 5 minutes).
+fuzz: $(STAMP_TEST)
+	HYBRID_FUZZ_MODELS=2000 HYBRID_FUZZ_ALL_METHODS=1 HYBRID_INTERRUPT_MOMENTS=20 \
+		$(BIN)/python -m pytest -q -s tests/fuzz tests/cli/test_cli_simulate_interrupts.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .mypy_cache .ruff_cache

@@ -15,6 +15,12 @@ when the flow cannot go on:
   the flow failed on the way there (at a point the solver tried), else
   ``solver_failure``, at the last accepted point;
 - the solver stops advancing (:data:`STALL_STEPS` steps that do not move ``t``):
+  ``solver_failure``;
+- the solver crawls: over :data:`CRAWL_STEPS` steps its steps averaged less
+  than :data:`CRAWL_DROP` times the longest step of the stay, and at that pace
+  ``t_end`` is more than :data:`CRAWL_PROJECTION` steps away. A solution that
+  nears a singularity (a derivative without bound) and chatters across it does
+  this: steps a million times shorter than before, and a run of hours.
   ``solver_failure``.
 
 A flow failure at a trial point of a step the solver then rejected is not an
@@ -40,7 +46,16 @@ from hybrid.simulation.interrupts import Interrupts
 from hybrid.simulation.recorder import Recorder
 from hybrid.simulation.settings import Settings
 
-__all__ = ["SOLVERS", "STALL_STEPS", "StayEnd", "StayIntegrator", "one_line"]
+__all__ = [
+    "CRAWL_DROP",
+    "CRAWL_PROJECTION",
+    "CRAWL_STEPS",
+    "SOLVERS",
+    "STALL_STEPS",
+    "StayEnd",
+    "StayIntegrator",
+    "one_line",
+]
 
 SOLVERS: dict[str, type[OdeSolver]] = {
     "RK45": RK45,
@@ -54,6 +69,15 @@ SOLVERS: dict[str, type[OdeSolver]] = {
 
 STALL_STEPS = 50
 """Consecutive accepted steps that do not advance ``t`` before a stay ends as stalled."""
+
+CRAWL_STEPS = 1000
+"""Steps over which the pace of the solver is measured (see the module docstring)."""
+
+CRAWL_DROP = 1e-6
+"""A pace below this fraction of the longest step of the stay is a crawl..."""
+
+CRAWL_PROJECTION = 1e6
+"""... when ``t_end`` is more than this many steps away at that pace."""
 
 _SOLVER_ERRORS = (ValueError, ArithmeticError, np.linalg.LinAlgError)
 
@@ -102,7 +126,9 @@ class StayIntegrator:
         failure = self.compiled.failure
         w = watch.value(t0, x0) if watch.value is not None else math.inf
         t, x = t0, x0
-        stalls = 0
+        stalls = steps = 0
+        longest, window_start = 0.0, t0
+        t_end = self.settings.t_end
 
         def arm(ts: float, xs: np.ndarray) -> bool:
             return watch.arm(ts, xs, band(xs))
@@ -132,6 +158,15 @@ class StayIntegrator:
                     f"floating-point numbers at t={t:.9g} (largest |state| {peak:.3g}; the "
                     "solution may blow up here, or try another --method)",
                 )
+            h = t1 - t
+            longest = max(longest, h)
+            steps += 1
+            if steps % CRAWL_STEPS == 0:
+                pace = (t1 - window_start) / CRAWL_STEPS
+                window_start = t1
+                if pace < CRAWL_DROP * longest and t_end - t1 > CRAWL_PROJECTION * pace:
+                    record.close(None, None)
+                    return self._crawled(t, x, pace, longest)
             curve = step_curve(solver, x)
             event, w = first_event(
                 curve, watch, w, spacing, arm if watch.pending else None, failure
@@ -200,6 +235,20 @@ class StayIntegrator:
         if h is None or not h > 0.0 or not t_end > t0:
             return None
         return min(h, self.settings.max_step, t_end - t0)
+
+    def _crawled(self, t: float, x: np.ndarray, pace: float, longest: float) -> StayEnd:
+        """The end of a stay whose solver crawls (see the module docstring)."""
+        peak = max(map(abs, x.tolist()), default=0.0)
+        remaining = (self.settings.t_end - t) / pace
+        return StayEnd(
+            "solver_failure",
+            t,
+            x,
+            f"solver crawls: its last {CRAWL_STEPS} steps averaged {pace:.3g} (it took steps of "
+            f"{longest:.3g} before), so t_end is still {remaining:.2g} steps away (largest "
+            f"|state| {peak:.3g}); the solution may near a singularity here (a derivative "
+            "without bound) and chatter across it",
+        )
 
     def _gave_up(self, t: float, x: np.ndarray, why: str, nonfinite: bool = False) -> StayEnd:
         """The end of a stay whose solver cannot go on, at the last accepted point ``(t, x)``."""
