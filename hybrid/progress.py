@@ -228,11 +228,14 @@ def _is_terminal(stream: TextIO) -> bool:
 
 
 def _number(value: float) -> str:
+    """``5``, ``2.5``, ``0.0123``, ``1,234``, ``3.2e+15``: what a person reads at a glance."""
     if not math.isfinite(value):
         return str(value)
-    if value == int(value) and abs(value) < 1e15:
-        return f"{int(value):,}"
-    return f"{value:.3g}" if abs(value) < 1e6 else f"{value:.4g}"
+    if abs(value) >= 1e15:
+        return f"{value:.3g}"
+    if value == int(value) or abs(value) >= 100:
+        return f"{value:,.0f}"
+    return f"{value:.3g}"
 
 
 def _duration(seconds: float) -> str:

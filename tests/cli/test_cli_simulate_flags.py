@@ -29,6 +29,15 @@ def error_lines(stderr: str) -> list[str]:
         (["--t-end", "1", "--param", "g"], "argument --param: expected name=value, got 'g'"),
         (["--t-end", "1", "--param", "g=heavy"], "value of 'g' must be a number"),
         ([], "the following arguments are required: --t-end"),
+        # values that used to hang the run instead of being refused
+        (
+            ["--t-end", "1", "--rtol", "1e400"],
+            "argument --rtol: must be a finite number, got 1e400",
+        ),
+        (["--t-end", "1", "--param", "g=nan"], "value of 'g' must be a finite number, got 'nan'"),
+        (["--t-end", "inf"], "argument --t-end: must be a finite number, got inf"),
+        (["--t-end", "1", "--atol=-inf"], "argument --atol: must be > 0, got -inf"),
+        (["--t-end", "1", "--input", "u"], "argument --input: expected NAME=EXPR"),
     ],
 )
 def test_bad_flags_exit_2_with_one_line(
@@ -48,6 +57,12 @@ def test_bad_flags_exit_2_with_one_line(
     [
         (["--t-end", "1", "--param", "gg=1"], "unknown parameter 'gg'"),
         (["--t-end", "1", "--out", "traj.txt"], "--out: use a .csv or .npz file name"),
+        (["--t-end", "10", "--max-step", "1e-300"], "max_step=1e-300 is below the resolution"),
+        (["--t-end", "1e6", "--max-step", "1e-7"], "needs at least 1e+13 steps"),
+        (["--t-end", "10", "--dt", "1e-12"], "dt=1e-12 gives 1e+13 points"),
+        (["--t-end", "1", "--rtol", "1e-20"], "rtol must be at least 2.22e-14"),
+        (["--t-end", "1", "--rtol", "2"], "and below 1, got 2.0"),
+        (["--t-end", "1", "--input", "u=t"], "'u' is not a free input of bouncing_ball"),
     ],
 )
 def test_bad_values_found_later_exit_2_with_one_line(
@@ -87,3 +102,12 @@ def _points() -> int:
     import hybrid
 
     return len(hybrid.simulate(hybrid.load(BALL), t_end=2.0))
+
+
+def test_refused_settings_end_at_once_in_a_real_process() -> None:
+    # --rtol 1e400, --param g=nan and --max-step 1e-300 used to hang the run
+    for flags in (["--rtol", "1e400"], ["--param", "g=nan"], ["--max-step", "1e-300"]):
+        result = run_cli("simulate", BALL, "--t-end", "10", *flags, timeout=30)
+        assert result.returncode == 2, flags
+        assert result.stdout == ""
+        assert_no_traceback(result.stderr)
