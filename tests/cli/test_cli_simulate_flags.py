@@ -111,3 +111,19 @@ def test_refused_settings_end_at_once_in_a_real_process() -> None:
         assert result.returncode == 2, flags
         assert result.stdout == ""
         assert_no_traceback(result.stderr)
+
+
+def test_every_simulate_flag_is_documented_in_cli_md() -> None:
+    from support import DOCS
+
+    from hybrid.cli.main import build_parser
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    simulate = sub.choices["simulate"]  # type: ignore[index]
+    page = (DOCS / "cli.md").read_text()
+    section = page.split("## `hybrid simulate`", 1)[1].split("\n## ", 1)[0]
+    flags = [o for a in simulate._actions for o in a.option_strings if o.startswith("--")]
+    flags.remove("--help")
+    missing = [f for f in flags if f"`{f}" not in section]
+    assert not missing, f"not in the simulate section of docs/cli.md: {missing}"
