@@ -198,7 +198,7 @@ def _phi(fn: Any, curve: StepCurve, a: float, wa: float, b: float, wb: float) ->
 
 def _locate(fn: Any, curve: StepCurve, a: float, wa: float, b: float, wb: float) -> float:
     """The zero of the watch in ``[a, b]`` (``wa > 0 >= wb``)."""
-    if wb == 0.0 or not wa > 0.0:
+    if wb == 0.0 or not (wa > 0.0 and math.isfinite(wa) and math.isfinite(wb)):
         return b
     try:
         root: float = brentq(_phi(fn, curve, a, wa, b, wb), a, b, xtol=_TOL, rtol=_TOL)

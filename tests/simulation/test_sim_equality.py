@@ -138,3 +138,18 @@ edges:
 """
     (jump,) = hybrid.simulate(hybrid.load_text(text), t_end=1.0).jumps
     assert jump.t == 0.0
+
+
+def test_check_and_simulate_agree_on_the_zero_time_cycle_at_the_origin() -> None:
+    # check warns that down and up can fire again and again without time passing: at
+    # the origin the state sits on the level x == 0 (the flow is zero there), both
+    # guards hold at entry, and the simulator indeed jumps back and forth at t = 0
+    model = circle("x == 0")
+    cycles = [f for f in check(model).findings if f.rule == "zero-time-cycle"]
+    assert len(cycles) == 1 and "down" in cycles[0].message and "up" in cycles[0].message
+    run = hybrid.simulate(model, t_end=1.0, initial={"x": 0.0, "y": 0.0})
+    assert run.termination.cause == "zeno" and run.termination.t == 0.0
+    assert "jumps at the same instant" in run.termination.message
+    # from (1, 0) the state only passes the level, so no jump follows another at once
+    run = hybrid.simulate(model, t_end=10.0, **TOL)
+    assert len({j.t for j in run.jumps}) == len(run.jumps)
