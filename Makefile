@@ -39,7 +39,7 @@ bench: $(STAMP_TEST)
 	$(BIN)/python -m bench
 
 # The large campaigns behind the small in-suite ones: 2,000 generated models with every
-# solver method, and 20 Ctrl-C at random moments of a long run (about 5 minutes).
+# solver method, and 20 Ctrl-C at random moments of a long run (2 to 3 minutes).
 fuzz: $(STAMP_TEST)
 	HYBRID_FUZZ_MODELS=2000 HYBRID_FUZZ_ALL_METHODS=1 HYBRID_INTERRUPT_MOMENTS=20 \
 		$(BIN)/python -m pytest -q -s tests/fuzz tests/cli/test_cli_simulate_interrupts.py

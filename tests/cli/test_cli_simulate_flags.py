@@ -104,13 +104,12 @@ def _points() -> int:
     return len(hybrid.simulate(hybrid.load(BALL), t_end=2.0))
 
 
-def test_refused_settings_end_at_once_in_a_real_process() -> None:
-    # --rtol 1e400, --param g=nan and --max-step 1e-300 used to hang the run
-    for flags in (["--rtol", "1e400"], ["--param", "g=nan"], ["--max-step", "1e-300"]):
-        result = run_cli("simulate", BALL, "--t-end", "10", *flags, timeout=30)
-        assert result.returncode == 2, flags
-        assert result.stdout == ""
-        assert_no_traceback(result.stderr)
+def test_a_refused_setting_ends_at_once_in_a_real_process() -> None:
+    # --param g=nan used to hang the run (the other refused values above too)
+    result = run_cli("simulate", BALL, "--t-end", "10", "--param", "g=nan", timeout=30)
+    assert result.returncode == 2
+    assert result.stdout == ""
+    assert_no_traceback(result.stderr)
 
 
 def test_every_simulate_flag_is_documented_in_cli_md() -> None:
