@@ -19,9 +19,10 @@ backend implements the same and is tested against this one):
    values (no higher than both neighbours, lower than one) is examined when the
    parabola through it and its neighbours dips at least half way from it to
    0: the watch is minimised between the neighbours (bounded Brent). A minimum
-   ``<= 0`` gives a crossing, located between the left neighbour and the
-   minimum; a minimum within the band of 0 is a *touch*: an event at the
-   minimum. A dip examined this way is the earliest event of the step.
+   ``< 0`` gives a crossing, located between the left neighbour and the
+   minimum; a minimum from 0 to the band is a *touch*: an event at the
+   minimum. A dip before the first crossing holds the earliest event of the
+   step.
 
 What it cannot see: a window in which the watch is below 0 that lies between
 two samples and leaves no dip in the sampled values (a kink, as of ``x >= 5
@@ -130,24 +131,28 @@ def first_event(
             return None, math.inf
         values = [w0]
         append = values.append
-        t_prev, w_prev = t0, w0
+        crossing: Found | None = None
+        w = w0
         for t, x in zip(times, rows, strict=True):
             w = fn(t, x)
             if failure is not None and failure.error is not None:
+                t_prev = times[len(values) - 2] if len(values) > 1 else t0
                 return Failed(t_prev, curve.at(t_prev)), w
             if w <= 0.0:
-                root = _locate(fn, curve, t_prev, w_prev, t, w)
-                return Found(root, curve.at(root), "crossing"), w
+                t_prev = times[len(values) - 2] if len(values) > 1 else t0
+                root = _locate(fn, curve, t_prev, values[-1], t, w)
+                crossing = Found(root, curve.at(root), "crossing")
+                break
             append(w)
-            t_prev, w_prev = t, w
-        for k in range(1, m):  # sample k is at times[k - 1]; values[0] is the step start
+        # a dip before the first crossing (or anywhere, without one) holds an earlier event
+        for k in range(1, len(values) - 1):  # sample k is at times[k - 1]
             wb = values[k]
             if wb <= values[k - 1] and wb <= values[k + 1]:
                 ta = times[k - 2] if k >= 2 else t0
                 dip = _dip(fn, curve, ta, values[k - 1], times[k - 1], wb, times[k], values[k + 1])
                 if dip is not None:
-                    return dip, values[-1]
-        return None, values[-1]
+                    return dip, w
+        return crossing, w
     return _with_arming(curve, watch, w0, times, rows, arm, failure)
 
 
@@ -238,7 +243,7 @@ def _dip(
     w_min = float(best.fun)
     if not math.isfinite(w_min):
         return None
-    if w_min <= 0.0:
+    if w_min < 0.0:
         root = _locate(fn, curve, ta, wa, t_min, w_min)
         return Found(root, curve.at(root), "crossing")
     x_min = curve.at(t_min)
