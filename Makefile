@@ -6,7 +6,7 @@ STAMP_DEMO := $(VENV)/.installed-demo
 STAMP_TEST := $(VENV)/.installed-test
 STAMP_DOCS := $(VENV)/.installed-docs
 
-.PHONY: demo test docs lint typecheck check-specs bench clean
+.PHONY: demo test docs lint typecheck check-specs bench fuzz clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -48,6 +48,12 @@ docs: $(STAMP_DOCS)
 
 bench: $(STAMP_TEST)
 	$(BIN)/python -m bench
+
+# The large campaigns behind the small in-suite ones: 2,000 generated models with every
+# solver method, and 20 Ctrl-C at random moments of a long run (2 to 3 minutes).
+fuzz: $(STAMP_TEST)
+	HYBRID_FUZZ_MODELS=2000 HYBRID_FUZZ_ALL_METHODS=1 HYBRID_INTERRUPT_MOMENTS=20 \
+		$(BIN)/python -m pytest -q -s tests/fuzz tests/cli/test_cli_simulate_interrupts.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .mypy_cache .ruff_cache docs/_build docs/api docs/_generated

@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from bench import engine_overhead, peers, rhs_call, spec_scaling, uvms_realtime
+from bench import engine_overhead, peers, rhs_call, spec_scaling, step_search, uvms_realtime
 from bench.harness import machine
 
 RESULTS = Path(__file__).resolve().parent / "results.json"
@@ -25,6 +25,7 @@ def main(argv: list[str] | None = None) -> int:
     report: dict[str, Any] = {"machine": machine(), "comparisons": []}
     for module, kwargs in (
         (engine_overhead, {"repeats": repeats}),
+        (step_search, {"repeats": repeats}),
         (rhs_call, {"repeats": repeats}),
         (uvms_realtime, {"repeats": max(3, repeats // 2)}),
     ):

@@ -19,7 +19,7 @@ from support import REPO
 PACKAGE = REPO / "hybrid"
 
 LAYERS: tuple[frozenset[str], ...] = (
-    frozenset({"errors", "version", "lazy", "allocation"}),
+    frozenset({"errors", "version", "lazy", "allocation", "progress"}),
     frozenset({"expr"}),
     frozenset({"model"}),
     frozenset({"compose"}),

@@ -3,7 +3,9 @@
 - 0: success (``simulate`` reached t-end; ``check`` found no error);
 - 1: findings (``check``), a run that ended otherwise or violated a requirement;
 - 2: an invalid spec or invalid usage;
-- 130: stopped by a second Ctrl-C (the first one ends a run cleanly).
+- 130: stopped by Ctrl-C before anything was computed, or outputs abandoned by a
+  deliberate Ctrl-C while they were written (a Ctrl-C during a run ends it cleanly,
+  exit 1, outputs written).
 """
 
 __all__ = ["EXIT_ABANDONED", "EXIT_FINDINGS", "EXIT_INVALID", "EXIT_OK"]

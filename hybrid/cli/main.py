@@ -8,6 +8,7 @@ Exit codes: 0 success; 1 findings (check) or a run that ended before t-end
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Sequence
 
@@ -32,11 +33,16 @@ def _param(text: str) -> tuple[str, float]:
         raise argparse.ArgumentTypeError(f"expected name=value, got '{text}'")
     key, value = text.split("=", 1)
     try:
-        return key.strip(), float(value)
+        number = float(value)
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"value of '{key}' must be a number, got '{value}'"
         ) from None
+    if not math.isfinite(number):
+        raise argparse.ArgumentTypeError(
+            f"value of '{key}' must be a finite number, got '{value}'"
+        )
+    return key.strip(), number
 
 
 def _positive(text: str) -> float:
@@ -44,9 +50,18 @@ def _positive(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got '{text}'") from None
-    if not value > 0:
+    if math.isnan(value) or not value > 0:
         raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
     return value
+
+
+def _assignment(text: str) -> tuple[str, str]:
+    name, sep, expression = text.partition("=")
+    if not sep or not name.strip().isidentifier() or not expression.strip():
+        raise argparse.ArgumentTypeError(f"expected NAME=EXPR (an expression of t), got '{text}'")
+    return name.strip(), expression.strip()
 
 
 def _count(text: str) -> int:
@@ -98,10 +113,28 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME=VALUE",
         help="override a parameter (comp.NAME in a system)",
     )
+    p.add_argument(
+        "--input",
+        type=_assignment,
+        action="append",
+        default=[],
+        metavar="NAME=EXPR",
+        help="drive a free input with an expression of t, e.g. u='sin(2*t)'",
+    )
+    p.add_argument(
+        "--input-csv",
+        action="append",
+        default=[],
+        metavar="FILE",
+        help="drive free inputs with time series: a CSV with columns t,NAME,...",
+    )
     p.add_argument("--dt", type=_positive, default=None, help="write points on a uniform grid")
     p.add_argument("--out", help="trajectory file (.csv or .npz)")
     p.add_argument("--events", help="events JSON file")
     p.add_argument("--plot", help="figure file (needs the 'plot' extra)")
+    p.add_argument(
+        "--quiet", action="store_true", help="no progress on stderr (shown only on a terminal)"
+    )
 
     p = sub.add_parser("graph", help="print the location graph")
     p.add_argument("file", metavar="FILE", help="spec or system file")

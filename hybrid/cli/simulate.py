@@ -1,46 +1,87 @@
-"""``hybrid simulate``: run a spec, write what was computed, exit 0 only at t-end."""
+"""``hybrid simulate``: run a spec, write what was computed, exit 0 only at t-end.
+
+Ctrl-C is handled for the whole command (:mod:`hybrid.simulation.interrupts`):
+while the run goes on, Ctrl-C ends it cleanly at the step in progress (cause
+``interrupted``) and the outputs are written as for any other end; while the
+outputs are written, a Ctrl-C after an interrupted run, or a second one, abandons
+them (exit 130; the files already complete are kept, the one being written is
+not created). Progress goes to stderr when it is a terminal, unless ``--quiet``.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
-from hybrid.cli.exits import EXIT_FINDINGS, EXIT_OK
-from hybrid.errors import UsageError
+from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_OK
+from hybrid.compose import System
+from hybrid.errors import UsageError, did_you_mean
+from hybrid.model import Automaton
+from hybrid.progress import TerminalLine, terminal_reporter
 from hybrid.simulation.engine import simulate
+from hybrid.simulation.interrupts import ABANDON_HINT, Interrupts
 from hybrid.simulation.result import Run
 
 __all__ = ["run_simulate"]
 
+OUTPUT_FLAGS = ("out", "events", "plot")
+
 
 def run_simulate(args: argparse.Namespace) -> int:
-    """The ``simulate`` command; returns the exit code (0, 1 or 2)."""
+    """The ``simulate`` command; returns the exit code (0, 1, 2 or 130)."""
     from hybrid.reader.loader import load
 
-    outputs = [(flag, getattr(args, flag)) for flag in ("out", "events", "plot")]
+    outputs = [(flag, getattr(args, flag)) for flag in OUTPUT_FLAGS]
     for flag, path in outputs:
         if path is not None and not Path(path).resolve().parent.is_dir():
             raise UsageError(f"--{flag}: directory of '{path}' does not exist")
     if args.out is not None and Path(args.out).suffix.lower() not in (".csv", ".npz"):
         raise UsageError(f"--out: use a .csv or .npz file name, got '{args.out}'")
-    model = load(args.file)
-    parameters = dict(args.param)
-    if parameters:
-        model = model.with_parameters(parameters)
-    run = simulate(
-        model,
-        t_end=args.t_end,
-        max_jumps=args.max_jumps,
-        rtol=args.rtol,
-        atol=args.atol,
-        max_step=args.max_step,
-        method=args.method,
-        dt=args.dt,
-        dense=args.plot is not None,
-    )
-    _write_outputs(run, args)
-    term = run.termination
+    line = terminal_reporter(args.quiet)
+    interrupts = Interrupts(notify=_notifier(line))
+    with interrupts.installed():
+        model = load(args.file)
+        parameters = dict(args.param)
+        if parameters:
+            model = model.with_parameters(parameters)
+        inputs = _inputs(args, model)
+        run = simulate(
+            model,
+            t_end=args.t_end,
+            max_jumps=args.max_jumps,
+            rtol=args.rtol,
+            atol=args.atol,
+            max_step=args.max_step,
+            method=args.method,
+            dt=args.dt,
+            dense=args.plot is not None,
+            inputs=inputs or None,
+            progress=line,
+        )
+        term = run.termination
+        pending = [path for _, path in outputs if path is not None]
+        if term.cause == "interrupted" and pending:
+            print(
+                f"{args.file}: interrupted at t={term.t:.9g}; writing the outputs ({ABANDON_HINT})",
+                file=sys.stderr,
+                flush=True,
+            )
+        written: list[str] = []
+        try:
+            with interrupts.writing():
+                _write_outputs(run, args, written, line)
+        except KeyboardInterrupt:
+            if line is not None:
+                line.clear()
+            left = [p for p in pending if p not in written]
+            kept = f"; complete: {', '.join(written)}" if written else ""
+            print(
+                f"hybrid: interrupted again while writing: abandoned {', '.join(left)}{kept}",
+                file=sys.stderr,
+            )
+            return EXIT_ABANDONED
     summary = (
         f"{args.file}: {term.cause} at t={term.t:.9g} j={term.j}"
         f" ({len(run.jumps)} jumps, {len(run)} points)"
@@ -53,17 +94,69 @@ def run_simulate(args: argparse.Namespace) -> int:
     return EXIT_FINDINGS
 
 
-def _write_outputs(run: Run, args: argparse.Namespace) -> None:
+def _notifier(line: TerminalLine | None) -> Callable[[str], None]:
+    def notify(text: str) -> None:
+        if line is not None:
+            line.message(f"hybrid: {text}")
+        else:
+            print(f"hybrid: {text}", file=sys.stderr, flush=True)
+
+    return notify
+
+
+def _inputs(
+    args: argparse.Namespace, model: Automaton | System
+) -> dict[str, Callable[[float], float]]:
+    """The free inputs of ``model`` from ``--input NAME=EXPR`` and ``--input-csv FILE``."""
+    from hybrid.simulation.inputs import ExpressionInput, read_series
+
+    declared = list(model.inputs) if isinstance(model, Automaton) else []
+    given: dict[str, Callable[[float], float]] = {}
+    origin: dict[str, str] = {}
+
+    def add(name: str, fn: Callable[[float], float], where: str) -> None:
+        if name not in declared:
+            names = ", ".join(declared) or "none"
+            raise UsageError(
+                f"{where}: '{name}' is not a free input of {model.name} (inputs: {names})"
+                f"{did_you_mean(name, declared)}"
+            )
+        if name in given:
+            raise UsageError(f"input '{name}' is given twice ({origin[name]} and {where})")
+        given[name] = fn
+        origin[name] = where
+
+    for name, source in args.input:
+        add(name, ExpressionInput(name, source), f"--input {name}")
+    for file in args.input_csv:
+        for name, series in read_series(file).items():
+            series.check_covers(0.0, args.t_end)
+            add(name, series, file)
+    missing = [name for name in declared if name not in given]
+    if missing:
+        raise UsageError(
+            f"input '{missing[0]}' needs a value: give --input {missing[0]}=EXPR (an expression "
+            f"of t) or --input-csv FILE (columns t,{missing[0]})"
+        )
+    return given
+
+
+def _write_outputs(
+    run: Run, args: argparse.Namespace, written: list[str], line: TerminalLine | None
+) -> None:
     from hybrid.export.trajectory import write_csv, write_events, write_npz
 
     if args.out is not None:
         if Path(args.out).suffix.lower() == ".npz":
-            write_npz(run, args.out)
+            write_npz(run, args.out, progress=line)
         else:
-            write_csv(run, args.out)
+            write_csv(run, args.out, progress=line)
+        written.append(args.out)
     if args.events is not None:
-        write_events(run, args.events)
+        write_events(run, args.events, progress=line)
+        written.append(args.events)
     if args.plot is not None:
         from hybrid.export.plot import plot_run
 
         plot_run(run, args.plot)
+        written.append(args.plot)

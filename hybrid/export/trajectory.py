@@ -2,12 +2,15 @@
 
 CSV columns are ``t,j,location,<state...>,<signals...>``; a jump gives two
 rows with the same ``t`` (pre-jump with ``j``, post-jump with ``j + 1``).
-Numbers are written with 17 significant digits, so they read back exactly.
+Numbers are written as Python's shortest exact representation (at most 17
+significant digits), so they read back exactly.
+
+Every writer takes ``progress``, a :mod:`hybrid.progress` reporter that sees
+the rows written of the rows to write: a large CSV takes seconds.
 """
 
 from __future__ import annotations
 
-import io
 import json
 import math
 from pathlib import Path
@@ -16,37 +19,48 @@ from typing import Any
 import numpy as np
 
 from hybrid.export.atomic import atomic_write
+from hybrid.progress import Reporter, Tracker
 from hybrid.simulation.result import Run
 
 __all__ = ["events_document", "write_csv", "write_events", "write_npz"]
 
 
-def _number(value: float) -> str:
-    return (
-        repr(float(value))
-        if math.isfinite(value)
-        else ("nan" if math.isnan(value) else ("inf" if value > 0 else "-inf"))
-    )
+CHUNK_ROWS = 20_000
+"""Rows formatted and written at a time (and between two progress reports)."""
 
 
-def write_csv(run: Run, path: str | Path) -> None:
-    """Write the trajectory as CSV (atomically)."""
-    buffer = io.StringIO()
-    buffer.write(",".join(["t", "j", "location", *run.state_names, *run.signal_names]) + "\n")
-    for i in range(len(run)):
-        values = [*run.states[i], *run.signals[i]]
-        row = [_number(run.t[i]), str(int(run.j[i])), _csv_text(str(run.location[i]))]
-        row.extend(_number(v) for v in values)
-        buffer.write(",".join(row) + "\n")
+def write_csv(run: Run, path: str | Path, progress: Reporter | None = None) -> None:
+    """Write the trajectory as CSV (atomically).
+
+    Columns are formatted whole with ``repr`` (``nan``, ``inf`` and ``-inf`` for
+    non-finite values), a chunk of rows at a time.
+    """
+    rows = len(run)
+    tracker = Tracker(f"writing {Path(path).name}", total=rows, unit="rows", report=progress)
+    header = ",".join(["t", "j", "location", *run.state_names, *run.signal_names]) + "\n"
+    quoted = {name: _csv_text(str(name)) for name in np.unique(run.location).tolist()}
     with atomic_write(path) as handle:
-        handle.write(buffer.getvalue().encode("utf-8"))
+        handle.write(header.encode("utf-8"))
+        for start in range(0, rows, CHUNK_ROWS):
+            stop = min(rows, start + CHUNK_ROWS)
+            columns = [
+                list(map(repr, run.t[start:stop].tolist())),
+                list(map(str, run.j[start:stop].tolist())),
+                [quoted[name] for name in run.location[start:stop].tolist()],
+            ]
+            columns.extend(list(map(repr, col)) for col in run.states[start:stop].T.tolist())
+            columns.extend(list(map(repr, col)) for col in run.signals[start:stop].T.tolist())
+            text = "\n".join(map(",".join, zip(*columns, strict=True))) + "\n"
+            handle.write(text.encode("utf-8"))
+            tracker.update(stop)
+    tracker.finish(rows)
 
 
 def _csv_text(text: str) -> str:
     return f'"{text}"' if any(c in text for c in ',"\n') else text
 
 
-def write_npz(run: Run, path: str | Path) -> None:
+def write_npz(run: Run, path: str | Path, progress: Reporter | None = None) -> None:
     """Write the trajectory as a NumPy ``.npz`` archive (atomically)."""
     arrays: dict[str, Any] = {
         "t": run.t,
@@ -57,8 +71,10 @@ def write_npz(run: Run, path: str | Path) -> None:
         "states": run.states,
         "signals": run.signals,
     }
+    tracker = Tracker(f"writing {Path(path).name}", total=len(run), unit="rows", report=progress)
     with atomic_write(path) as handle:
         np.savez(handle, **arrays)
+    tracker.finish(len(run))
 
 
 def events_document(run: Run) -> dict[str, Any]:
@@ -71,11 +87,15 @@ def events_document(run: Run) -> dict[str, Any]:
     }
 
 
-def write_events(run: Run, path: str | Path) -> None:
+def write_events(run: Run, path: str | Path, progress: Reporter | None = None) -> None:
     """Write the events JSON (atomically); non-finite numbers become null."""
+    tracker = Tracker(
+        f"writing {Path(path).name}", total=len(run.jumps), unit="jumps", report=progress
+    )
     text = json.dumps(_finite(events_document(run)), indent=2) + "\n"
     with atomic_write(path) as handle:
         handle.write(text.encode("utf-8"))
+    tracker.finish(len(run.jumps))
 
 
 def _finite(value: Any) -> Any:

@@ -9,6 +9,16 @@ comparison (``<=``, ``>=``, ``==``) holds on its boundary, a strict one
 (``<``, ``>``, ``!=``) does not. The simulator uses rho for root finding and
 the boolean form to decide a guard that sits exactly on its boundary.
 
+**Levels.** An equality in a guard (``a == b``, or ``a >= b and a <= b``, or
+``b <= a <= b``) holds only at isolated instants, so its rho ``|a - b|``
+never changes sign and a root finder cannot see it. :func:`levels` lists such
+equality atoms (their differences ``a - b``, in a fixed order);
+:func:`oriented_rho` writes the guard with atom ``i`` as the one-sided
+``sign_i * (a - b) <= 0``, which becomes true when the level is reached from
+the side ``sign_i``; :func:`snapped` replaces atom ``i`` by a constant (true
+when the point is at the level). The simulator watches the oriented form and
+decides the snapped one (docs/semantics.md, "Equality guards").
+
 Examples
 --------
 >>> from hybrid.expr.parse import Scope, parse_expression
@@ -16,13 +26,20 @@ Examples
 >>> g = parse_expression("h <= 0 and v < 0", Scope({"h": "state", "v": "state"}), want="bool")
 >>> to_source(guard_to_rho(g), {"h": "h", "v": "v"})
 '_max(h, v)'
+>>> e = parse_expression("x >= 1 and x <= 1 and v > 0", Scope({"x": "state", "v": "state"}), want="bool")
+>>> [to_source(d, {"x": "x"}) for d in levels(e)]
+['1.0 - x']
+>>> to_source(oriented_rho(e, (-1,)), {"x": "x", "v": "v"})
+'_max(x - 1.0, -v)'
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
+
 from hybrid.expr import ir
 
-__all__ = ["guard_to_rho", "is_strict"]
+__all__ = ["guard_to_rho", "is_strict", "levels", "oriented_rho", "snapped", "structural_key"]
 
 
 def guard_to_rho(node: ir.Expr) -> ir.Expr:
@@ -71,3 +88,160 @@ def _negate(node: ir.Expr) -> ir.Expr:
     if isinstance(node, ir.Num):
         return ir.Num(-node.value, node.col)
     return ir.Unary("-", node, node.col)
+
+
+# --- equality levels -------------------------------------------------------------------
+
+
+def structural_key(node: ir.Expr) -> tuple[object, ...]:
+    """A key equal for two expressions exactly when they are the same tree (columns ignored)."""
+    if isinstance(node, ir.Num | ir.BoolConst):
+        return (type(node).__name__, node.value)
+    if isinstance(node, ir.Var):
+        return ("Var", node.name, node.kind)
+    if isinstance(node, ir.Index):
+        return ("Index", node.name, node.index)
+    if isinstance(node, ir.Call):
+        return ("Call", node.func, *map(structural_key, node.args))
+    if isinstance(node, ir.Unary):
+        return ("Unary", node.op, structural_key(node.operand))
+    if isinstance(node, ir.Bin):
+        return ("Bin", node.op, structural_key(node.left), structural_key(node.right))
+    if isinstance(node, ir.Cmp):
+        return ("Cmp", node.ops, *map(structural_key, node.operands))
+    if isinstance(node, ir.BoolOp):
+        return ("BoolOp", node.op, *map(structural_key, node.values))
+    return ("Not", structural_key(node.operand))
+
+
+Replacement = Callable[[int, ir.Expr, int], ir.Expr]
+"""``(index, difference, column) -> boolean node`` that stands for level atom ``index``."""
+
+
+def levels(node: ir.Expr) -> tuple[ir.Expr, ...]:
+    """The differences ``a - b`` of the equality atoms of a guard, in a fixed order.
+
+    Only atoms that must hold for the guard to hold count (an ``==`` under an even
+    number of ``not``, a ``!=`` under an odd number); ``a >= b and a <= b`` (in
+    either spelling, or as the chain ``b <= a <= b``) is one atom.
+    """
+    found: list[ir.Expr] = []
+
+    def record(index: int, difference: ir.Expr, col: int) -> ir.Expr:
+        found.append(difference)
+        return ir.BoolConst(True, col)
+
+    _rewrite(node, record, True, [0])
+    return tuple(found)
+
+
+def oriented_rho(node: ir.Expr, signs: Sequence[int]) -> ir.Expr:
+    """Rho of the guard with level atom ``i`` read as ``signs[i] * (a - b) <= 0``."""
+
+    def one_sided(index: int, difference: ir.Expr, col: int) -> ir.Expr:
+        side = difference if signs[index] > 0 else _opposite(difference)
+        return ir.Cmp(("<=",), (side, ir.Num(0.0, col)), col)
+
+    return guard_to_rho(_rewrite(node, one_sided, True, [0]))
+
+
+def snapped(node: ir.Expr, at_level: Sequence[bool]) -> ir.Expr:
+    """The guard with level atom ``i`` replaced by the constant ``at_level[i]``."""
+
+    def constant(index: int, difference: ir.Expr, col: int) -> ir.Expr:
+        return ir.BoolConst(bool(at_level[index]), col)
+
+    return _rewrite(node, constant, True, [0])
+
+
+def _opposite(difference: ir.Expr) -> ir.Expr:
+    """``b - a`` for ``a - b``."""
+    if isinstance(difference, ir.Bin) and difference.op == "-":
+        return ir.Bin("-", difference.right, difference.left, difference.col)
+    return _negate(difference)
+
+
+def _rewrite(
+    node: ir.Expr | _Level, replace: Replacement, positive: bool, counter: list[int]
+) -> ir.Expr:
+    """``node`` with every level atom replaced (``counter`` numbers them in walk order)."""
+    if isinstance(node, ir.Not):
+        return ir.Not(_rewrite(node.operand, replace, not positive, counter), node.col)
+    if isinstance(node, ir.BoolOp):
+        values: list[ir.Expr | _Level] = list(node.values)
+        if positive and node.op == "and":
+            values = _fuse(node.values, node.col)
+        rewritten = tuple(_rewrite(v, replace, positive, counter) for v in values)
+        return rewritten[0] if len(rewritten) == 1 else ir.BoolOp(node.op, rewritten, node.col)
+    if isinstance(node, _Level):
+        return _atom(node.difference, replace, positive, counter, node.col)
+    if isinstance(node, ir.Cmp):
+        if len(node.ops) > 1:
+            links: list[ir.Expr] = [
+                ir.Cmp((op,), (node.operands[i], node.operands[i + 1]), node.col)
+                for i, op in enumerate(node.ops)
+            ]
+            fused: list[ir.Expr | _Level] = _fuse(links, node.col) if positive else [*links]
+            if any(isinstance(v, _Level) for v in fused) or any(
+                op in ("==", "!=") for op in node.ops
+            ):
+                parts = tuple(_rewrite(v, replace, positive, counter) for v in fused)
+                return parts[0] if len(parts) == 1 else ir.BoolOp("and", parts, node.col)
+            return node
+        op = node.ops[0]
+        if (op == "==" and positive) or (op == "!=" and not positive):
+            a, b = node.operands
+            return _atom(_sub(a, b, node.col), replace, positive, counter, node.col)
+    return node
+
+
+def _atom(
+    difference: ir.Expr, replace: Replacement, positive: bool, counter: list[int], col: int
+) -> ir.Expr:
+    index = counter[0]
+    counter[0] += 1
+    stand_in = replace(index, difference, col)
+    return stand_in if positive else ir.Not(stand_in, col)
+
+
+class _Level:
+    """Two comparisons ``a <= b`` and ``a >= b`` of one ``and``, fused into one level atom."""
+
+    __slots__ = ("col", "difference")
+
+    def __init__(self, difference: ir.Expr, col: int) -> None:
+        self.difference = difference
+        self.col = col
+
+
+def _bounds(node: ir.Expr) -> tuple[ir.Expr, ir.Expr] | None:
+    """``(low, high)`` for a non-strict single comparison ``low <= high``, else None."""
+    if isinstance(node, ir.Cmp) and len(node.ops) == 1 and node.ops[0] in ("<=", ">="):
+        a, b = node.operands
+        return (a, b) if node.ops[0] == "<=" else (b, a)
+    return None
+
+
+def _fuse(values: Sequence[ir.Expr], col: int) -> list[ir.Expr | _Level]:
+    """``values`` of an ``and`` with each pair ``a <= b``, ``b <= a`` fused into a :class:`_Level`."""
+    bounds = [_bounds(v) for v in values]
+    keys = [None if b is None else (structural_key(b[0]), structural_key(b[1])) for b in bounds]
+    result: list[ir.Expr | _Level] = []
+    used: set[int] = set()
+    for i, v in enumerate(values):
+        pair, key = bounds[i], keys[i]
+        if i in used:
+            continue
+        if pair is None or key is None:
+            result.append(v)
+            continue
+        flipped = (key[1], key[0])
+        partner = next(
+            (j for j in range(i + 1, len(values)) if j not in used and keys[j] == flipped), None
+        )
+        if partner is None:
+            result.append(v)
+            continue
+        used.add(partner)
+        result.append(_Level(_sub(pair[0], pair[1], col), col))
+    return result

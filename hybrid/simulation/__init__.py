@@ -3,11 +3,15 @@
 Modules: :mod:`~hybrid.simulation.settings` (what a run is asked to do),
 :mod:`~hybrid.simulation.compiled` (the model's functions per mode),
 :mod:`~hybrid.simulation.boundary` (decisions at a point),
-:mod:`~hybrid.simulation.events` (the watch event, Ctrl-C),
+:mod:`~hybrid.simulation.events` (the watch of a stay and its arming),
+:mod:`~hybrid.simulation.dense` (step interpolants),
+:mod:`~hybrid.simulation.crossing` (the search of a step for the first event),
+:mod:`~hybrid.simulation.stay` (one stay, step by step),
 :mod:`~hybrid.simulation.loop` (the event loop), :mod:`~hybrid.simulation.recorder`
 and :mod:`~hybrid.simulation.result` (what a run returns),
 :mod:`~hybrid.simulation.zeno`, :mod:`~hybrid.simulation.failures` (messages),
-:mod:`~hybrid.simulation.engine` (``simulate``).
+:mod:`~hybrid.simulation.interrupts` (Ctrl-C), :mod:`~hybrid.simulation.inputs`
+(inputs from text), :mod:`~hybrid.simulation.engine` (``simulate``).
 """
 
 from typing import TYPE_CHECKING

@@ -9,6 +9,12 @@ until it has been strictly false (docs/semantics.md); flat means its boolean
 form decides. Among enabled transitions the highest priority fires, ties by
 file order.
 
+At a point where the search stopped (:func:`enabled_at_event`), an armed
+guard's equality atoms are *snapped*: an atom whose two sides differ by at most
+the band is true there (the level has been reached), any other false; the rest
+of the guard is decided as above. At the start of a stay they are not: a state
+that starts on a level and leaves it has not reached it.
+
 Examples
 --------
 >>> import hybrid, numpy as np
@@ -29,13 +35,16 @@ from typing import Any
 
 import numpy as np
 
-from hybrid.simulation.compiled import CompiledCondition, CompiledMode, CompiledTransition
+from hybrid.simulation.compiled import CompiledMode, CompiledTransition
+
+Fn = Callable[[float, Any], Any]
 
 __all__ = [
     "band",
     "choose",
     "chosen_by",
     "enabled_at_entry",
+    "enabled_at_event",
     "holds_now",
     "invariant_left_at",
     "slope",
@@ -55,27 +64,28 @@ def slope(fn: Callable[[float, Any], float], mode: CompiledMode, t: float, x: np
 
 
 def holds_now(
-    cond: CompiledCondition,
+    rho: Fn,
+    holds: Fn,
     mode: CompiledMode,
     t: float,
     x: np.ndarray,
     armed: bool,
     width: float,
 ) -> tuple[bool, bool]:
-    """``(enabled now, armed)`` for a guard at a point where no event says so."""
-    value = cond.rho(t, x)
+    """``(enabled now, armed)`` for a guard given by its ``rho`` and boolean ``holds``."""
+    value = rho(t, x)
     if value < -width:
         return True, True
     if value > width:
         return False, True
     if not armed:
         return False, False
-    rate = slope(cond.rho, mode, t, x)
+    rate = slope(rho, mode, t, x)
     if rate < -width:
         return True, True
     if rate > width:
         return False, False  # on the boundary, moving away: disarm until strictly false
-    return bool(cond.holds(t, x)), False
+    return bool(holds(t, x)), False
 
 
 def enabled_at_entry(
@@ -86,11 +96,35 @@ def enabled_at_entry(
     armed: list[bool] = []
     width = band(x)
     for tr in mode.transitions:
-        now, is_armed = holds_now(tr, mode, t, x, True, width)
+        now, is_armed = holds_now(tr.rho, tr.holds, mode, t, x, True, width)
         armed.append(is_armed)
         if now:
             enabled.append(tr)
     return choose(enabled), enabled, armed
+
+
+def enabled_at_event(
+    mode: CompiledMode, t: float, x: np.ndarray, armed: Callable[[int], bool]
+) -> list[CompiledTransition]:
+    """The transitions enabled at a point where the search stopped (``armed(i)``: in the watch).
+
+    A crossing the search found still has to pass the boundary rule: rho may
+    reach 0 and stay there while a strict guard never holds. A disarmed guard
+    counts only if it is at or below its boundary there.
+    """
+    width = band(x)
+    enabled: list[CompiledTransition] = []
+    for i, tr in enumerate(mode.transitions):
+        if armed(i):
+            at_level = tuple(abs(d(t, x)) <= width for d in tr.levels)
+            rho, holds = tr.snapped(at_level)
+        elif tr.rho(t, x) <= width:
+            rho, holds = tr.rho, tr.holds
+        else:
+            continue
+        if holds_now(rho, holds, mode, t, x, True, width)[0]:
+            enabled.append(tr)
+    return enabled
 
 
 def invariant_left_at(mode: CompiledMode, t: float, x: np.ndarray) -> str | None:

@@ -5,6 +5,10 @@ the right-hand side ``rhs(t, x) -> list`` (signals computed in dependency
 order, then the derivative of every state variable), the output function
 giving every signal column, and per transition and invariant a ``rho``
 function (``<= 0`` iff it holds), a boolean ``holds`` function and a reset.
+A guard with equality atoms (docs/semantics.md, "Equality guards") also gets
+the difference ``a - b`` of each atom (``levels``) and, compiled on first use,
+its *oriented* rho (the atoms read one-sided) and its *snapped* forms (the
+atoms replaced by constants).
 
 Evaluation errors (a math domain error, an overflow, a division by zero) never
 raise: the compiled function records them and returns NaN. The right-hand side
@@ -30,14 +34,14 @@ True
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
-from hybrid.expr.rho import guard_to_rho
+from hybrid.expr.rho import guard_to_rho, levels, oriented_rho, snapped
 from hybrid.model import Automaton
 from hybrid.modes import Mode, ModeView, TransitionView, mode_of
 
@@ -64,8 +68,42 @@ class CompiledCondition:
 
 @dataclass
 class CompiledTransition(CompiledCondition):
+    """A transition; a guard with equality atoms has ``levels`` and compiles variants on demand."""
+
     view: TransitionView
     reset: Fn
+    levels: tuple[Fn, ...] = ()
+    variant: Callable[[str, ir.Expr, str], Fn] | None = None
+    _oriented: dict[tuple[int, ...], Fn] = field(default_factory=dict)
+    _snapped: dict[tuple[bool, ...], tuple[Fn, Fn]] = field(default_factory=dict)
+
+    def oriented(self, signs: tuple[int, ...]) -> Fn:
+        """Rho with level atom ``i`` read as ``signs[i] * (a - b) <= 0`` (the plain rho without levels)."""
+        if not self.levels:
+            return self.rho
+        fn = self._oriented.get(signs)
+        if fn is None:
+            assert self.variant is not None
+            tag = "".join("p" if s > 0 else "n" for s in signs)
+            fn = self.variant(tag, oriented_rho(self.view.guard, signs), "rho")
+            self._oriented[signs] = fn
+        return fn
+
+    def snapped(self, at_level: tuple[bool, ...]) -> tuple[Fn, Fn]:
+        """``(rho, holds)`` of the guard with level atom ``i`` replaced by ``at_level[i]``."""
+        if not self.levels:
+            return self.rho, self.holds
+        pair = self._snapped.get(at_level)
+        if pair is None:
+            assert self.variant is not None
+            tag = "".join("y" if a else "n" for a in at_level)
+            guard = snapped(self.view.guard, at_level)
+            pair = (
+                self.variant(tag, guard_to_rho(guard), "rho"),
+                self.variant(tag, guard, "holds"),
+            )
+            self._snapped[at_level] = pair
+        return pair
 
 
 @dataclass
@@ -197,6 +235,14 @@ class CompiledModel:
         for i, tr in enumerate(view.transitions):
             what = f"the guard of {tr.name}"
             reset_of = [tr.reset.get(s) for s in self.state_names]
+            differences = levels(tr.guard)
+
+            def variant(suffix: str, expr: ir.Expr, role: str, i: int = i, what: str = what) -> Fn:
+                kind = "g" if role == "rho" else "gb"
+                return self._function(
+                    f"{kind}_{tag}_{i}_{suffix}", what, [expr], ctx, shape="scalar"
+                )
+
             transitions.append(
                 CompiledTransition(
                     name=tr.name,
@@ -212,6 +258,11 @@ class CompiledModel:
                         ctx,
                         reset_of=reset_of,
                     ),
+                    levels=tuple(
+                        self._function(f"lvl_{tag}_{i}_{k}", what, [d], ctx, shape="scalar")
+                        for k, d in enumerate(differences)
+                    ),
+                    variant=variant if differences else None,
                 )
             )
         return CompiledMode(view.key, view.name, rhs, outputs, invariants, transitions)

@@ -1,9 +1,12 @@
 """``simulate``: the public entry to the simulator.
 
-It validates the settings (:class:`~hybrid.simulation.settings.Settings`),
-applies the caller's overrides to the model, compiles it (once per model and
-thread, :class:`~hybrid.simulation.compiled.CompiledModel`) and runs the
-:class:`~hybrid.simulation.loop.EventLoop` with Ctrl-C turned into a clean end.
+It validates the settings (:class:`~hybrid.simulation.settings.Settings`) and
+the overrides (finite numbers, callable inputs), applies the overrides to the
+model, compiles it (once per model and thread,
+:class:`~hybrid.simulation.compiled.CompiledModel`) and runs the
+:class:`~hybrid.simulation.loop.EventLoop` with Ctrl-C turned into a clean end
+(:mod:`~hybrid.simulation.interrupts`) and progress reported through
+:mod:`hybrid.progress`.
 """
 
 from __future__ import annotations
@@ -17,11 +20,12 @@ import numpy as np
 from hybrid.compose import System
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
+from hybrid.progress import Reporter, Tracker
 from hybrid.simulation.compiled import CompiledModel
-from hybrid.simulation.events import sigint_watch
+from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.loop import EventLoop
 from hybrid.simulation.result import Run
-from hybrid.simulation.settings import MAX_JUMPS_PER_INSTANT, Settings
+from hybrid.simulation.settings import MAX_JUMPS_PER_INSTANT, Settings, finite_number
 
 __all__ = ["simulate"]
 
@@ -45,6 +49,7 @@ def simulate(
     max_jumps_per_instant: int = MAX_JUMPS_PER_INSTANT,
     handle_sigint: bool = True,
     dense: bool = False,
+    progress: Reporter | None = None,
 ) -> Run:
     """Simulate ``model`` from ``t_start`` to ``t_end``.
 
@@ -60,13 +65,16 @@ def simulate(
         Passed to :func:`scipy.integrate.solve_ivp`. Lower ``max_step`` so that
         a guard that is true only briefly is not stepped over.
     parameters : mapping, optional
-        Parameter overrides (``comp.name`` in a system).
+        Parameter overrides (``comp.name`` in a system), finite numbers.
     initial : mapping, optional
-        Initial values of some state variables.
+        Initial values of some state variables, finite numbers.
     initial_location : str, optional
         Start location of an automaton.
     inputs : mapping, optional
-        External inputs of an automaton: name to a function of ``t``.
+        External inputs of an automaton: name to a function of ``t`` returning a
+        number (see :mod:`hybrid.simulation.inputs` for expressions and time series).
+    t_start : float
+        Start time.
     dt : float, optional
         Store points on a uniform grid (jump points are always stored).
     zeno : bool
@@ -77,6 +85,10 @@ def simulate(
         Turn Ctrl-C into a clean end (cause ``interrupted``), keeping the output.
     dense : bool
         Keep each segment's interpolant in ``run.segments`` (smooth plots).
+    progress : callable, optional
+        Called with a :class:`hybrid.progress.Status` (simulated time of
+        ``t_end``, ``jumps`` and ``points`` so far, rate, time left) at most
+        five times a second while the run goes on, and once when it ends.
 
     Returns
     -------
@@ -104,6 +116,9 @@ def simulate(
         zeno=zeno,
         max_jumps_per_instant=max_jumps_per_instant,
     )
+    parameters = _numbers("parameter", parameters)
+    initial = _numbers("initial value of", initial)
+    _check_inputs(inputs)
     model = model.with_parameters(parameters) if parameters else model
     if isinstance(model, Automaton) and (initial or initial_location):
         model = model.with_initial(initial_location, initial)
@@ -111,10 +126,52 @@ def simulate(
         raise UsageError("initial_location applies to an automaton; set it per component")
     compiled = _compiled(model, inputs)
     x0 = np.array(_initial_vector(model, compiled, initial), dtype=float)
-    with sigint_watch(handle_sigint) as interrupted:
-        loop = EventLoop(compiled, settings, interrupted)
-        termination = loop.run(t_start, x0)
-    return loop.recorder.run(model.name, termination)
+    tracker = None
+    if progress is not None:
+        tracker = Tracker("simulate", total=t_end, unit="s", start=t_start, report=progress)
+    # a solution that blows up overflows inside the solver's linear algebra; the run
+    # sees the non-finite state and ends with a message, so numpy's warnings are noise
+    with sigint_watch(handle_sigint) as interrupts, np.errstate(all="ignore"):
+        loop = EventLoop(compiled, settings, interrupts, _updater(tracker))
+        termination = loop.run(settings.t_start, x0)
+    run = loop.recorder.run(model.name, termination)
+    if tracker is not None:
+        tracker.finish(termination.t, jumps=len(run.jumps), points=len(run))
+    return run
+
+
+def _updater(tracker: Tracker | None) -> Callable[[float, int, int], None] | None:
+    if tracker is None:
+        return None
+    update = tracker.update
+
+    def progress(t: float, jumps: int, points: int) -> None:
+        update(t, jumps=jumps, points=points)
+
+    return progress
+
+
+def _numbers(what: str, values: Mapping[str, float] | None) -> dict[str, float] | None:
+    """``values`` with each checked to be a finite number (a :class:`UsageError` if not)."""
+    if not values:
+        return None
+    if not isinstance(values, Mapping):
+        raise UsageError(f"{what} overrides must be a mapping of names to numbers, got {values!r}")
+    return {str(k): finite_number(f"{what} '{k}'", v) for k, v in values.items()}
+
+
+def _check_inputs(inputs: Mapping[str, Callable[[float], float]] | None) -> None:
+    if inputs is None:
+        return
+    if not isinstance(inputs, Mapping):
+        raise UsageError(
+            f"inputs must be a mapping of input names to functions of t, got {inputs!r}"
+        )
+    for name, fn in inputs.items():
+        if not callable(fn):
+            raise UsageError(
+                f"input '{name}' must be a function of t (e.g. lambda t: 0.5), got {fn!r}"
+            )
 
 
 _CACHE = threading.local()

@@ -1,145 +1,156 @@
-"""The event machinery of a stay in a mode: the watch, Ctrl-C, and its handler.
+"""The watch of a stay in a mode: one value for every armed guard and invariant.
 
-solve_ivp gets one terminal event per stay, the *watch* built by
-:func:`watch_factory`; Ctrl-C reaches it through the flag that
-:func:`sigint_watch` sets and :class:`Interrupt` turns into a sign change.
+During a stay the simulator watches one function of ``(t, x)``, the *watch*:
+the smallest of every armed guard's rho (the guard starts to hold when it falls
+to 0) and every armed invariant's ``-rho`` (the invariant stops holding when it
+falls to 0). Its first zero is the first event of the stay, whichever guard or
+invariant causes it, so one search per step finds it
+(:mod:`~hybrid.simulation.crossing`).
+
+**Arming** (docs/semantics.md, "Re-arming"). A guard or invariant on its
+boundary at the start of a stay and moving away is *disarmed*: it is left out
+of the watch until it is strictly on its safe side (its value beyond the band
+of :func:`~hybrid.simulation.boundary.band`) at a point the search looks at.
+
+**Orientation** (docs/semantics.md, "Equality guards"). A guard with equality
+atoms is watched in its oriented form: atom ``a == b`` reads
+``s * (a - b) <= 0`` with ``s`` the sign of ``a - b`` when the guard is armed,
+so the term falls through 0 when the level is reached. While some ``a - b`` is
+exactly 0 the guard stays disarmed.
+
+The watch function is generated from a template (:func:`watch_factory`) per
+pattern of signs, cached by the caller, and never contains user text.
+
+Examples
+--------
+>>> import hybrid, numpy as np
+>>> from hybrid.simulation.compiled import CompiledModel
+>>> compiled = CompiledModel(hybrid.load("specs/bouncing_ball.yaml"))
+>>> mode = compiled.mode(compiled.initial_key)
+>>> watch = Watch(mode, [True], 0.0, np.array([10.0, 0.0]), 1e-9, {})
+>>> float(watch.value(0.0, np.array([10.0, 0.0])))   # min(max(h, v), h): 10 m above the floor
+10.0
+>>> watch.pending
+False
 """
 
 from __future__ import annotations
 
-import signal
-import threading
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+import math
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from hybrid.expr.generated import define
+from hybrid.simulation.compiled import CompiledMode, CompiledTransition
 
-__all__ = ["STALL_CALLS", "Interrupt", "sigint_watch", "watch_factory"]
+__all__ = ["Watch", "orientation", "watch_factory"]
 
-STALL_CALLS = 50
-"""Calls at one step-end time after which the solver counts as stalled."""
-
-
-@contextmanager
-def sigint_watch(enabled: bool) -> Iterator[list[bool]]:
-    """Turn the first Ctrl-C into a flag the loop sees at its next step."""
-    flag = [False]
-    if not enabled or threading.current_thread() is not threading.main_thread():
-        yield flag
-        return
-    previous = signal.getsignal(signal.SIGINT)
-
-    def handler(signum: int, frame: Any) -> None:
-        if flag[0]:
-            raise KeyboardInterrupt
-        flag[0] = True
-
-    signal.signal(signal.SIGINT, handler)
-    try:
-        yield flag
-    finally:
-        signal.signal(signal.SIGINT, previous)
+Fn = Callable[[float, Any], Any]
+Factory = Callable[[Sequence[Fn]], Fn]
 
 
-def watch_factory(signs: tuple[float, ...], armed: tuple[bool, ...]) -> Callable[..., Any]:
-    """Source-built factory of the one terminal event of a stay in a mode.
+def watch_factory(signs: tuple[float, ...]) -> Factory:
+    """Source-built ``make(fns)`` giving ``watch(t, x) = min_i signs[i] * fns[i](t, x)``.
 
-    The event's value is the smallest of: each guard's rho (the guard starts to
-    hold when it falls to 0) and each invariant's -rho (the invariant stops
-    holding when it falls to 0); so solve_ivp locates one root per crossing, the
-    earliest, as a hand-written loop with one event would. A term that cannot be
-    evaluated (NaN) is left out; the failure is recorded where it happened.
-
-    solve_ivp calls the event at each step end, always at a later time than
-    before, and then, to locate a crossing, at times between the last two step
-    ends on the step's interpolant. Two rules keep that root finding sound:
-
-    - **Disarmed terms** (a guard or invariant on its boundary at entry) are left
-      out until they have been strictly on their safe side *at a step end*; so the
-      function root finding sees is the one whose sign change was detected.
-    - **The bracket is exact**: the values returned at the last two step ends are
-      remembered and returned again when root finding asks for those very times,
-      even where the interpolant does not reproduce the step-end state to the last
-      bit (LSODA's does not), so brentq never sees two ends of the same sign.
-
-    - **A stalled solver is stopped**: more than :data:`STALL_CALLS` calls at the
-      same step-end time mean the solver no longer advances (LSODA can loop on
-      ever smaller steps near a finite-time blow-up, where RK45 gives up); the
-      watch then sets ``_stalled`` and returns exactly 0, which ends the
-      integration there (brentq accepts a zero-length bracket whose value is 0).
-
-    Ctrl-C is read from a flag; once set, the interrupt watch takes over. The
-    source comes from this template and the arming pattern only (no user text);
-    factories are cached per mode and pattern by the caller.
+    A term that cannot be evaluated (NaN) is left out (the failure is recorded
+    where it happened and ends the run); with no finite term the watch is
+    ``inf``.
     """
-    lines = [
-        "def make(_fns, _flag, _interrupt, _armed, _stalled):",
-        *(f"    _f{i} = _fns[{i}]" for i in range(len(signs))),
-        "    _m = [None, 0.0, -1.0e308, 0.0, 0]  # last two step ends (t, value); repeats",
-        "    def watch(t, x):",
-        "        if _flag[0]:",
-        "            return _interrupt(t, x)",
-        "        if t == _m[2]:",
-        "            _m[4] += 1",
-        f"            if _m[4] > {STALL_CALLS}:",
-        "                _stalled[0] = True",
-        "                return 0.0",
-        "            return _m[3]",
-        "        if t == _m[0]:",
-        "            return _m[1]",
-        "        step_end = t > _m[2]",
-        "        v = 1.0e308",
-    ]
-    for i, (sign, is_armed) in enumerate(zip(signs, armed, strict=True)):
-        term = f"{'-' if sign < 0 else ''}_f{i}(t, x)"
-        lines.append(f"        w = {term}")
-        if not is_armed:
-            lines += [
-                f"        if not _armed[{i}]:",
-                "            if step_end and w > 0.0:",
-                f"                _armed[{i}] = True",
-                "            else:",
-                "                w = 1.0e308",
-            ]
-        lines += ["        if w < v:", "            v = w"]
-    lines += [
-        "        if v >= 1.0e308:",
-        "            v = 1.0",
-        "        if step_end:",
-        "            _m[0] = _m[2]",
-        "            _m[1] = _m[3]",
-        "            _m[2] = t",
-        "            _m[3] = v",
-        "            _m[4] = 0",
-        "        return v",
-        "    watch.terminal = True",
-        "    watch.direction = -1.0",
-        "    return watch",
-    ]
-    return define("make", "\n".join(lines) + "\n", {})
+    lines = ["def make(_fns):"]
+    lines += [f"    _f{i} = _fns[{i}]" for i in range(len(signs))]
+    lines += ["    def watch(t, x):", "        v = _inf"]
+    for i, sign in enumerate(signs):
+        lines += [
+            f"        w = {'-' if sign < 0 else ''}_f{i}(t, x)",
+            "        if w < v:",
+            "            v = w",
+        ]
+    lines += ["        return v", "    return watch"]
+    factory: Factory = define("make", "\n".join(lines) + "\n", {"_inf": math.inf})
+    return factory
 
 
-class Interrupt:
-    """A terminal event that turns Ctrl-C into a step function of ``t``.
+def orientation(tr: CompiledTransition, t: float, x: Any) -> tuple[int, ...] | None:
+    """The side of each level of ``tr`` at ``(t, x)``; None while one is exactly at its level."""
+    signs = []
+    for difference in tr.levels:
+        value = difference(t, x)
+        if value > 0.0:
+            signs.append(1)
+        elif value < 0.0:
+            signs.append(-1)
+        else:
+            return None
+    return tuple(signs)
 
-    The flag is noticed at the end of a step, at time ``at``; from then on the
-    event reads +1 before ``at`` and -1 from it, so solve_ivp's root finding
-    between the step's ends sees a sign change (a bare flag would read -1 at
-    both ends and make ``brentq`` fail). At the start of a segment it reads +1.
+
+class Watch:
+    """The armed terms of one stay and their watch function (``value``; None if none is armed).
+
+    ``pending`` says whether some term is still disarmed (then :meth:`arm` is
+    called at every point the search looks at); ``generation`` changes each time
+    the watch function does.
     """
 
-    terminal = True
-    direction = 0.0
+    __slots__ = ("factories", "generation", "inv_armed", "mode", "pending", "signs", "value")
 
-    def __init__(self, flag: list[bool], t0: float) -> None:
-        self.flag = flag
-        self.t0 = t0
-        self.at: float | None = None
+    def __init__(
+        self,
+        mode: CompiledMode,
+        guards_armed: Sequence[bool],
+        t: float,
+        x: Any,
+        width: float,
+        factories: dict[tuple[float, ...], Factory],
+    ) -> None:
+        self.mode = mode
+        self.factories = factories
+        self.signs: list[tuple[int, ...] | None] = [
+            orientation(tr, t, x) if armed else None
+            for tr, armed in zip(mode.transitions, guards_armed, strict=True)
+        ]
+        self.inv_armed = [inv.rho(t, x) < -width for inv in mode.invariants]
+        self.generation = 0
+        self.value: Fn | None = None
+        self.pending = False
+        self._build()
 
-    def __call__(self, t: float, x: Any) -> float:
-        if self.at is None:
-            if not self.flag[0] or t <= self.t0:
-                return 1.0
-            self.at = t
-        return 1.0 if t < self.at else -1.0
+    def armed(self, index: int) -> bool:
+        """Whether transition ``index`` takes part in the watch."""
+        return self.signs[index] is not None
+
+    def _build(self) -> None:
+        fns: list[Fn] = []
+        signs: list[float] = []
+        for tr, side in zip(self.mode.transitions, self.signs, strict=True):
+            if side is not None:
+                fns.append(tr.oriented(side))
+                signs.append(1.0)
+        for inv, armed in zip(self.mode.invariants, self.inv_armed, strict=True):
+            if armed:
+                fns.append(inv.rho)
+                signs.append(-1.0)
+        key = tuple(signs)
+        factory = self.factories.get(key)
+        if factory is None and fns:
+            factory = self.factories[key] = watch_factory(key)
+        self.value = factory(fns) if factory is not None and fns else None
+        self.pending = None in self.signs or not all(self.inv_armed)
+        self.generation += 1
+
+    def arm(self, t: float, x: Any, width: float) -> bool:
+        """Arm each disarmed term that is beyond ``width`` on its safe side; True if one was."""
+        changed = False
+        for i, tr in enumerate(self.mode.transitions):
+            if self.signs[i] is None and tr.rho(t, x) > width:
+                side = orientation(tr, t, x)
+                if side is not None:
+                    self.signs[i] = side
+                    changed = True
+        for k, inv in enumerate(self.mode.invariants):
+            if not self.inv_armed[k] and -inv.rho(t, x) > width:
+                self.inv_armed[k] = True
+                changed = True
+        if changed:
+            self._build()
+        return changed

@@ -39,7 +39,8 @@ def describe_failure(compiled: CompiledModel, failure: EvalFailure) -> str:
     source = compiled.sources.get(failure.where)
     error = failure.error
     culprit = None
-    if source is not None and error is not None:
+    from_input = isinstance(error, ValueError) and str(error).startswith("input ")
+    if source is not None and error is not None and not from_input:
         point = _failure_point(error, compiled.state_names)
         if point is not None:
             culprit = _culprit(list(source.exprs), source.context, *point)

@@ -1,12 +1,14 @@
-"""The event loop: one ``solve_ivp`` call per stay in a mode, jumps in between.
+"""The event loop: stays in modes (:mod:`~hybrid.simulation.stay`), jumps in between.
 
 Semantics (docs/semantics.md): as-soon-as-possible firing; among transitions
 enabled at one instant the highest priority fires, ties by file order, and the
 choice is logged; after a jump the transitions are tested at the new point and
 one enabled there fires at once (same ``t``, next ``j``); a guard that sits on
-its boundary and moves away is disarmed until it has been strictly false, so
-it never fires spuriously; leaving an invariant with nothing enabled ends the
-run as ``blocked``. The decisions at a point are :mod:`~hybrid.simulation.boundary`'s.
+its boundary and moves away is disarmed until it is strictly false, so it
+never fires spuriously; leaving an invariant with nothing enabled ends the
+run as ``blocked``. The decisions at a point are
+:mod:`~hybrid.simulation.boundary`'s; where a stay ends is the search's
+(:mod:`~hybrid.simulation.crossing`).
 
 Evaluation errors (see :mod:`hybrid.simulation.compiled`) end the run as
 ``nonfinite`` when they happen at a point of the trajectory: a guard,
@@ -23,35 +25,53 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from hybrid.expr.codegen import EvalFailure
 from hybrid.simulation import boundary
 from hybrid.simulation.compiled import CompiledMode, CompiledModel, CompiledTransition
-from hybrid.simulation.events import Interrupt, watch_factory
+from hybrid.simulation.events import Watch
 from hybrid.simulation.failures import describe_failure
+from hybrid.simulation.interrupts import Interrupts
 from hybrid.simulation.recorder import Recorder
 from hybrid.simulation.result import Termination
 from hybrid.simulation.settings import Settings
+from hybrid.simulation.stay import StayIntegrator
 from hybrid.simulation.zeno import ZenoDetector
 
 __all__ = ["EventLoop"]
 
 Flowed = tuple[float, np.ndarray, CompiledTransition | None, list[CompiledTransition]]
+Progress = Callable[[float, int, int], None]
 
 
 class EventLoop:
-    """Runs one simulation of a compiled model; the recorder keeps what it computes."""
+    """Runs one simulation of a compiled model; the recorder keeps what it computes.
+
+    ``progress(t, jumps, points)`` is called after every accepted step (the caller
+    throttles it).
+    """
 
     def __init__(
-        self, compiled: CompiledModel, settings: Settings, interrupted: list[bool]
+        self,
+        compiled: CompiledModel,
+        settings: Settings,
+        interrupts: Interrupts,
+        progress: Progress | None = None,
     ) -> None:
         self.compiled = compiled
         self.settings = settings
-        self.interrupted = interrupted
+        self.interrupts = interrupts
         self.recorder = Recorder(compiled, settings)
-        self.watch_factories: dict[tuple[Any, ...], Callable[..., Any]] = {}
-        self.last_step: float | None = None
+        self.watch_factories: dict[tuple[float, ...], Any] = {}
+        self.progress = progress
+        tick = None
+        if progress is not None:
+            recorder = self.recorder
+
+            def tick(t: float) -> None:
+                progress(t, len(recorder.jumps), recorder.count)
+
+        self.integrator = StayIntegrator(compiled, settings, self.recorder, interrupts, tick)
 
     def run(self, t: float, x: np.ndarray) -> Termination:
         """Simulate from ``(t, x)`` in the initial mode until the run ends; how it ended."""
@@ -68,7 +88,7 @@ class EventLoop:
         while True:
             if self._failed() is not None:
                 return self._eval_failure(t, j, mode)
-            if self.interrupted[0]:
+            if self.interrupts.requested:
                 return Termination(
                     "interrupted", t, j, "interrupted by the user", location=mode.name
                 )
@@ -173,53 +193,21 @@ class EventLoop:
     def _flow(
         self, mode: CompiledMode, t0: float, x0: np.ndarray, j: int, armed: list[bool]
     ) -> Termination | Flowed:
-        """Integrate one stay until the watch event or ``t_end``; what happened at its end."""
-        settings = self.settings
-        width = boundary.band(x0)
-        inv_armed = [inv.rho(t0, x0) < -width for inv in mode.invariants]
-        interrupt = Interrupt(self.interrupted, t0)
-        functions = [*(tr.rho for tr in mode.transitions), *(inv.rho for inv in mode.invariants)]
-        signs = (1.0,) * len(mode.transitions) + (-1.0,) * len(mode.invariants)
-        pattern = (*armed, *inv_armed)
-        factory = self.watch_factories.get((mode.key, pattern))
-        if factory is None:
-            factory = self.watch_factories[(mode.key, pattern)] = watch_factory(signs, pattern)
-        watch_armed = list(pattern)
-        stalled = [False]
-        events: list[Any] = [factory(functions, interrupt.flag, interrupt, watch_armed, stalled)]
-        self.compiled.flow_failure.clear()
-        sol = solve_ivp(
-            mode.rhs,
-            (t0, settings.t_end),
-            x0,
-            method=settings.method,
-            rtol=settings.rtol,
-            atol=settings.atol,
-            max_step=settings.max_step,
-            first_step=self._first_step(t0),
-            events=events,
-            dense_output=settings.keeps_interpolants,
-        )
-        ts, xs = sol.t, sol.y.T
-        if ts.size >= 3:  # the last full step (the final one is cut short by the event)
-            self.last_step = float(ts[-2] - ts[-3])
-        self.recorder.stay(mode, j, ts, xs, sol.sol)
-        t, x = float(ts[-1]), xs[-1].copy()
+        """Integrate one stay until its first event or end; what happened at its end."""
+        watch = Watch(mode, armed, t0, x0, boundary.band(x0), self.watch_factories)
         if self.compiled.failure.error is not None:
+            return self._eval_failure(t0, j, mode)
+        end = self.integrator.stay(mode, t0, x0, j, watch)
+        t, x = end.t, end.x
+        if end.cause == "eval_failure" or self.compiled.failure.error is not None:
             return self._eval_failure(t, j, mode)
-        ended = self._solver_end(sol, mode, t, x, xs, j, stalled[0])
-        if ended is not None:
-            return ended
-        if interrupt.at is not None or self.interrupted[0]:
+        if end.cause == "t_end":
+            return Termination("t_end", t, j, "reached t_end", location=mode.name)
+        if end.cause == "interrupted":
             return Termination("interrupted", t, j, "interrupted by the user", location=mode.name)
-        width = boundary.band(x)
-        enabled: list[CompiledTransition] = []
-        for i, tr in enumerate(mode.transitions):
-            # a crossing the solver found still has to pass the boundary rule: rho may
-            # reach 0 and stay there while a strict guard never holds (e.g. `0 > 0 and ...`)
-            armed_now = watch_armed[i] or tr.rho(t, x) <= width
-            if boundary.holds_now(tr, mode, t, x, armed_now, width)[0]:
-                enabled.append(tr)
+        if end.cause != "event":
+            return Termination(end.cause, t, j, end.message, location=mode.name)
+        enabled = boundary.enabled_at_event(mode, t, x, watch.armed)
         if self._failed() is not None:
             return self._eval_failure(t, j, mode)
         chosen = boundary.choose(enabled)
@@ -228,69 +216,6 @@ class EventLoop:
             if blocked is not None:
                 return blocked
         return t, x, chosen, enabled
-
-    def _solver_end(
-        self,
-        sol: Any,
-        mode: CompiledMode,
-        t: float,
-        x: np.ndarray,
-        xs: np.ndarray,
-        j: int,
-        stalled: bool,
-    ) -> Termination | None:
-        """How the run ends if the solver failed, reached ``t_end`` or stalled; else ``None``."""
-        flow_failure = self.compiled.flow_failure
-        # a state that becomes non-finite makes the solver fail, so the last row is enough
-        # unless it did
-        finite = _finite(x) if sol.status != -1 else bool(np.isfinite(xs).all())
-        if flow_failure.error is not None and (sol.status == -1 or not finite):
-            return Termination(
-                "nonfinite",
-                t,
-                j,
-                f"{describe_failure(self.compiled, flow_failure)} (at t={flow_failure.t:.9g}); "
-                f"the solution leaves the domain of the flow after t={t:.9g}",
-                location=mode.name,
-            )
-        flow_failure.clear()  # only at trial points the solver rejected: it stepped around them
-        if sol.status == -1 or not finite:
-            cause = "nonfinite" if not finite else "solver_failure"
-            peak = float(np.max(np.abs(xs[-1]))) if xs.size else math.nan
-            return Termination(
-                cause,
-                t,
-                j,
-                f"solver stopped: {sol.message} (largest |state| {peak:.3g}; the solution may "
-                "blow up here, or try another --method or tighter tolerances)",
-                location=mode.name,
-            )
-        if sol.status == 0:
-            return Termination("t_end", t, j, "reached t_end", location=mode.name)
-        if stalled:
-            peak = max(map(abs, x.tolist()), default=0.0)
-            return Termination(
-                "solver_failure",
-                t,
-                j,
-                f"solver stopped advancing: its step size fell below the spacing of "
-                f"floating-point numbers at t={t:.9g} (largest |state| {peak:.3g}; the solution "
-                "may blow up here, or try another --method)",
-                location=mode.name,
-            )
-        return None
-
-    def _first_step(self, t0: float) -> float | None:
-        """Start a stay with the last full step of the previous one (None: let scipy choose).
-
-        Warm-starting saves the solver's initial-step estimate (two evaluations of
-        the right-hand side) at every jump; its error control still accepts or
-        shrinks the step as the tolerances require.
-        """
-        h, t_end = self.last_step, self.settings.t_end
-        if h is None or not h > 0.0:
-            return None
-        return min(h, self.settings.max_step, t_end - t0) if t_end > t0 else None
 
     # --- jumping ------------------------------------------------------------------------
 

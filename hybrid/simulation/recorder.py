@@ -1,8 +1,9 @@
 """The recorder: the points, jumps and interpolants of a run, assembled into a :class:`Run`.
 
-Points are stored per stay as arrays, signals computed when stored (a signal
-that fails must end the run there), and the columns are assembled once, at
-the end.
+Points are collected per stay (:class:`StayRecord`: the end of every accepted
+step, or the points of a ``dt`` grid, and the end of the stay) and stored as
+arrays when the stay ends, signals computed then (a signal that fails must end
+the run there); the columns are assembled once, at the end.
 """
 
 from __future__ import annotations
@@ -11,13 +12,77 @@ import math
 from typing import Any
 
 import numpy as np
+from scipy.integrate import OdeSolution
 
 from hybrid.simulation.compiled import CompiledMode, CompiledModel, CompiledTransition
+from hybrid.simulation.dense import StepCurve
 from hybrid.simulation.layout import run_layout
 from hybrid.simulation.result import Jump, Run, Termination
 from hybrid.simulation.settings import Settings
 
-__all__ = ["Recorder"]
+__all__ = ["Recorder", "StayRecord"]
+
+
+class StayRecord:
+    """The points of one stay in a mode, step by step, stored by :meth:`close`."""
+
+    def __init__(self, recorder: Recorder, mode: CompiledMode, j: int, t0: float) -> None:
+        self.recorder = recorder
+        self.mode = mode
+        self.j = j
+        self.ts: list[float] = []
+        self.xs: list[np.ndarray] = []
+        self.dt = recorder.settings.dt
+        self.dense = recorder.settings.dense
+        self.step_ends = [t0]
+        self.interpolants: list[Any] = []
+
+    def step(self, curve: StepCurve, stop: float | None) -> None:
+        """Record an accepted step; ``stop`` is where the stay ends inside it (None: it goes on).
+
+        Stored: the step end if the stay goes on; with a ``dt`` grid instead, the
+        grid points after the step start and before ``stop`` (up to the step end
+        if the stay goes on).
+        """
+        if self.dt is None:
+            if stop is None:
+                self.ts.append(curve.t1)
+                self.xs.append(curve.x1)
+        else:
+            grid = self._grid(curve.t0, curve.t1 if stop is None else stop, stop is None)
+            if grid.size:
+                self.ts.extend(grid.tolist())
+                self.xs.extend(curve.many(grid))
+        if self.dense:
+            self.step_ends.append(curve.t1)
+            self.interpolants.append(curve.dense_output())
+
+    def _grid(self, after: float, until: float, inclusive: bool) -> np.ndarray:
+        dt = self.dt
+        assert dt is not None
+        start = self.recorder.settings.t_start
+        k0 = math.floor((after - start) / dt)
+        k1 = math.floor((until - start) / dt) + 1
+        grid = start + dt * np.arange(k0, k1 + 1)
+        keep = (grid > after) & ((grid <= until) if inclusive else (grid < until))
+        return grid[keep]
+
+    def close(self, t: float | None, x: np.ndarray | None) -> None:
+        """End the stay at ``(t, x)`` (None: no point beyond those recorded) and store its points."""
+        if t is not None and x is not None:
+            self.ts.append(t)
+            self.xs.append(x)
+        if self.ts:
+            self.recorder.points(self.mode, self.j, np.array(self.ts), np.array(self.xs))
+        if self.dense and self.interpolants:
+            end = self.ts[-1] if self.ts else self.step_ends[-1]
+            solution = OdeSolution(self.step_ends, self.interpolants)
+            self.recorder.segments.append((self.j, self.step_ends[0], end, solution))
+
+    @property
+    def count(self) -> int:
+        """Points recorded so far in this stay."""
+        return len(self.ts)
 
 
 class Recorder:
@@ -29,33 +94,20 @@ class Recorder:
         self.chunks: list[tuple[CompiledMode, int, np.ndarray, np.ndarray, list[Any]]] = []
         self.jumps: list[Jump] = []
         self.segments: list[tuple[int, float, float, Any]] = []
+        self.count = 0
+        """Points stored so far."""
 
     def points(self, mode: CompiledMode, j: int, ts: np.ndarray, xs: np.ndarray) -> None:
         """Store points ``ts`` (n,) with states ``xs`` (n, d) in ``mode`` at hybrid time ``j``."""
         if ts.size:
+            self.count += ts.size
             outputs = mode.outputs
             signals = [outputs(t, x) for t, x in zip(ts.tolist(), xs, strict=True)]
             self.chunks.append((mode, j, ts, xs, signals))
 
-    def stay(self, mode: CompiledMode, j: int, ts: np.ndarray, xs: np.ndarray, sol: Any) -> None:
-        """Store a stay's points (after its first): the solver's, or a ``dt`` grid, and its end.
-
-        With ``dense`` settings the stay's interpolant is kept in ``run.segments``.
-        """
-        dt = self.settings.dt
-        if dt is None or sol is None:
-            self.points(mode, j, ts[1:], xs[1:])
-        else:
-            t0, t1 = float(ts[0]), float(ts[-1])
-            start = self.settings.t_start
-            k0 = math.floor((t0 - start) / dt) + 1
-            k1 = math.ceil((t1 - start) / dt) - 1
-            grid = start + dt * np.arange(k0, k1 + 1) if k1 >= k0 else np.empty(0)
-            grid = grid[(grid > t0) & (grid < t1)]
-            inner = sol(grid).T if grid.size else np.empty((0, xs.shape[1]))
-            self.points(mode, j, np.append(grid, t1), np.vstack([inner, xs[-1:]]))
-        if self.settings.dense and sol is not None and ts.size > 1:
-            self.segments.append((j, float(ts[0]), float(ts[-1]), sol))
+    def stay(self, mode: CompiledMode, j: int, t0: float) -> StayRecord:
+        """Start recording a stay in ``mode`` that begins at ``t0`` (its first point is stored)."""
+        return StayRecord(self, mode, j, t0)
 
     def jump(
         self,

@@ -1,5 +1,10 @@
 """The settings of one simulation run, validated once, frozen.
 
+Every setting is checked up front, so that a run never starts with a value
+that would make it hang or fail later: times and tolerances must be finite
+numbers in range, and ``max_step`` and ``dt`` must leave a number of steps or
+points a computer can take (see :data:`MAX_STEPS` and :data:`MAX_GRID_POINTS`).
+
 Examples
 --------
 >>> s = Settings(t_end=10.0)
@@ -9,23 +14,73 @@ Examples
 Traceback (most recent call last):
 ...
 hybrid.errors.UsageError: t_end must be a finite time after t_start=0.0, got -1.0
+>>> Settings(t_end=10.0, rtol=float("inf"))
+Traceback (most recent call last):
+...
+hybrid.errors.UsageError: rtol must be a finite number, got inf
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import asdict, dataclass
 from typing import Any
 
 from hybrid.errors import UsageError
 
-__all__ = ["MAX_JUMPS_PER_INSTANT", "METHODS", "Settings"]
+__all__ = [
+    "MAX_GRID_POINTS",
+    "MAX_JUMPS_PER_INSTANT",
+    "MAX_STEPS",
+    "METHODS",
+    "MIN_RTOL",
+    "Settings",
+    "finite_number",
+]
 
 METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 """The integration methods of :func:`scipy.integrate.solve_ivp` a run may use."""
 
 MAX_JUMPS_PER_INSTANT = 1000
 """Jumps allowed at one instant before a run ends as ``zeno`` (a zero-time cycle)."""
+
+MIN_RTOL = 100 * 2.220446049250313e-16
+"""Smallest relative tolerance: scipy's solvers raise smaller ones to it with a warning."""
+
+MAX_STEPS = 1e12
+"""Most steps a ``max_step`` may force over the run (months of solver work)."""
+
+MAX_GRID_POINTS = 1e8
+"""Most points a ``dt`` grid may give (each is a row of the trajectory in memory)."""
+
+
+def finite_number(name: str, value: Any) -> float:
+    """``value`` as a float, or a :class:`UsageError` naming ``name`` if it is not a finite number.
+
+    Examples
+    --------
+    >>> finite_number("g", 9.81)
+    9.81
+    >>> finite_number("g", float("nan"))
+    Traceback (most recent call last):
+    ...
+    hybrid.errors.UsageError: g must be a finite number, got nan
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise UsageError(f"{name} must be a number, got {value!r}")
+    number = float(value)
+    if not math.isfinite(number):
+        raise UsageError(f"{name} must be a finite number, got {number}")
+    return number
+
+
+def _whole(name: str, value: Any, least: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise UsageError(f"{name} must be a whole number, got {value!r}")
+    if value < least:
+        raise UsageError(f"{name} must be >= {least}, got {value}")
+    return int(value)
 
 
 @dataclass(frozen=True)
@@ -45,18 +100,48 @@ class Settings:
     max_jumps_per_instant: int = MAX_JUMPS_PER_INSTANT
 
     def __post_init__(self) -> None:
-        t0, t1 = self.t_start, self.t_end
-        if not (math.isfinite(t0) and math.isfinite(t1)) or t1 <= t0:
-            raise UsageError(f"t_end must be a finite time after t_start={t0}, got {t1}")
-        if self.max_jumps < 0:
-            raise UsageError(f"max_jumps must be >= 0, got {self.max_jumps}")
-        for name in ("rtol", "atol"):
-            if not getattr(self, name) > 0:
-                raise UsageError(f"{name} must be > 0, got {getattr(self, name)}")
-        if not self.max_step > 0:
-            raise UsageError(f"max_step must be > 0, got {self.max_step}")
-        if self.dt is not None and not self.dt > 0:
-            raise UsageError(f"dt must be > 0, got {self.dt}")
+        t0 = finite_number("t_start", self.t_start)
+        if (
+            isinstance(self.t_end, bool)
+            or not isinstance(self.t_end, numbers.Real)
+            or not math.isfinite(self.t_end)
+            or self.t_end <= t0
+        ):
+            raise UsageError(f"t_end must be a finite time after t_start={t0}, got {self.t_end}")
+        span = float(self.t_end) - t0
+        _whole("max_jumps", self.max_jumps, 0)
+        _whole("max_jumps_per_instant", self.max_jumps_per_instant, 1)
+        rtol = finite_number("rtol", self.rtol)
+        if not MIN_RTOL <= rtol < 1.0:
+            raise UsageError(
+                f"rtol must be at least {MIN_RTOL:.3g} (100 machine epsilons) and below 1, "
+                f"got {rtol}"
+            )
+        if not finite_number("atol", self.atol) > 0:
+            raise UsageError(f"atol must be > 0, got {self.atol}")
+        step = self.max_step
+        if isinstance(step, bool) or not isinstance(step, numbers.Real) or not step > 0:
+            raise UsageError(f"max_step must be > 0, got {step}")
+        resolution = 4 * 2.220446049250313e-16 * max(1.0, abs(t0), abs(float(self.t_end)))
+        if step < resolution:
+            raise UsageError(
+                f"max_step={step:g} is below the resolution of time near t_end={self.t_end:g} "
+                f"({resolution:.3g}): a step that short cannot advance t"
+            )
+        if span / step > MAX_STEPS:
+            raise UsageError(
+                f"max_step={step:g} needs at least {span / step:.3g} steps from t={t0:g} to "
+                f"t_end={self.t_end:g} (the limit is {MAX_STEPS:.0e}): raise it"
+            )
+        if self.dt is not None:
+            dt = finite_number("dt", self.dt)
+            if not dt > 0:
+                raise UsageError(f"dt must be > 0, got {self.dt}")
+            if span / dt > MAX_GRID_POINTS:
+                raise UsageError(
+                    f"dt={dt:g} gives {span / dt:.3g} points from t={t0:g} to "
+                    f"t_end={self.t_end:g} (the limit is {MAX_GRID_POINTS:.0e}): raise it"
+                )
         if self.method not in METHODS:
             raise UsageError(f"unknown method '{self.method}'; choose one of {', '.join(METHODS)}")
 

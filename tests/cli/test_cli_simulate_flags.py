@@ -29,6 +29,15 @@ def error_lines(stderr: str) -> list[str]:
         (["--t-end", "1", "--param", "g"], "argument --param: expected name=value, got 'g'"),
         (["--t-end", "1", "--param", "g=heavy"], "value of 'g' must be a number"),
         ([], "the following arguments are required: --t-end"),
+        # values that used to hang the run instead of being refused
+        (
+            ["--t-end", "1", "--rtol", "1e400"],
+            "argument --rtol: must be a finite number, got 1e400",
+        ),
+        (["--t-end", "1", "--param", "g=nan"], "value of 'g' must be a finite number, got 'nan'"),
+        (["--t-end", "inf"], "argument --t-end: must be a finite number, got inf"),
+        (["--t-end", "1", "--atol=-inf"], "argument --atol: must be > 0, got -inf"),
+        (["--t-end", "1", "--input", "u"], "argument --input: expected NAME=EXPR"),
     ],
 )
 def test_bad_flags_exit_2_with_one_line(
@@ -48,6 +57,12 @@ def test_bad_flags_exit_2_with_one_line(
     [
         (["--t-end", "1", "--param", "gg=1"], "unknown parameter 'gg'"),
         (["--t-end", "1", "--out", "traj.txt"], "--out: use a .csv or .npz file name"),
+        (["--t-end", "10", "--max-step", "1e-300"], "max_step=1e-300 is below the resolution"),
+        (["--t-end", "1e6", "--max-step", "1e-7"], "needs at least 1e+13 steps"),
+        (["--t-end", "10", "--dt", "1e-12"], "dt=1e-12 gives 1e+13 points"),
+        (["--t-end", "1", "--rtol", "1e-20"], "rtol must be at least 2.22e-14"),
+        (["--t-end", "1", "--rtol", "2"], "and below 1, got 2.0"),
+        (["--t-end", "1", "--input", "u=t"], "'u' is not a free input of bouncing_ball"),
     ],
 )
 def test_bad_values_found_later_exit_2_with_one_line(
@@ -87,3 +102,27 @@ def _points() -> int:
     import hybrid
 
     return len(hybrid.simulate(hybrid.load(BALL), t_end=2.0))
+
+
+def test_a_refused_setting_ends_at_once_in_a_real_process() -> None:
+    # --param g=nan used to hang the run (the other refused values above too)
+    result = run_cli("simulate", BALL, "--t-end", "10", "--param", "g=nan", timeout=30)
+    assert result.returncode == 2
+    assert result.stdout == ""
+    assert_no_traceback(result.stderr)
+
+
+def test_every_simulate_flag_is_documented_in_cli_md() -> None:
+    from support import DOCS
+
+    from hybrid.cli.main import build_parser
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    simulate = sub.choices["simulate"]  # type: ignore[index]
+    page = (DOCS / "cli.md").read_text()
+    section = page.split("## `hybrid simulate`", 1)[1].split("\n## ", 1)[0]
+    flags = [o for a in simulate._actions for o in a.option_strings if o.startswith("--")]
+    flags.remove("--help")
+    missing = [f for f in flags if f"`{f}" not in section]
+    assert not missing, f"not in the simulate section of docs/cli.md: {missing}"

@@ -201,3 +201,34 @@ def test_bad_output_name_is_a_usage_error(
         == 2
     )
     assert "does not exist" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX permissions")
+@pytest.mark.parametrize(("umask", "mode"), [(0o022, 0o644), (0o077, 0o600), (0o002, 0o664)])
+def test_new_files_get_the_permissions_of_the_umask(
+    tmp_path: Path, ball_run: hybrid.Run, umask: int, mode: int
+) -> None:
+    previous = os.umask(umask)
+    try:
+        write_csv(ball_run, tmp_path / "traj.csv")
+        write_npz(ball_run, tmp_path / "traj.npz")
+        write_events(ball_run, tmp_path / "events.json")
+        code = main_in_process(
+            "simulate", SPECS / "bouncing_ball.yaml", "--t-end", "1",
+            "--out", tmp_path / "cli.csv", "--events", tmp_path / "cli.json",
+        )  # fmt: skip
+    finally:
+        os.umask(previous)
+    assert code == 0
+    for name in ("traj.csv", "traj.npz", "events.json", "cli.csv", "cli.json"):
+        assert (tmp_path / name).stat().st_mode & 0o777 == mode, name
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX permissions")
+def test_replacing_a_file_keeps_its_permissions(tmp_path: Path, ball_run: hybrid.Run) -> None:
+    target = tmp_path / "traj.csv"
+    target.write_text("old\n")
+    target.chmod(0o640)
+    write_csv(ball_run, target)
+    assert target.stat().st_mode & 0o777 == 0o640
+    assert target.read_text().startswith("t,j,location,h,v,energy\n")

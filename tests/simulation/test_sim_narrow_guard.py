@@ -1,4 +1,4 @@
-"""A guard true only in a short window: missed by default steps, caught with ``max_step``.
+"""A guard true only in a short window: missed between default samples, caught with ``max_step``.
 
 The automaton is the worked example of docs/semantics.md, read from the page
 between its markers, so the documentation and the behaviour cannot drift apart.
@@ -9,10 +9,12 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 from support import DOCS, main_in_process, read_json
 
 import hybrid
+from hybrid.simulation.crossing import HORIZON_SAMPLES, parts
 
 START = "<!-- semantics-example:narrow-guard:start -->"
 END = "<!-- semantics-example:narrow-guard:end -->"
@@ -35,34 +37,48 @@ def model() -> hybrid.Automaton:
 
 
 def test_default_steps_miss_the_window(model: hybrid.Automaton) -> None:
-    run = hybrid.simulate(model, t_end=10.0)
+    run = hybrid.simulate(model, t_end=2.0)
     assert run.termination.cause == "t_end"
     assert run.jumps == [] and set(run.location) == {"moving"}
-    # the window lies inside one step: no stored point has the guard true
-    assert not any(5.0 <= x <= 5.001 for x in run["x"])
+    # the step ends the page lists, and the window lies inside one step
+    np.testing.assert_allclose(run.t, [0, 1e-4, 0.0011, 0.0111, 0.1111, 1.1111, 2.0])
+    assert not any(1.0 <= x <= 1.0001 for x in run["x"])
+
+
+def test_the_samples_around_the_window_show_no_dip(model: hybrid.Automaton) -> None:
+    # the page's account: 500 samples 2 ms apart in the step [0.1111, 1.1111]; the two
+    # around the window are at 0.9991 and 1.0011, where rho is positive
+    t0, t1 = 0.1111, 1.1111
+    m = parts(t1 - t0, 2.0 / HORIZON_SAMPLES)
+    samples = t0 + (t1 - t0) * np.arange(1, m + 1) / m
+    assert m == 500
+    before = samples[samples < 1.0][-1]
+    after = samples[samples > 1.0001][0]
+    assert (round(before, 4), round(after, 4)) == (0.9991, 1.0011)
+    assert not np.any((samples >= 1.0) & (samples <= 1.0001))
 
 
 def test_max_step_catches_it_at_the_closed_form_time(model: hybrid.Automaton) -> None:
-    run = hybrid.simulate(model, t_end=10.0, max_step=0.0005)
+    run = hybrid.simulate(model, t_end=2.0, max_step=0.0004)
     assert run.termination.cause == "t_end"
     (jump,) = run.jumps
     assert (jump.edge, jump.source, jump.target) == ("window", "moving", "caught")
-    assert abs(jump.t - 5.0) < 1e-9, jump.t
-    assert jump.before["x"] == pytest.approx(5.0, abs=1e-9)
+    assert abs(jump.t - 1.0) < 1e-9, jump.t
+    assert jump.before["x"] == pytest.approx(1.0, abs=1e-9)
 
 
 def test_the_cli_flags_of_the_doc(model: hybrid.Automaton, tmp_path: Path) -> None:
     page = (DOCS / "semantics.md").read_text()
-    assert "hybrid simulate narrow.yaml --t-end 10 --events ev.json" in page
-    assert "hybrid simulate narrow.yaml --t-end 10 --max-step 0.0005 --events ev.json" in page
+    assert "hybrid simulate narrow.yaml --t-end 2 --events ev.json" in page
+    assert "hybrid simulate narrow.yaml --t-end 2 --max-step 0.0004 --events ev.json" in page
     spec = tmp_path / "narrow.yaml"
     spec.write_text(doc_example())
     events = tmp_path / "ev.json"
-    assert main_in_process("simulate", spec, "--t-end", "10", "--events", events) == 0
+    assert main_in_process("simulate", spec, "--t-end", "2", "--events", events) == 0
     assert read_json(events)["jumps"] == []
     code = main_in_process(
-        "simulate", spec, "--t-end", "10", "--max-step", "0.0005", "--events", events
+        "simulate", spec, "--t-end", "2", "--max-step", "0.0004", "--events", events
     )
     assert code == 0
     (jump,) = read_json(events)["jumps"]
-    assert jump["edge"] == "window" and abs(jump["t"] - 5.0) < 1e-9
+    assert jump["edge"] == "window" and abs(jump["t"] - 1.0) < 1e-9

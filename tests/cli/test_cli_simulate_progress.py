@@ -1,0 +1,64 @@
+"""Progress of ``hybrid simulate`` on stderr: on a terminal only, silenced by ``--quiet``."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from support import REPO, SPECS
+
+THERMOSTAT = SPECS / "thermostat.yaml"
+# long enough to be reported (every 0.2 s), writing a CSV large enough to be reported too
+ARGS = ["simulate", str(THERMOSTAT), "--t-end", "600", "--dt", "0.004"]
+
+
+def run_on_a_terminal(*extra: str, out: Path) -> tuple[int, str, str]:
+    """Run the command with stderr on a pseudo-terminal; exit code, stdout and what stderr showed."""
+    import pty
+
+    master, slave = pty.openpty()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "hybrid", *ARGS, "--out", str(out), *extra],
+        stdout=subprocess.PIPE,
+        stderr=slave,
+        cwd=REPO,
+        text=True,
+    )
+    os.close(slave)
+    shown = b""
+    while True:
+        try:
+            chunk = os.read(master, 4096)
+        except OSError:  # the child closed the terminal
+            break
+        if not chunk:
+            break
+        shown += chunk
+    os.close(master)
+    stdout = proc.stdout.read() if proc.stdout else ""
+    proc.wait(timeout=120)
+    return proc.returncode, stdout, shown.decode("utf-8", "replace")
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals are POSIX")
+def test_progress_is_shown_on_a_terminal_and_cleared(tmp_path: Path) -> None:
+    code, stdout, shown = run_on_a_terminal(out=tmp_path / "traj.csv")
+    assert code == 0
+    assert "simulate: " in shown and " s (" in shown and "jumps" in shown and "points" in shown
+    assert "per second" in shown and "left" in shown
+    assert "writing traj.csv: " in shown and " rows (" in shown
+    assert shown.endswith("\r") and shown.split("\r")[-2].strip() == ""  # the line is erased
+    assert "t_end at t=600" in stdout
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals are POSIX")
+def test_quiet_silences_it(tmp_path: Path) -> None:
+    code, _, shown = run_on_a_terminal("--quiet", out=tmp_path / "traj.csv")
+    assert code == 0
+    assert shown == ""
+
+
+# Not a terminal: nothing on stderr (tests/cli/test_cli_simulate_flags.py, a normal run).
