@@ -9,12 +9,19 @@ a label shared with other components (those fire together, one edge from
 each owner of the label, as in :func:`hybrid.modes.transitions_of`).
 
 Modes are tuples of location indices, encoded as integers in mixed radix, and
-each BFS level is processed with numpy: successors, the visited set (a bitmap
-when the product is small enough, else a set of ints), and the per-mode
-verdicts (deadlock, nondeterminism), which are decided once per distinct
-(location, available shared labels) and looked up for every mode.
-:func:`explore_reference` is a plain-Python BFS with the same results, kept
-as a cross-check and for products too large for 62-bit codes.
+each BFS level is processed with numpy, in slices of :data:`SLICE` modes:
+successors, the visited set (a bitmap when the product is small enough, else
+sorted arrays merged as they grow), and the per-mode verdicts (deadlock,
+nondeterminism), which are decided once per distinct (location, available
+shared labels) and looked up for every mode. :func:`explore_reference` is a
+plain-Python BFS with the same results, kept as a cross-check and for
+products too large for 62-bit codes.
+
+The explorer is bounded: it stops (``complete`` false) after ``max_states``
+modes, or earlier when the modes it keeps would take more than ``max_bytes``
+of memory (:func:`state_bound`), so a product too large to explore ends
+with a note instead of exhausting memory. ``progress(modes, frontier)`` is
+called after every slice, for a progress display.
 
 Examples
 --------
@@ -38,74 +45,53 @@ Examples
 
 from __future__ import annotations
 
-import itertools
 import time
-from collections import deque
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from collections.abc import Iterator
 
 import numpy as np
 
-from hybrid.analysis.product import Mode, ProductTables, Transition
+from hybrid.analysis.exploration import (
+    CODE_LIMIT,
+    DEFAULT_MAX_BYTES,
+    DEFAULT_MAX_STATES,
+    SLICE,
+    Exploration,
+    Progress,
+    explore_reference,
+    state_bound,
+)
+from hybrid.analysis.product import ProductTables
 
-__all__ = ["DEFAULT_MAX_STATES", "Exploration", "explore", "explore_reference"]
+__all__ = [
+    "DEFAULT_MAX_BYTES",
+    "DEFAULT_MAX_STATES",
+    "Exploration",
+    "Progress",
+    "explore",
+    "explore_reference",
+    "state_bound",
+]
 
-DEFAULT_MAX_STATES = 5_000_000
 DENSE_LIMIT = 1 << 25  # products up to this size keep the visited set as a bitmap
-_CODE_LIMIT = 1 << 62
 
 
-@dataclass
-class Exploration:
-    """What the exploration found; modes are given as integer codes."""
-
-    tables: ProductTables
-    states: int = 0
-    complete: bool = True
-    seconds: float = 0.0
-    reached: list[np.ndarray] = field(default_factory=list)
-    first_reach: dict[tuple[int, int], int] = field(default_factory=dict)
-    deadlocks: int = 0
-    first_deadlock: int | None = None
-    stuck_at: set[tuple[int, int]] = field(default_factory=set)
-    conflicts: int = 0
-    first_conflict: int | None = None
-    conflicted_at: set[tuple[int, int]] = field(default_factory=set)
-    fired: set[tuple[int, int]] = field(default_factory=set)
-    modes: list[int] = field(default_factory=list)
-    """Codes of the modes visited, in breadth-first order (level by level)."""
-    _parent: Callable[[int], int | None] | None = None
-
-    def path_to(self, code: int) -> list[tuple[Transition, Mode]]:
-        """A shortest path of transitions from the initial mode to mode ``code``."""
-        if self._parent is None:
-            return []
-        chain = [code]
-        while True:
-            parent = self._parent(chain[-1])
-            if parent is None:
-                break
-            chain.append(parent)
-        chain.reverse()
-        steps: list[tuple[Transition, Mode]] = []
-        for src, dst in itertools.pairwise(chain):
-            mode, target = self.tables.decode(src), self.tables.decode(dst)
-            for tr in self.tables.successors(mode):
-                if tr.target == target:
-                    steps.append((tr, target))
-                    break
-        return steps
-
-
-def explore(tables: ProductTables, max_states: int = DEFAULT_MAX_STATES) -> Exploration:
+def explore(
+    tables: ProductTables,
+    max_states: int = DEFAULT_MAX_STATES,
+    *,
+    max_bytes: int = DEFAULT_MAX_BYTES,
+    progress: Progress | None = None,
+) -> Exploration:
     """Breadth-first exploration of the reachable product (numpy, level by level).
 
-    Stops after ``max_states`` modes (``complete`` is then ``False``).
+    Stops after ``max_states`` modes, or when the modes kept would exceed
+    ``max_bytes`` (``complete`` is then ``False``; ``bound`` says where).
     """
-    if tables.size >= _CODE_LIMIT:
-        return explore_reference(tables, max_states)
+    bound = state_bound(tables, max_states, max_bytes)
+    if tables.size >= CODE_LIMIT:
+        return explore_reference(tables, bound, progress=progress)
     start = time.perf_counter()
-    result = Exploration(tables)
+    result = Exploration(tables, bound=bound)
     result.reached = [np.zeros(n, dtype=bool) for n in tables.radices]
     weights = np.array(tables.weights, dtype=np.int64)
     radices = np.array(tables.radices, dtype=np.int64)
@@ -122,59 +108,60 @@ def explore(tables: ProductTables, max_states: int = DEFAULT_MAX_STATES) -> Expl
         for i, n in enumerate(tables.radices)
     ]
 
-    dense = tables.size <= DENSE_LIMIT
-    bitmap = np.zeros(tables.size if dense else 0, dtype=bool)
-    seen: set[int] = set()
+    visited = _Visited(tables.size)
     levels: list[tuple[np.ndarray, np.ndarray]] = []
     init = tables.encode(tables.initial)
     frontier = np.array([init], dtype=np.int64)
-    if dense:
-        bitmap[init] = True
-    else:
-        seen.add(init)
+    visited.add(frontier)
     levels.append((frontier, np.array([-1], dtype=np.int64)))
     count = 1
 
-    while frontier.size:
-        digits = (frontier[:, None] // weights) % radices
-        offered = {}
-        for a, parts in sync_tabs.items():
-            ok = np.ones(frontier.size, dtype=bool)
-            for o, _, mask in parts:
-                ok &= mask[digits[:, o]].any(axis=1)
-            offered[a] = ok
-        _record_reach(result, digits, frontier)
-        _record_fired(tables, result, digits, offered)
-        _record_verdicts(tables, result, digits, frontier, offered, stick_loc, conflict_loc)
-
-        stepped = _successors(frontier, digits, local_tabs, sync_tabs, offered)
-        if stepped is None:
+    while frontier.size and result.complete:
+        fresh_parts: list[tuple[np.ndarray, np.ndarray]] = []
+        for lo in range(0, frontier.size, SLICE):
+            part = frontier[lo : lo + SLICE]
+            digits = (part[:, None] // weights) % radices
+            offered = {}
+            for a, parts in sync_tabs.items():
+                ok = np.ones(part.size, dtype=bool)
+                for o, _, mask in parts:
+                    ok &= mask[digits[:, o]].any(axis=1)
+                offered[a] = ok
+            _record_reach(result, digits, part)
+            _record_fired(tables, result, digits, offered)
+            _record_verdicts(tables, result, digits, part, offered, stick_loc, conflict_loc)
+            if not result.complete:
+                continue  # the bound was met: finish recording the last level only
+            stepped = _successors(part, digits, local_tabs, sync_tabs, offered)
+            if stepped is not None:
+                candidates, parents = stepped
+                unique, first = np.unique(candidates, return_index=True)
+                parents = parents[first]
+                fresh = ~visited.contains(unique)
+                unique, parents = unique[fresh], parents[fresh]
+                if unique.size:
+                    visited.add(unique)
+                    fresh_parts.append((unique, parents))
+                    count += unique.size
+                    if count > bound:
+                        result.complete = False
+            if progress is not None:
+                progress(count, frontier.size)
+        if not fresh_parts:
             break
-        candidates, parents = stepped
-        unique, first = np.unique(candidates, return_index=True)
-        parents = parents[first]
-        if dense:
-            fresh = ~bitmap[unique]
-        else:
-            fresh = np.fromiter(
-                (c not in seen for c in unique.tolist()), dtype=bool, count=unique.size
-            )
-        unique, parents = unique[fresh], parents[fresh]
-        if count + unique.size > max_states:
-            keep = max_states - count
+        unique = np.concatenate([u for u, _ in fresh_parts])
+        parents = np.concatenate([p for _, p in fresh_parts])
+        order = np.argsort(unique, kind="stable")
+        unique, parents = unique[order], parents[order]
+        if not result.complete:
+            keep = max(0, bound - (count - unique.size))
             unique, parents = unique[:keep], parents[:keep]
-            result.complete = False
-        if dense:
-            bitmap[unique] = True
-        else:
-            seen.update(unique.tolist())
-        count += unique.size
+            count -= count - bound
         levels.append((unique, parents))
         frontier = unique
-        if not result.complete:
+        if not result.complete and frontier.size:
             digits = (frontier[:, None] // weights) % radices
             _record_reach(result, digits, frontier)
-            break
 
     result.states = count
     result.seconds = time.perf_counter() - start
@@ -187,9 +174,46 @@ def explore(tables: ProductTables, max_states: int = DEFAULT_MAX_STATES) -> Expl
                 return None if value < 0 else value
         return None
 
+    def codes() -> Iterator[int]:
+        for level, _ in levels:
+            yield from (int(c) for c in level.tolist())
+
     result._parent = parent
-    result.modes = [int(c) for codes, _ in levels for c in codes.tolist()]
+    result._codes = codes
     return result
+
+
+class _Visited:
+    """The set of mode codes seen: a bitmap for small products, else sorted arrays.
+
+    Sorted arrays are merged when a newer one grows to half the size of the
+    one before (as in a log-structured merge tree), so a lookup searches a
+    logarithmic number of arrays and every code is copied a logarithmic
+    number of times.
+    """
+
+    def __init__(self, size: int) -> None:
+        self.bitmap = np.zeros(size, dtype=bool) if size <= DENSE_LIMIT else None
+        self.chunks: list[np.ndarray] = []
+
+    def contains(self, codes: np.ndarray) -> np.ndarray:
+        if self.bitmap is not None:
+            seen: np.ndarray = self.bitmap[codes]
+            return seen
+        found = np.zeros(codes.size, dtype=bool)
+        for chunk in self.chunks:
+            pos = np.minimum(np.searchsorted(chunk, codes), chunk.size - 1)
+            found |= chunk[pos] == codes
+        return found
+
+    def add(self, codes: np.ndarray) -> None:
+        if self.bitmap is not None:
+            self.bitmap[codes] = True
+            return
+        self.chunks.append(np.sort(codes))
+        while len(self.chunks) > 1 and self.chunks[-2].size <= 2 * self.chunks[-1].size:
+            last = self.chunks.pop()
+            self.chunks[-1] = np.sort(np.concatenate([self.chunks[-1], last]), kind="stable")
 
 
 _Table = tuple[np.ndarray, np.ndarray]
@@ -331,54 +355,3 @@ def _record_verdicts(
         result.conflicts += int(clash.sum())
         if result.first_conflict is None:
             result.first_conflict = int(frontier[np.argmax(clash)])
-
-
-def explore_reference(tables: ProductTables, max_states: int = DEFAULT_MAX_STATES) -> Exploration:
-    """The same exploration in plain Python over tuples (slow; a cross-check)."""
-    start = time.perf_counter()
-    result = Exploration(tables)
-    result.reached = [np.zeros(n, dtype=bool) for n in tables.radices]
-    parents: dict[Mode, Mode | None] = {tables.initial: None}
-    queue: deque[Mode] = deque([tables.initial])
-    while queue:
-        mode = queue.popleft()
-        code = tables.encode(mode)
-        for i, loc in enumerate(mode):
-            if not result.reached[i][loc]:
-                result.reached[i][loc] = True
-                result.first_reach[(i, loc)] = code
-        offered = tables.offered(mode)
-        dead = clash = False
-        for i, loc in enumerate(mode):
-            bits = tables.bits(i, offered)
-            if tables.stuck(i, loc, bits):
-                result.stuck_at.add((i, loc))
-                dead = True
-            if tables.conflicted(i, loc, bits):
-                result.conflicted_at.add((i, loc))
-                clash = True
-        if dead:
-            result.deadlocks += 1
-            if result.first_deadlock is None:
-                result.first_deadlock = code
-        if clash:
-            result.conflicts += 1
-            if result.first_conflict is None:
-                result.first_conflict = code
-        for tr in tables.successors(mode):
-            if tr.label is not None and tr.label in tables.owners:
-                result.fired.update(tr.parts)
-            if tr.target not in parents:
-                if len(parents) >= max_states:
-                    result.complete = False
-                    continue
-                parents[tr.target] = mode
-                queue.append(tr.target)
-    result.states = len(parents)
-    result.seconds = time.perf_counter() - start
-    by_code = {
-        tables.encode(m): (None if p is None else tables.encode(p)) for m, p in parents.items()
-    }
-    result._parent = by_code.get
-    result.modes = list(by_code)
-    return result
