@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import itertools
 import time
-from collections import deque
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
@@ -20,37 +19,51 @@ from hybrid.analysis.product import Mode, ProductTables, Transition
 __all__ = [
     "DEFAULT_MAX_BYTES",
     "DEFAULT_MAX_STATES",
-    "SLICE",
+    "SLICE_CELLS",
     "Exploration",
     "Progress",
     "explore_reference",
     "state_bound",
+    "words",
 ]
 
 DEFAULT_MAX_STATES = 5_000_000
 DEFAULT_MAX_BYTES = 256 * 1024 * 1024
 """Memory the explorer lets the modes it keeps take (256 MiB), whatever ``max_states``."""
-SLICE = 1 << 16  # modes of a level processed at once
-CODE_LIMIT = 1 << 62
-_BYTES_PER_CODE = 32  # level code and parent, visited copy, merge headroom
-_BYTES_PER_TUPLE = 120  # reference explorer: dict entry, tuple header, parent reference
+SLICE_CELLS = 1 << 22  # (modes x components) of a level processed at once
+WORD_BITS = 62  # mixed-radix digits packed per int64 word of a mode's code
 
 Progress = Callable[[int, int], None]
 """``progress(modes visited so far, modes in the frontier)``."""
 
 
+def words(tables: ProductTables) -> list[tuple[int, int]]:
+    """Per component, the (word, weight) of its digit in a mode's code of int64 words."""
+    layout: list[tuple[int, int]] = []
+    word, weight = 0, 1
+    for n in tables.radices:
+        if weight * n >= 1 << WORD_BITS:
+            word, weight = word + 1, 1
+        layout.append((word, weight))
+        weight *= n
+    return layout
+
+
 def state_bound(tables: ProductTables, max_states: int, max_bytes: int) -> int:
-    """How many modes an exploration of ``tables`` may keep within ``max_bytes``."""
-    if tables.size < CODE_LIMIT:
-        per_state = _BYTES_PER_CODE
-    else:
-        per_state = _BYTES_PER_TUPLE + 8 * len(tables.components)
+    """How many modes an exploration of ``tables`` may keep within ``max_bytes``.
+
+    Each mode kept costs its code (one int64 per word) in its level and in the
+    visited set, its parent index, and as much again for the copies made while
+    a level is sorted and merged (measured: bench/product_exploration.py).
+    """
+    k = 1 + max((w for w, _ in words(tables)), default=0)
+    per_state = 16 * (3 * k + 1)
     return max(1, min(max_states, max_bytes // per_state))
 
 
 @dataclass
 class Exploration:
-    """What the exploration found; modes are given as integer codes."""
+    """What the exploration found; modes are named by their index in breadth-first order."""
 
     tables: ProductTables
     states: int = 0
@@ -68,17 +81,22 @@ class Exploration:
     bound: int = 0
     """The most modes this exploration could keep (``max_states`` or the memory bound)."""
     _parent: Callable[[int], int | None] | None = None
-    _codes: Callable[[], Iterator[int]] | None = None
+    _mode: Callable[[int], Mode] | None = None
 
-    def codes(self) -> Iterator[int]:
-        """Codes of the modes visited, in breadth-first order (level by level)."""
-        return iter(()) if self._codes is None else self._codes()
+    def mode(self, index: int) -> Mode:
+        """The mode visited ``index``-th (0 is the initial mode)."""
+        assert self._mode is not None
+        return self._mode(index)
 
-    def path_to(self, code: int) -> list[tuple[Transition, Mode]]:
-        """A shortest path of transitions from the initial mode to mode ``code``."""
+    def modes(self) -> Iterator[Mode]:
+        """The modes visited, in breadth-first order."""
+        return (self.mode(k) for k in range(self.states))
+
+    def path_to(self, index: int) -> list[tuple[Transition, Mode]]:
+        """A shortest path of transitions from the initial mode to the ``index``-th mode."""
         if self._parent is None:
             return []
-        chain = [code]
+        chain = [index]
         while True:
             parent = self._parent(chain[-1])
             if parent is None:
@@ -87,7 +105,7 @@ class Exploration:
         chain.reverse()
         steps: list[tuple[Transition, Mode]] = []
         for src, dst in itertools.pairwise(chain):
-            mode, target = self.tables.decode(src), self.tables.decode(dst)
+            mode, target = self.mode(src), self.mode(dst)
             for tr in self.tables.successors(mode):
                 if tr.target == target:
                     steps.append((tr, target))
@@ -105,15 +123,16 @@ def explore_reference(
     start = time.perf_counter()
     result = Exploration(tables, bound=max_states)
     result.reached = [np.zeros(n, dtype=bool) for n in tables.radices]
-    parents: dict[Mode, Mode | None] = {tables.initial: None}
-    queue: deque[Mode] = deque([tables.initial])
-    while queue:
-        mode = queue.popleft()
-        code = tables.encode(mode)
+    index: dict[Mode, int] = {tables.initial: 0}
+    order: list[Mode] = [tables.initial]
+    parents: list[int | None] = [None]
+    head = 0
+    while head < len(order):
+        mode = order[head]
         for i, loc in enumerate(mode):
             if not result.reached[i][loc]:
                 result.reached[i][loc] = True
-                result.first_reach[(i, loc)] = code
+                result.first_reach[(i, loc)] = head
         offered = tables.offered(mode)
         dead = clash = False
         for i, loc in enumerate(mode):
@@ -127,27 +146,26 @@ def explore_reference(
         if dead:
             result.deadlocks += 1
             if result.first_deadlock is None:
-                result.first_deadlock = code
+                result.first_deadlock = head
         if clash:
             result.conflicts += 1
             if result.first_conflict is None:
-                result.first_conflict = code
+                result.first_conflict = head
         for tr in tables.successors(mode):
             if tr.label is not None and tr.label in tables.owners:
                 result.fired.update(tr.parts)
-            if tr.target not in parents:
-                if len(parents) >= max_states:
+            if tr.target not in index:
+                if len(order) >= max_states:
                     result.complete = False
                     continue
-                parents[tr.target] = mode
-                queue.append(tr.target)
-        if progress is not None and len(parents) % SLICE == 0:
-            progress(len(parents), len(queue))
-    result.states = len(parents)
+                index[tr.target] = len(order)
+                order.append(tr.target)
+                parents.append(head)
+        head += 1
+        if progress is not None and head % 4096 == 0:
+            progress(len(order), len(order) - head)
+    result.states = len(order)
     result.seconds = time.perf_counter() - start
-    by_code = {
-        tables.encode(m): (None if p is None else tables.encode(p)) for m, p in parents.items()
-    }
-    result._parent = by_code.get
-    result._codes = lambda: iter(list(by_code))
+    result._parent = parents.__getitem__
+    result._mode = order.__getitem__
     return result

@@ -13,6 +13,7 @@ import ast
 import keyword
 import math
 from collections.abc import Mapping
+from dataclasses import replace
 from types import MappingProxyType
 from typing import Any
 
@@ -118,6 +119,8 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
     edges = _edges(spec, positions, problems, scope, state_names)
     initial_location, initial_state = _initial(spec, problems, state_names)
     properties = build_properties(spec.properties, positions, problems.items, list(spec.locations))
+    if spec.checks is not None:
+        properties = replace(properties, ignore=tuple(spec.checks.ignore))
 
     if problems.items:
         raise SpecError.many(problems.items)
