@@ -34,7 +34,7 @@ from hybrid.reader.messages import closest
 from hybrid.reader.schema import AutomatonSpec, PropertiesSpec
 from hybrid.reader.yamlpos import PositionMap
 
-__all__ = ["build_automaton", "build_properties"]
+__all__ = ["ascii_only", "build_automaton", "build_properties"]
 
 RESERVED = {"t", "pi", "true", "false", *BUILTINS, *keyword.kwlist, *keyword.softkwlist}
 _KIND_TEXT = {"param": "parameter", "state": "state variable", "signal": "signal", "input": "input"}
@@ -53,10 +53,36 @@ class _Problems:
 
     def expression(self, path: tuple[Any, ...], source: str, scope: Scope, want: str) -> ir.Expr:
         try:
+            ascii_only(source)
             return parse_expression(source, scope, want=want)
         except ExprError as exc:
             self.items.append((self.positions.value(path).shifted(exc.col), exc.message))
             return ir.BoolConst(True) if want == "bool" else ir.Num(0.0)
+
+
+def ascii_only(source: str) -> None:
+    """Refuse an expression holding a character beyond ASCII, at its column.
+
+    Python would read ``ｘ`` and ``𝐱`` as ``x`` (NFKC normalisation of names),
+    and messages would then name a name that is not in the file; names are
+    ASCII letters, digits and ``_``, and nothing else in the language needs
+    more. (It also keeps every column a count of characters.)
+
+    Examples
+    --------
+    >>> ascii_only("x + 1")
+    >>> ascii_only("2*ｘ")
+    Traceback (most recent call last):
+    ...
+    hybrid.expr.parse.ExprError: character 'ｘ' (U+FF58) is not allowed in an expression: names are ASCII letters, digits and '_'
+    """
+    for col, char in enumerate(source):
+        if ord(char) > 127:
+            raise ExprError(
+                f"character {char!r} (U+{ord(char):04X}) is not allowed in an expression: "
+                "names are ASCII letters, digits and '_'",
+                col,
+            )
 
 
 def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
@@ -231,6 +257,7 @@ def _signals(
     for name, source in sources.items():
         path = (*base, name)
         try:
+            ascii_only(source)
             found = vector_call(source, scope)
         except ExprError as exc:
             problems.items.append((problems.positions.value(path).shifted(exc.col), exc.message))
