@@ -17,6 +17,7 @@ import numpy as np
 from hybrid.compose import System
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
+from hybrid.simulation.apart import independent_groups, simulate_apart
 from hybrid.simulation.compiled import CompiledModel
 from hybrid.simulation.events import sigint_watch
 from hybrid.simulation.loop import EventLoop
@@ -112,6 +113,15 @@ def simulate(
     compiled = _compiled(model, inputs)
     x0 = np.array(_initial_vector(model, compiled, initial), dtype=float)
     with sigint_watch(handle_sigint) as interrupted:
+
+        def run_group(sub: System, start: np.ndarray, how: Settings) -> tuple[Run, CompiledModel]:
+            part = _compiled(sub, None)
+            loop = EventLoop(part, how, interrupted)
+            return loop.recorder.run(sub.name, loop.run(t_start, start)), part
+
+        if isinstance(model, System) and len(groups := independent_groups(model)) > 1:
+            # independent components: simulated apart, never as a product
+            return simulate_apart(model, groups, x0, settings, run_group)
         loop = EventLoop(compiled, settings, interrupted)
         termination = loop.run(t_start, x0)
     return loop.recorder.run(model.name, termination)
