@@ -30,7 +30,7 @@ __all__ = [
 DEFAULT_MAX_STATES = 5_000_000
 DEFAULT_MAX_BYTES = 256 * 1024 * 1024
 """Memory the explorer lets the modes it keeps take (256 MiB), whatever ``max_states``."""
-SLICE_CELLS = 1 << 22  # (modes x components) of a level processed at once
+SLICE_CELLS = 1 << 20  # (modes x components x words) of a level processed at once
 WORD_BITS = 62  # mixed-radix digits packed per int64 word of a mode's code
 
 Progress = Callable[[int, int], None]

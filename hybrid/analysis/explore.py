@@ -109,7 +109,8 @@ def explore(
         np.array([tables.may_conflict(i, loc) for loc in range(n)])
         for i, n in enumerate(tables.radices)
     ]
-    step = max(1, SLICE_CELLS // max(1, len(radices)))
+    # a slice's successors take about (modes x components x words) int64s: keep that bounded
+    step = max(64, SLICE_CELLS // (max(1, len(radices)) * width))
 
     def digits_of(rows: np.ndarray) -> np.ndarray:
         return (rows[:, col] // weight) % radices

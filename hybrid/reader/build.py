@@ -30,11 +30,12 @@ from hybrid.expr.parse import (
     vector_call,
 )
 from hybrid.model import Automaton, Edge, Location, Properties, StateVar
+from hybrid.reader.characters import ascii_only
 from hybrid.reader.messages import closest
 from hybrid.reader.schema import AutomatonSpec, PropertiesSpec
 from hybrid.reader.yamlpos import PositionMap
 
-__all__ = ["ascii_only", "build_automaton", "build_properties"]
+__all__ = ["build_automaton", "build_properties"]
 
 RESERVED = {"t", "pi", "true", "false", *BUILTINS, *keyword.kwlist, *keyword.softkwlist}
 _KIND_TEXT = {"param": "parameter", "state": "state variable", "signal": "signal", "input": "input"}
@@ -58,31 +59,6 @@ class _Problems:
         except ExprError as exc:
             self.items.append((self.positions.value(path).shifted(exc.col), exc.message))
             return ir.BoolConst(True) if want == "bool" else ir.Num(0.0)
-
-
-def ascii_only(source: str) -> None:
-    """Refuse an expression holding a character beyond ASCII, at its column.
-
-    Python would read ``ｘ`` and ``𝐱`` as ``x`` (NFKC normalisation of names),
-    and messages would then name a name that is not in the file; names are
-    ASCII letters, digits and ``_``, and nothing else in the language needs
-    more. (It also keeps every column a count of characters.)
-
-    Examples
-    --------
-    >>> ascii_only("x + 1")
-    >>> ascii_only("2*ｘ")
-    Traceback (most recent call last):
-    ...
-    hybrid.expr.parse.ExprError: character 'ｘ' (U+FF58) is not allowed in an expression: names are ASCII letters, digits and '_'
-    """
-    for col, char in enumerate(source):
-        if ord(char) > 127:
-            raise ExprError(
-                f"character {char!r} (U+{ord(char):04X}) is not allowed in an expression: "
-                "names are ASCII letters, digits and '_'",
-                col,
-            )
 
 
 def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:

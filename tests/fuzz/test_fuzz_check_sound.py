@@ -67,7 +67,11 @@ def automaton_text(draw: st.DrawFn, name: str = "fuzz", suffix: str = "", labels
         flow = f"{{{x}: {draw(terms)}, {y}: {draw(terms)}}}"
         inv = draw(
             st.sampled_from(
-                ["true", f"{x} {draw(ops)} {draw(terms)}", f"{x} <= {draw(st.sampled_from(CONSTANTS))}"]
+                [
+                    "true",
+                    f"{x} {draw(ops)} {draw(terms)}",
+                    f"{x} <= {draw(st.sampled_from(CONSTANTS))}",
+                ]
             )
         )
         lines.append(f"  {loc}: {{flow: {flow}, invariant: '{inv}'}}")
@@ -77,16 +81,20 @@ def automaton_text(draw: st.DrawFn, name: str = "fuzz", suffix: str = "", labels
             st.one_of(
                 st.just("true"),
                 st.builds(lambda a, o, b: f"{a} {o} {b}", terms, ops, terms),
-                st.builds(
-                    lambda a, o, c: f"{a} {o} {c}", terms, ops, st.sampled_from(CONSTANTS)
-                ),
+                st.builds(lambda a, o, c: f"{a} {o} {c}", terms, ops, st.sampled_from(CONSTANTS)),
             )
         )
         if draw(st.booleans()):
             guard = f"{guard} and {draw(terms)} {draw(ops)} {draw(terms)}"
         reset = draw(
             st.sampled_from(
-                ["{}", f"{{{x}: 0}}", f"{{{x}: -{x}, {y}: {y} + 1}}", f"{{{y}: 0.5*{x}}}", f"{{{x}: 1}}"]
+                [
+                    "{}",
+                    f"{{{x}: 0}}",
+                    f"{{{x}: -{x}, {y}: {y} + 1}}",
+                    f"{{{y}: 0.5*{x}}}",
+                    f"{{{x}: 1}}",
+                ]
             )
         )
         prio = draw(st.integers(0, 1))
@@ -114,9 +122,8 @@ def model(draw: st.DrawFn) -> hybrid.Automaton | hybrid.System:
 
 def _bounded_prefix(m: hybrid.Automaton | hybrid.System, run: hybrid.Run) -> float:
     """The first stored time at which the state is outside its declared bounds (inf if never)."""
-    states = m.states if isinstance(m, hybrid.System) else m.states
     first = math.inf
-    for s in states:
+    for s in m.states:
         values = np.asarray(run[s.name])
         outside = (values < s.lower) | (values > s.upper) | ~np.isfinite(values)
         if outside.any():
@@ -132,9 +139,7 @@ def assert_check_agrees_with_run(m: hybrid.Automaton | hybrid.System) -> None:
     except hybrid.SimulationError:
         return
     horizon = _bounded_prefix(m, run)
-    fired = {
-        part for jump in run.jumps if jump.t < horizon for part in jump.edge.split("+")
-    }
+    fired = {part for jump in run.jumps if jump.t < horizon for part in jump.edge.split("+")}
     entered = {
         part
         for t, loc in zip(run.t.tolist(), run.location.tolist(), strict=True)
