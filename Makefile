@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP_DEMO := $(VENV)/.installed-demo
 STAMP_TEST := $(VENV)/.installed-test
 
-.PHONY: demo test lint typecheck check-specs bench clean
+.PHONY: demo test lint typecheck check-specs bench fuzz clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -37,6 +37,11 @@ test: lint typecheck check-specs
 
 bench: $(STAMP_TEST)
 	$(BIN)/python -m bench
+
+# randomized tests at full size: every test marked `fuzz`, with HYBRID_FUZZ=1 scaling the
+# example counts (check vs simulate: 5,000 models; loader: 100,000 mutated specs)
+fuzz: $(STAMP_TEST)
+	HYBRID_FUZZ=1 $(BIN)/python -m pytest -q -m fuzz -p no:cacheprovider tests
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .mypy_cache .ruff_cache
