@@ -98,3 +98,11 @@ def test_columns_count_characters_not_bytes():
     with pytest.raises(hybrid.SpecError) as info:
         hybrid.load_text(text, file="f.yaml")
     assert info.value.column == text.splitlines()[2].index("q'") + 1
+
+
+def test_non_ascii_keys_are_refused_at_the_key():
+    text = "automaton: a\nstate: {x: {}, ｘ: {}}\nlocations: {l: {}}\n"
+    with pytest.raises(hybrid.SpecError) as info:
+        hybrid.load_text(text, file="f.yaml")
+    assert (info.value.line, info.value.column) == (2, text.splitlines()[1].index("ｘ") + 1)
+    assert "ASCII" in info.value.message
