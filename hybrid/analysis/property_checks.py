@@ -92,7 +92,7 @@ def property_violations(analysis: Analysis) -> list[Finding]:
                     "property-violated",
                     where.get(f"reachable:{name}", position),
                     f"location '{name}' is declared reachable but is not"
-                    f"{blocked_entries(analysis, i, loc)}",
+                    f"{blocked_entries(analysis, i, loc)}; {assumptions(analysis.facts[i])}",
                     where=f"reachable: {name}",
                 )
             )
