@@ -26,7 +26,7 @@ from hypothesis import strategies as st
 import hybrid
 
 FULL_EXAMPLES = 5_000
-IN_SUITE_EXAMPLES = 60
+IN_SUITE_EXAMPLES = 40
 
 
 def examples(in_suite: int, full: int) -> int:
