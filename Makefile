@@ -51,9 +51,15 @@ bench: $(STAMP_TEST)
 
 # The large campaigns behind the small in-suite ones: 2,000 generated models with every
 # solver method, and 20 Ctrl-C at random moments of a long run (2 to 3 minutes).
+# Randomized tests at full size (well over an hour on 2 cores): every test marked `fuzz`,
+# with HYBRID_FUZZ=1 scaling the example counts (check vs simulate: 5,000 models; loader:
+# 100,000 mutated specs), and the simulation fuzz (2,000 generated models with every
+# solver method) with 20 Ctrl-C at random moments of a long run.
 fuzz: $(STAMP_TEST)
+	HYBRID_FUZZ=1 $(BIN)/python -m pytest -q -p no:cacheprovider -m fuzz tests
 	HYBRID_FUZZ_MODELS=2000 HYBRID_FUZZ_ALL_METHODS=1 HYBRID_INTERRUPT_MOMENTS=20 \
-		$(BIN)/python -m pytest -q -s tests/fuzz tests/cli/test_cli_simulate_interrupts.py
+		$(BIN)/python -m pytest -q -s -p no:cacheprovider \
+		tests/fuzz/test_fuzz_simulation.py tests/cli/test_cli_simulate_interrupts.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .mypy_cache .ruff_cache docs/_build docs/api docs/_generated

@@ -38,6 +38,11 @@ def main(argv: list[str] | None = None) -> int:
     product = product_exploration.run(8 if quick else 12)
     print("product exploration", product)
     report["product_exploration"] = product
+    from bench import scaling_components
+
+    components = scaling_components.run(3 if quick else 7)
+    print("many components", json.dumps(components))
+    report["components"] = components
     scaling = spec_scaling.run()
     for row in scaling["rows"]:
         print(scaling["name"], row)

@@ -1,8 +1,12 @@
 """Product exploration at scale: 12 copies of a 3-location automaton (3**12 = 531,441 modes).
 
 Each copy is a cyclic timer a -> b -> c -> a on its own clock (``x_i' = 1``,
-invariant ``x_i <= 2``, guard ``x_i >= 1``, reset ``x_i := 0``); the copies do
-not synchronise, so every combination of locations is reachable. The whole of
+invariant ``x_i <= 2``, guard ``x_i >= 1``, reset ``x_i := 0``); the copies take
+``a -> b`` together (a shared label, so they form one group of interacting
+components and their product is explored whole), then ``b -> c -> a`` each on
+its own and wait in ``a`` (no invariant there) for the others, so every
+combination of locations is reachable. (Copies sharing no
+label would be explored one by one: see bench/scaling_components.py.) The whole of
 ``hybrid.check`` runs on the composition, with properties asking for
 reachability of every location, deadlock freedom and determinism: the
 exploration visits every mode once.
@@ -36,12 +40,13 @@ def copy(i: int) -> Automaton:
         f"""
 automaton: timer{i}
 state: {{{x}: {{initial: 0, bounds: [0, 10]}}}}
+labels: [go]
 locations:
-  a: {{flow: {{{x}: 1}}, invariant: {x} <= 2}}
+  a: {{flow: {{{x}: 1}}}}
   b: {{flow: {{{x}: 1}}, invariant: {x} <= 2}}
   c: {{flow: {{{x}: 1}}, invariant: {x} <= 2}}
 edges:
-  - {{from: a, to: b, guard: {x} >= 1, reset: {{{x}: 0}}}}
+  - {{from: a, to: b, guard: {x} >= 1, reset: {{{x}: 0}}, label: go}}
   - {{from: b, to: c, guard: {x} >= 1, reset: {{{x}: 0}}}}
   - {{from: c, to: a, guard: {x} >= 1, reset: {{{x}: 0}}}}
 """,

@@ -63,13 +63,35 @@ def render(report: dict[str, Any]) -> str:
         "|" + "---|" * len(p),
         "| " + " | ".join(_fmt(v) for v in p.values()) + " |",
         "",
-        "Peers:",
-        "",
     ]
+    lines += _components(report.get("components"))
+    lines += ["Peers:", ""]
     for name, info in report["peers"].items():
         state = "available" if info["available"] else "not available"
         lines.append(f"- **{name}**: {state}. {info['reason']}")
     return "\n".join(lines)
+
+
+def _components(c: dict[str, Any] | None) -> list[str]:
+    """Many components (bench/scaling_components.py), when the run has it."""
+    if not c:
+        return []
+    sim = c["simulate"]
+    lines = [
+        f"Many components: `simulate` of 50 and 200 independent thermostats to t = {sim['t_end']:g}: "
+        f"{sim['median_s_50']:.2f} s and {sim['median_s_200']:.2f} s (median), growth exponent "
+        f"**{sim['exponent']:.2f}** (min {sim['exponent_min']:.2f}, max {sim['exponent_max']:.2f}).",
+        "",
+        "| `check` case | time | peak memory | findings |",
+        "|---|---|---|---|",
+    ]
+    for case in c["check"]:
+        rules = sorted(set(case["findings"]))
+        lines.append(
+            f"| {case['case']} | {case['s']:.2f} s | {case['peak_rss_mb']:.0f} MB | "
+            f"{', '.join(rules) or 'none'} |"
+        )
+    return [*lines, ""]
 
 
 def _fmt(value: Any) -> str:

@@ -76,6 +76,8 @@ class Properties:
     deadlock_free: bool | None = None
     deterministic: bool | None = None
     positions: Mapping[str, Position] = field(default_factory=dict)
+    ignore: tuple[str, ...] = ()
+    """Rules `hybrid check` does not report for this file (its ``checks: {ignore: [...]}``)."""
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,7 @@ from hybrid.expr import ir
 from hybrid.expr.transform import bind_parameters
 from hybrid.model import Edge
 
-__all__ = ["Mode", "ModeView", "TransitionView", "mode_of", "transitions_of"]
+__all__ = ["Binder", "Mode", "ModeView", "TransitionView", "mode_of", "transitions_of"]
 
 Mode = tuple[str, ...]
 
@@ -62,7 +62,31 @@ class ModeView:
     transitions: tuple[TransitionView, ...]
 
 
-def transitions_of(system: System, key: Mode, *, bind: bool = True) -> tuple[TransitionView, ...]:
+class Binder:
+    """Binds a component's parameters into its expressions once, for many modes.
+
+    ``mode_of(system, key, binder=Binder(system))`` gives the same view as
+    without it, but an expression met again in another mode is not bound
+    again: its bound copy is reused (the same object, so whoever caches by
+    expression, as the compiled model does, finds it again).
+    """
+
+    def __init__(self, system: System) -> None:
+        self.system = system
+        self._bound: dict[tuple[int, int], tuple[ir.Expr, ir.Expr]] = {}
+
+    def __call__(self, i: int, node: ir.Expr) -> ir.Expr:
+        key = (i, id(node))
+        found = self._bound.get(key)
+        if found is None or found[0] is not node:
+            found = (node, bind_parameters(node, self.system.components[i].automaton.parameters))
+            self._bound[key] = found
+        return found[1]
+
+
+def transitions_of(
+    system: System, key: Mode, *, bind: bool = True, binder: Binder | None = None
+) -> tuple[TransitionView, ...]:
     """The transitions leaving mode ``key``, in priority-then-file order of their edges."""
     owners = system.shared_labels
     result: list[TransitionView] = []
@@ -70,7 +94,7 @@ def transitions_of(system: System, key: Mode, *, bind: bool = True) -> tuple[Tra
     for i, (c, loc) in enumerate(zip(system.components, key, strict=True)):
         for edge in c.automaton.outgoing(loc):
             if edge.label is None or edge.label not in owners:
-                result.append(_single(system, key, i, edge, bind))
+                result.append(_single(system, key, i, edge, bind, binder))
             else:
                 shared.setdefault(edge.label, [[] for _ in owners[edge.label]])
                 slot = owners[edge.label].index(i)
@@ -79,25 +103,37 @@ def transitions_of(system: System, key: Mode, *, bind: bool = True) -> tuple[Tra
         comps = owners[label]
         for combo in itertools.product(*per_comp):
             result.append(
-                _synchronised(system, key, label, list(zip(comps, combo, strict=True)), bind)
+                _synchronised(
+                    system, key, label, list(zip(comps, combo, strict=True)), bind, binder
+                )
             )
     result.sort(key=lambda tr: tr.order)
     return tuple(result)
 
 
-def _bound(system: System, i: int, node: ir.Expr, bind: bool) -> ir.Expr:
-    return bind_parameters(node, system.components[i].automaton.parameters) if bind else node
+def _bound(
+    system: System, i: int, node: ir.Expr, bind: bool, binder: Binder | None = None
+) -> ir.Expr:
+    if not bind:
+        return node
+    if binder is not None:
+        return binder(i, node)
+    return bind_parameters(node, system.components[i].automaton.parameters)
 
 
-def _single(system: System, key: Mode, i: int, edge: Edge, bind: bool) -> TransitionView:
+def _single(
+    system: System, key: Mode, i: int, edge: Edge, bind: bool, binder: Binder | None = None
+) -> TransitionView:
     target = list(key)
     target[i] = edge.target
     return TransitionView(
         name=system.qualified(i, edge.name),
         label=edge.label,
         edges=((i, edge),),
-        guard=_bound(system, i, edge.guard, bind),
-        reset=MappingProxyType({k: _bound(system, i, v, bind) for k, v in edge.reset.items()}),
+        guard=_bound(system, i, edge.guard, bind, binder),
+        reset=MappingProxyType(
+            {k: _bound(system, i, v, bind, binder) for k, v in edge.reset.items()}
+        ),
         priority=edge.priority,
         order=(i, edge.index),
         target=tuple(target),
@@ -105,15 +141,20 @@ def _single(system: System, key: Mode, i: int, edge: Edge, bind: bool) -> Transi
 
 
 def _synchronised(
-    system: System, key: Mode, label: str, parts: list[tuple[int, Edge]], bind: bool
+    system: System,
+    key: Mode,
+    label: str,
+    parts: list[tuple[int, Edge]],
+    bind: bool,
+    binder: Binder | None = None,
 ) -> TransitionView:
     target = list(key)
     reset: dict[str, ir.Expr] = {}
     guards: list[ir.Expr] = []
     for i, edge in parts:
         target[i] = edge.target
-        guards.append(_bound(system, i, edge.guard, bind))
-        reset.update({k: _bound(system, i, v, bind) for k, v in edge.reset.items()})
+        guards.append(_bound(system, i, edge.guard, bind, binder))
+        reset.update({k: _bound(system, i, v, bind, binder) for k, v in edge.reset.items()})
     return TransitionView(
         name="+".join(system.qualified(i, e.name) for i, e in parts),
         label=label,
@@ -126,8 +167,11 @@ def _synchronised(
     )
 
 
-def mode_of(system: System, key: Mode) -> ModeView:
-    """Flows, signals, invariants and transitions of mode ``key``, parameters bound."""
+def mode_of(system: System, key: Mode, *, binder: Binder | None = None) -> ModeView:
+    """Flows, signals, invariants and transitions of mode ``key``, parameters bound.
+
+    ``binder`` (a :class:`Binder`) reuses the bound expressions of earlier calls.
+    """
     flow: dict[str, ir.Expr] = {}
     signals: dict[str, ir.Expr] = {}
     invariants: list[tuple[str, ir.Expr]] = []
@@ -135,12 +179,14 @@ def mode_of(system: System, key: Mode) -> ModeView:
         a = c.automaton
         loc = a.locations[loc_name]
         for name in a.signal_names:
-            signals[name] = _bound(system, i, loc.signals.get(name, a.signals[name]), True)
+            signals[name] = _bound(
+                system, i, loc.signals.get(name, a.signals[name]), True, binder
+            )
         for var, expr in loc.flow.items():
-            flow[var] = _bound(system, i, expr, True)
+            flow[var] = _bound(system, i, expr, True, binder)
         if not (isinstance(loc.invariant, ir.BoolConst) and loc.invariant.value):
             invariants.append(
-                (system.qualified(i, loc_name), _bound(system, i, loc.invariant, True))
+                (system.qualified(i, loc_name), _bound(system, i, loc.invariant, True, binder))
             )
     return ModeView(
         key=key,
@@ -148,5 +194,5 @@ def mode_of(system: System, key: Mode) -> ModeView:
         flow=MappingProxyType(flow),
         signals=MappingProxyType(signals),
         invariants=tuple(invariants),
-        transitions=transitions_of(system, key),
+        transitions=transitions_of(system, key, binder=binder),
     )

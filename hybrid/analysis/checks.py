@@ -18,9 +18,16 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from hybrid.analysis.context import Analysis, path_text
-from hybrid.analysis.findings import Finding
+from hybrid.analysis.context import Analysis
+from hybrid.analysis.findings import Finding, WitnessStep
+from hybrid.analysis.property_checks import (
+    assumptions,
+    blocked_entries,
+    incomplete_analysis,
+    property_violations,
+)
 from hybrid.analysis.static import AutomatonFacts
+from hybrid.analysis.zerotime import system_components
 from hybrid.errors import Position
 from hybrid.expr import ir
 from hybrid.model import Automaton, Edge
@@ -58,33 +65,28 @@ def unreachable_locations(analysis: Analysis) -> list[Finding]:
             qualified = analysis.qualified(i, name)
             if analysis.reached(i, name) or qualified in declared:
                 continue
+            initial = analysis.qualified(i, comp.automaton.initial_location)
             found.append(
                 Finding.at(
                     "unreachable-location",
                     loc.position,
-                    f"location '{qualified}' is unreachable from '{analysis.qualified(i, comp.automaton.initial_location)}'"
-                    f"{_blocked_entries(analysis, i, name)}",
+                    f"location '{qualified}' is unreachable from '{initial}'"
+                    f"{blocked_entries(analysis, i, name)}; {assumptions(analysis.facts[i])}",
                     where=qualified,
                 )
             )
     return found
 
 
-def _blocked_entries(analysis: Analysis, component: int, location: str) -> str:
-    """Why nothing leads into ``location``: its incoming edges that can never fire."""
-    facts = analysis.facts[component]
-    into = [f for f in facts.incoming(location) if f.edge.source != location]
-    dead = [f.edge.name for f in into if not f.live]
-    if dead:
-        names = ", ".join(f"'{n}'" for n in dead)
-        return f": the guard of {names} into it can never hold within the declared bounds"
-    if not into:
-        return ": no edge leads into it"
-    return ": no reachable location has an edge into it that can fire"
-
-
 def sink_locations(analysis: Analysis) -> list[Finding]:
-    """Locations whose invariant the flow can leave but that no edge can leave."""
+    """Locations whose invariant the flow can leave but that no edge can leave.
+
+    An error when the location has edges and none of them can ever fire (a
+    run that gets there ends blocked, surely not what the edges were for); a
+    note when it has no edge at all: a location that ends every run when its
+    invariant runs out (a global clock ``clk <= T``, a time horizon) is a
+    standard idiom.
+    """
     found: list[Finding] = []
     for i, (comp, facts) in enumerate(zip(analysis.system.components, analysis.facts, strict=True)):
         for name, loc in comp.automaton.locations.items():
@@ -94,14 +96,26 @@ def sink_locations(analysis: Analysis) -> list[Finding]:
             if any(f.live for f in facts.outgoing(name)):
                 continue
             qualified = analysis.qualified(i, name)
-            edges = facts.outgoing(name)
-            why = "no edge leaves it" if not edges else "none of its edges can ever fire"
+            if not facts.outgoing(name):
+                found.append(
+                    Finding.at(
+                        "sink-location",
+                        loc.position,
+                        f"location '{qualified}' has no edge out: a run ends blocked there when "
+                        f"its invariant '{loc.invariant_source}' runs out (fine for a time "
+                        "horizon or a final location)",
+                        where=qualified,
+                        severity="note",
+                    )
+                )
+                continue
             found.append(
                 Finding.at(
                     "sink-location",
                     loc.position,
                     f"location '{qualified}' is a sink: the flow can leave its invariant "
-                    f"'{loc.invariant_source}' but {why}; a run that gets there ends blocked",
+                    f"'{loc.invariant_source}' but none of its edges can ever fire; a run that "
+                    f"gets there ends blocked ({assumptions(facts)})",
                     where=qualified,
                 )
             )
@@ -123,7 +137,9 @@ def dead_edges(analysis: Analysis) -> list[Finding]:
                         "dead-edge",
                         _edge_position(edge),
                         f"edge '{qualified}' can never fire: its guard '{edge.guard_source}' "
-                        f"cannot hold within the declared bounds" + _invariant_note(facts, edge),
+                        "cannot hold where a run may be in its source, neither while flowing"
+                        + _invariant_note(facts, edge)
+                        + f" nor on entry; {assumptions(facts)}",
                         where=qualified,
                     )
                 )
@@ -153,7 +169,7 @@ def _invariant_note(facts: AutomatonFacts, edge: Edge) -> str:
     inv = facts.automaton.locations[edge.source].invariant_source
     if inv.strip() == "true":
         return ""
-    return f" and the invariant '{inv}' of '{edge.source}'"
+    return f" (within the invariant '{inv}' of '{edge.source}')"
 
 
 def nondeterminism(analysis: Analysis) -> list[Finding]:
@@ -184,22 +200,39 @@ def nondeterminism(analysis: Analysis) -> list[Finding]:
 
 
 def zero_time_cycles(analysis: Analysis) -> list[Finding]:
-    """Cycles of edges that can be taken again and again without time passing."""
+    """Strongly connected components of edges that may fire again and again at one instant.
+
+    One finding per component (:mod:`hybrid.analysis.zerotime`), with a
+    shortest cycle through it as witness; only edges whose source may be
+    reached count, and in a system a shared label counts only while every
+    owner of it can take it again and again at one instant too.
+    """
+
+    def allowed(i: int, e: int) -> bool:
+        return analysis.reached(i, analysis.facts[i].automaton.edges[e].source)
+
+    per_component = system_components(analysis.zero_time, analysis.system.shared_labels, allowed)
     found: list[Finding] = []
-    for i, facts in enumerate(analysis.facts):
-        edges = facts.automaton.edges
-        for cycle in facts.zero_time_cycles():
-            if not all(analysis.reached(i, edges[e].source) for e in cycle):
-                continue
-            names = [analysis.qualified(i, edges[e].name) for e in cycle]
+    for i, components in enumerate(per_component):
+        edges = analysis.facts[i].automaton.edges
+        for comp in components:
+            names = [analysis.qualified(i, edges[e].name) for e in comp.cycle]
             loop = " -> ".join([*names, names[0]])
+            steps: list[WitnessStep] = [(None, analysis.qualified(i, edges[comp.cycle[0]].source))]
+            steps += [
+                (n, analysis.qualified(i, edges[e].target))
+                for n, e in zip(names, comp.cycle, strict=True)
+            ]
+            more = len(comp.edges) - len(set(comp.cycle))
             found.append(
                 Finding.at(
                     "zero-time-cycle",
-                    edges[cycle[0]].position,
-                    f"edges {loop} can fire again and again without time passing (each guard "
-                    "can hold right after the previous reset): a Zeno candidate",
+                    edges[comp.cycle[0]].position,
+                    f"edges {loop} may fire again and again without time passing (each guard "
+                    "can hold right after the previous reset): a Zeno candidate"
+                    + (f"; {more} more edge(s) can join such cycles" if more else ""),
                     where=names[0],
+                    witness=steps,
                 )
             )
     return found
@@ -267,111 +300,6 @@ def _expressions(a: Automaton) -> list[ir.Expr]:
     for edge in a.edges:
         exprs += [edge.guard, *edge.reset.values()]
     return exprs
-
-
-def property_violations(analysis: Analysis) -> list[Finding]:
-    """The declared properties refuted, each with a witness path where there is one."""
-    props = analysis.system.properties
-    exploration = analysis.exploration
-    tables = analysis.tables
-    where = props.positions
-    position = analysis.system.position
-    index = {
-        tables.location_name(i, k): (i, k)
-        for i, c in enumerate(tables.components)
-        for k in range(len(c.locations))
-    }
-    found: list[Finding] = []
-    for name in (*props.reachable, *props.unreachable):
-        if name not in index:
-            found.append(
-                Finding.at(
-                    "property-violated",
-                    position,
-                    f"property names an unknown location '{name}'",
-                    where=name,
-                )
-            )
-    for name in props.reachable:
-        if name not in index:
-            continue
-        i, k = index[name]
-        if exploration.complete and not exploration.reached[i][k]:
-            loc = tables.components[i].locations[k]
-            found.append(
-                Finding.at(
-                    "property-violated",
-                    where.get(f"reachable:{name}", position),
-                    f"location '{name}' is declared reachable but is not"
-                    f"{_blocked_entries(analysis, i, loc)}",
-                    where=f"reachable: {name}",
-                )
-            )
-    for name in props.unreachable:
-        if name not in index:
-            continue
-        i, k = index[name]
-        if exploration.reached[i][k]:
-            witness = analysis.witness(exploration.first_reach[(i, k)])
-            found.append(
-                Finding.at(
-                    "property-violated",
-                    where.get(f"unreachable:{name}", position),
-                    f"location '{name}' is declared unreachable but may be reached: "
-                    f"{path_text(witness)}",
-                    where=f"unreachable: {name}",
-                    witness=witness,
-                )
-            )
-    if props.deadlock_free and exploration.first_deadlock is not None:
-        witness = analysis.witness(exploration.first_deadlock)
-        stuck = ", ".join(
-            sorted(f"'{tables.location_name(i, k)}'" for i, k in exploration.stuck_at)
-        )
-        found.append(
-            Finding.at(
-                "property-violated",
-                where.get("deadlock_free", position),
-                f"deadlock_free: the flow may leave the invariant of {stuck} at a point where "
-                f"no transition is enabled ({exploration.deadlocks} reachable mode(s)); "
-                f"witness: {path_text(witness)}",
-                where="deadlock_free",
-                witness=witness,
-            )
-        )
-    if props.deterministic and exploration.first_conflict is not None:
-        witness = analysis.witness(exploration.first_conflict)
-        places = ", ".join(
-            sorted(f"'{tables.location_name(i, k)}'" for i, k in exploration.conflicted_at)
-        )
-        found.append(
-            Finding.at(
-                "property-violated",
-                where.get("deterministic", position),
-                f"deterministic: edges of the same priority can be enabled at once in {places} "
-                f"({exploration.conflicts} reachable mode(s)); witness: {path_text(witness)}",
-                where="deterministic",
-                witness=witness,
-            )
-        )
-    return found
-
-
-def incomplete_analysis(analysis: Analysis) -> list[Finding]:
-    """A note when the product was too large to explore whole."""
-    exploration = analysis.exploration
-    if exploration.complete:
-        return []
-    return [
-        Finding.at(
-            "analysis-incomplete",
-            analysis.system.position,
-            f"exploration of the product stopped after {exploration.states} modes; "
-            "unreachable-location, never-synchronising edges and reachable properties are "
-            "not reported",
-            where=analysis.system.name,
-        )
-    ]
 
 
 CHECKS: tuple[Callable[[Analysis], list[Finding]], ...] = (

@@ -18,11 +18,13 @@ from dataclasses import dataclass
 
 import networkx as nx
 
-from hybrid.analysis.explore import DEFAULT_MAX_STATES, Exploration, explore
+from hybrid.analysis.explore import DEFAULT_MAX_BYTES, DEFAULT_MAX_STATES, Progress
 from hybrid.analysis.findings import WitnessStep
 from hybrid.analysis.graph import location_graph
 from hybrid.analysis.product import ProductTables
+from hybrid.analysis.reach import Reachability, Ref, explore_system
 from hybrid.analysis.static import AutomatonFacts
+from hybrid.analysis.zerotime import ZeroTimeGraph
 from hybrid.compose import System, as_system
 from hybrid.model import Automaton
 
@@ -38,7 +40,15 @@ class Analysis:
     facts: list[AutomatonFacts]
     graphs: list[nx.MultiDiGraph]
     tables: ProductTables
-    exploration: Exploration
+    exploration: Reachability
+    _zero_time: list[ZeroTimeGraph] | None = None
+
+    @property
+    def zero_time(self) -> list[ZeroTimeGraph]:
+        """The zero-time graph of every component (built on first use)."""
+        if self._zero_time is None:
+            self._zero_time = [ZeroTimeGraph(f) for f in self.facts]
+        return self._zero_time
 
     def reached(self, component: int, location: str) -> bool:
         """Whether the location may be reached (always true if exploration stopped early)."""
@@ -54,42 +64,48 @@ class Analysis:
     def witness_to(self, location: str) -> tuple[WitnessStep, ...] | None:
         """A shortest path to a location (``comp.loc`` in a system), or ``None`` if unreachable.
 
-        The path follows edges whose guards can hold within the declared bounds
-        (and, in a system, that can synchronise); guards are judged one at a
-        time, so the path is a candidate run, not a proven one.
+        The path follows edges that can fire (and, in a system, that can
+        synchronise); guards are judged one edge at a time, so the path is a
+        candidate run, not a proven one.
         """
         tables = self.tables
         for i, comp in enumerate(tables.components):
             for k in range(len(comp.locations)):
                 if tables.location_name(i, k) == location:
-                    code = self.exploration.first_reach.get((i, k))
-                    return None if code is None else self.witness(code)
+                    ref = self.exploration.first_reach.get((i, k))
+                    return None if ref is None else self.witness(ref)
         raise KeyError(location)
 
-    def witness(self, code: int) -> tuple[WitnessStep, ...]:
-        """The path to mode ``code``: ``(None, initial)`` then ``(transition, mode)`` steps."""
-        tables = self.tables
-        steps: list[WitnessStep] = [(None, tables.name(tables.initial))]
-        for transition, mode in self.exploration.path_to(code):
-            steps.append((tables.transition_name(transition), tables.name(mode)))
-        return tuple(steps)
+    def witness(self, ref: Ref) -> tuple[WitnessStep, ...]:
+        """The path to a mode: ``(None, initial)`` then ``(transition, mode)`` steps."""
+        return self.exploration.witness(ref)
 
 
-def analyse(model: Automaton | System, *, max_states: int = DEFAULT_MAX_STATES) -> Analysis:
-    """Static facts, location graphs and the product exploration of ``model``.
+def analyse(
+    model: Automaton | System,
+    *,
+    max_states: int = DEFAULT_MAX_STATES,
+    max_bytes: int = DEFAULT_MAX_BYTES,
+    progress: Progress | None = None,
+) -> Analysis:
+    """Static facts, location graphs and the reachable product of ``model``.
 
     Parameters
     ----------
     model
         An automaton or a system.
     max_states
-        Stop exploring the product after this many modes.
+        Stop exploring a group's product after this many modes.
+    max_bytes
+        Stop exploring a group's product before its modes take more memory than this.
+    progress
+        Called as ``progress(modes, frontier)`` while exploring (for a progress display).
     """
     system = as_system(model)
     facts = [AutomatonFacts(c.automaton) for c in system.components]
     graphs = [location_graph(c.automaton, f) for c, f in zip(system.components, facts, strict=True)]
     tables = ProductTables(system, facts)
-    exploration = explore(tables, max_states)
+    exploration = explore_system(tables, max_states, max_bytes=max_bytes, progress=progress)
     return Analysis(model, system, facts, graphs, tables, exploration)
 
 

@@ -8,13 +8,21 @@ edges (guard can hold within bounds) split into local ones and ones carrying
 a label shared with other components (those fire together, one edge from
 each owner of the label, as in :func:`hybrid.modes.transitions_of`).
 
-Modes are tuples of location indices, encoded as integers in mixed radix, and
-each BFS level is processed with numpy: successors, the visited set (a bitmap
-when the product is small enough, else a set of ints), and the per-mode
-verdicts (deadlock, nondeterminism), which are decided once per distinct
-(location, available shared labels) and looked up for every mode.
+Modes are tuples of location indices, encoded in mixed radix as one int64
+word, or several for products beyond 62 bits (:func:`words`), and each BFS
+level is processed with numpy, in slices: successors, the visited set (a
+bitmap when the product is small enough, else sorted arrays merged as they
+grow), and the per-mode verdicts (deadlock, nondeterminism), which are
+decided once per distinct (location, available shared labels) and looked up
+for every mode. A mode is named by its index in breadth-first order.
 :func:`explore_reference` is a plain-Python BFS with the same results, kept
-as a cross-check and for products too large for 62-bit codes.
+as a cross-check.
+
+The explorer is bounded: it stops (``complete`` false) after ``max_states``
+modes, or earlier when the modes it keeps would take more than ``max_bytes``
+of memory (:func:`state_bound`), so a product too large to explore ends
+with a note instead of exhausting memory. ``progress(modes, frontier)`` is
+called after every slice, for a progress display.
 
 Examples
 --------
@@ -38,80 +46,60 @@ Examples
 
 from __future__ import annotations
 
-import itertools
 import time
-from collections import deque
-from collections.abc import Callable
-from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybrid.analysis.product import Mode, ProductTables, Transition
+from hybrid.analysis.exploration import (
+    DEFAULT_MAX_BYTES,
+    DEFAULT_MAX_STATES,
+    SLICE_CELLS,
+    Exploration,
+    Progress,
+    explore_reference,
+    state_bound,
+    words,
+)
+from hybrid.analysis.product import Mode, ProductTables
 
-__all__ = ["DEFAULT_MAX_STATES", "Exploration", "explore", "explore_reference"]
+__all__ = [
+    "DEFAULT_MAX_BYTES",
+    "DEFAULT_MAX_STATES",
+    "Exploration",
+    "Progress",
+    "explore",
+    "explore_reference",
+    "state_bound",
+]
 
-DEFAULT_MAX_STATES = 5_000_000
 DENSE_LIMIT = 1 << 25  # products up to this size keep the visited set as a bitmap
-_CODE_LIMIT = 1 << 62
 
 
-@dataclass
-class Exploration:
-    """What the exploration found; modes are given as integer codes."""
-
-    tables: ProductTables
-    states: int = 0
-    complete: bool = True
-    seconds: float = 0.0
-    reached: list[np.ndarray] = field(default_factory=list)
-    first_reach: dict[tuple[int, int], int] = field(default_factory=dict)
-    deadlocks: int = 0
-    first_deadlock: int | None = None
-    stuck_at: set[tuple[int, int]] = field(default_factory=set)
-    conflicts: int = 0
-    first_conflict: int | None = None
-    conflicted_at: set[tuple[int, int]] = field(default_factory=set)
-    fired: set[tuple[int, int]] = field(default_factory=set)
-    modes: list[int] = field(default_factory=list)
-    """Codes of the modes visited, in breadth-first order (level by level)."""
-    _parent: Callable[[int], int | None] | None = None
-
-    def path_to(self, code: int) -> list[tuple[Transition, Mode]]:
-        """A shortest path of transitions from the initial mode to mode ``code``."""
-        if self._parent is None:
-            return []
-        chain = [code]
-        while True:
-            parent = self._parent(chain[-1])
-            if parent is None:
-                break
-            chain.append(parent)
-        chain.reverse()
-        steps: list[tuple[Transition, Mode]] = []
-        for src, dst in itertools.pairwise(chain):
-            mode, target = self.tables.decode(src), self.tables.decode(dst)
-            for tr in self.tables.successors(mode):
-                if tr.target == target:
-                    steps.append((tr, target))
-                    break
-        return steps
-
-
-def explore(tables: ProductTables, max_states: int = DEFAULT_MAX_STATES) -> Exploration:
+def explore(
+    tables: ProductTables,
+    max_states: int = DEFAULT_MAX_STATES,
+    *,
+    max_bytes: int = DEFAULT_MAX_BYTES,
+    progress: Progress | None = None,
+) -> Exploration:
     """Breadth-first exploration of the reachable product (numpy, level by level).
 
-    Stops after ``max_states`` modes (``complete`` is then ``False``).
+    Stops after ``max_states`` modes, or when the modes kept would exceed
+    ``max_bytes`` (``complete`` is then ``False``; ``bound`` says where).
     """
-    if tables.size >= _CODE_LIMIT:
-        return explore_reference(tables, max_states)
     start = time.perf_counter()
-    result = Exploration(tables)
+    bound = state_bound(tables, max_states, max_bytes)
+    result = Exploration(tables, bound=bound)
     result.reached = [np.zeros(n, dtype=bool) for n in tables.radices]
-    weights = np.array(tables.weights, dtype=np.int64)
+    layout = words(tables)
+    width = 1 + max((w for w, _ in layout), default=0)
+    col = np.array([w for w, _ in layout], dtype=np.int64)
+    weight = np.array([g for _, g in layout], dtype=np.int64)
     radices = np.array(tables.radices, dtype=np.int64)
-    local_tabs = [_delta_table(tables, i, None) for i in range(len(tables.components))]
+    local_tabs = [_delta_table(tables, i, None, int(weight[i])) for i in range(len(radices))]
     sync_tabs = {
-        a: [(o, *_delta_table(tables, o, a)) for o in owners] for a, owners in tables.owners.items()
+        a: [(o, *_delta_table(tables, o, a, int(weight[o]))) for o in owners]
+        for a, owners in tables.owners.items()
     }
     stick_loc = [
         np.array([tables.may_stick(i, loc) for loc in range(n)])
@@ -121,127 +109,191 @@ def explore(tables: ProductTables, max_states: int = DEFAULT_MAX_STATES) -> Expl
         np.array([tables.may_conflict(i, loc) for loc in range(n)])
         for i, n in enumerate(tables.radices)
     ]
+    # a slice's successors take about (modes x components x words) int64s: keep that bounded
+    step = max(64, SLICE_CELLS // (max(1, len(radices)) * width))
 
-    dense = tables.size <= DENSE_LIMIT
-    bitmap = np.zeros(tables.size if dense else 0, dtype=bool)
-    seen: set[int] = set()
-    levels: list[tuple[np.ndarray, np.ndarray]] = []
-    init = tables.encode(tables.initial)
-    frontier = np.array([init], dtype=np.int64)
-    if dense:
-        bitmap[init] = True
-    else:
-        seen.add(init)
-    levels.append((frontier, np.array([-1], dtype=np.int64)))
+    def digits_of(rows: np.ndarray) -> np.ndarray:
+        return (rows[:, col] // weight) % radices
+
+    visited = _Visited(width, tables.size)
+    init = np.zeros((1, width), dtype=np.int64)
+    for i, loc in enumerate(tables.initial):
+        init[0, col[i]] += loc * weight[i]
+    levels: list[tuple[np.ndarray, np.ndarray]] = [(init, np.array([-1], dtype=np.int64))]
+    offsets = [0]
+    visited.add(init)
+    frontier = init
     count = 1
 
-    while frontier.size:
-        digits = (frontier[:, None] // weights) % radices
-        offered = {}
-        for a, parts in sync_tabs.items():
-            ok = np.ones(frontier.size, dtype=bool)
-            for o, _, mask in parts:
-                ok &= mask[digits[:, o]].any(axis=1)
-            offered[a] = ok
-        _record_reach(result, digits, frontier)
-        _record_fired(tables, result, digits, offered)
-        _record_verdicts(tables, result, digits, frontier, offered, stick_loc, conflict_loc)
-
-        stepped = _successors(frontier, digits, local_tabs, sync_tabs, offered)
-        if stepped is None:
+    while frontier.size and result.complete:
+        base = offsets[-1]
+        fresh: list[tuple[np.ndarray, np.ndarray]] = []
+        for lo in range(0, frontier.shape[0], step):
+            part = frontier[lo : lo + step]
+            ids = base + lo + np.arange(part.shape[0], dtype=np.int64)
+            digits = digits_of(part)
+            offered = {}
+            for a, parts in sync_tabs.items():
+                ok = np.ones(part.shape[0], dtype=bool)
+                for o, _, mask in parts:
+                    ok &= mask[digits[:, o]].any(axis=1)
+                offered[a] = ok
+            _record_reach(result, digits, ids)
+            _record_fired(tables, result, digits, offered)
+            _record_verdicts(tables, result, digits, ids, offered, stick_loc, conflict_loc)
+            if not result.complete:
+                continue  # the bound was met: only record the rest of this level
+            stepped = _successors(part, ids, digits, col, local_tabs, sync_tabs, offered)
+            if stepped is not None:
+                rows, parents = stepped
+                keys = _keys(rows)
+                _, first = np.unique(keys, return_index=True)
+                rows, parents = rows[first], parents[first]
+                new = ~visited.contains(rows)
+                rows, parents = rows[new], parents[new]
+                if rows.shape[0]:
+                    visited.add(rows)
+                    fresh.append((rows, parents))
+                    count += rows.shape[0]
+                    if count > bound:
+                        result.complete = False
+            if progress is not None:
+                progress(count, frontier.shape[0])
+        if not fresh:
             break
-        candidates, parents = stepped
-        unique, first = np.unique(candidates, return_index=True)
-        parents = parents[first]
-        if dense:
-            fresh = ~bitmap[unique]
-        else:
-            fresh = np.fromiter(
-                (c not in seen for c in unique.tolist()), dtype=bool, count=unique.size
-            )
-        unique, parents = unique[fresh], parents[fresh]
-        if count + unique.size > max_states:
-            keep = max_states - count
-            unique, parents = unique[:keep], parents[:keep]
-            result.complete = False
-        if dense:
-            bitmap[unique] = True
-        else:
-            seen.update(unique.tolist())
-        count += unique.size
-        levels.append((unique, parents))
-        frontier = unique
+        rows = np.concatenate([r for r, _ in fresh])
+        parents = np.concatenate([p for _, p in fresh])
         if not result.complete:
-            digits = (frontier[:, None] // weights) % radices
-            _record_reach(result, digits, frontier)
-            break
+            keep = bound - (count - rows.shape[0])
+            rows, parents = rows[:keep], parents[:keep]
+            count = bound
+        offsets.append(offsets[-1] + levels[-1][0].shape[0])
+        levels.append((rows, parents))
+        frontier = rows
+        if not result.complete:  # the last level kept is reached too; record it in slices
+            for lo in range(0, frontier.shape[0], step):
+                part = frontier[lo : lo + step]
+                ids = offsets[-1] + lo + np.arange(part.shape[0], dtype=np.int64)
+                _record_reach(result, digits_of(part), ids)
 
     result.states = count
-    result.seconds = time.perf_counter() - start
 
-    def parent(code: int) -> int | None:
-        for codes, pars in levels:
-            pos = int(np.searchsorted(codes, code))
-            if pos < codes.size and int(codes[pos]) == code:
-                value = int(pars[pos])
-                return None if value < 0 else value
-        return None
+    def locate(index: int) -> tuple[int, int]:
+        level = int(np.searchsorted(np.array(offsets), index, side="right")) - 1
+        return level, index - offsets[level]
+
+    def parent(index: int) -> int | None:
+        level, pos = locate(index)
+        value = int(levels[level][1][pos])
+        return None if value < 0 else value
+
+    def mode(index: int) -> Mode:
+        level, pos = locate(index)
+        row = levels[level][0][pos : pos + 1]
+        return tuple(int(d) for d in digits_of(row)[0].tolist())
 
     result._parent = parent
-    result.modes = [int(c) for codes, _ in levels for c in codes.tolist()]
+    result._mode = mode
+    result.seconds = time.perf_counter() - start
     return result
+
+
+def _keys(rows: np.ndarray) -> np.ndarray:
+    """One sortable key per row of a code array (the int itself for one word)."""
+    if rows.shape[1] == 1:
+        return rows[:, 0]
+    rows = np.ascontiguousarray(rows)
+    return rows.view(np.dtype((np.void, 8 * rows.shape[1]))).ravel()
+
+
+class _Visited:
+    """The set of mode codes seen: a bitmap for small products, else sorted key arrays.
+
+    Sorted arrays are merged when a newer one grows to half the size of the
+    one before (as in a log-structured merge tree), so a lookup searches a
+    logarithmic number of arrays and every key is copied a logarithmic
+    number of times.
+    """
+
+    def __init__(self, width: int, size: int) -> None:
+        self.bitmap = np.zeros(size, dtype=bool) if width == 1 and size <= DENSE_LIMIT else None
+        self.chunks: list[np.ndarray] = []
+
+    def contains(self, rows: np.ndarray) -> np.ndarray:
+        keys = _keys(rows)
+        if self.bitmap is not None:
+            seen: np.ndarray = self.bitmap[keys]
+            return seen
+        found = np.zeros(keys.shape[0], dtype=bool)
+        for chunk in self.chunks:
+            pos = np.minimum(np.searchsorted(chunk, keys), chunk.shape[0] - 1)
+            found |= chunk[pos] == keys
+        return found
+
+    def add(self, rows: np.ndarray) -> None:
+        keys = _keys(rows)
+        if self.bitmap is not None:
+            self.bitmap[keys] = True
+            return
+        self.chunks.append(np.sort(keys))
+        while len(self.chunks) > 1 and self.chunks[-2].shape[0] <= 2 * self.chunks[-1].shape[0]:
+            last = self.chunks.pop()
+            self.chunks[-1] = np.sort(np.concatenate([self.chunks[-1], last]))
 
 
 _Table = tuple[np.ndarray, np.ndarray]
 
 
 def _successors(
-    frontier: np.ndarray,
+    part: np.ndarray,
+    ids: np.ndarray,
     digits: np.ndarray,
+    col: np.ndarray,
     local_tabs: list[_Table],
     sync_tabs: dict[str, list[tuple[int, np.ndarray, np.ndarray]]],
     offered: dict[str, np.ndarray],
 ) -> tuple[np.ndarray, np.ndarray] | None:
-    """Codes of all successors of the frontier and, aligned, the code of their parent."""
+    """Codes of all successors of ``part`` and, aligned, the index of their parent."""
     succ: list[np.ndarray] = []
     pars: list[np.ndarray] = []
     for i, (delta, mask) in enumerate(local_tabs):
         if not mask.any():
             continue
-        d = delta[digits[:, i]]
         m = mask[digits[:, i]]
-        succ.append((frontier[:, None] + d)[m])
-        pars.append(np.broadcast_to(frontier[:, None], d.shape)[m])
+        row, edge = np.nonzero(m)
+        if not row.size:
+            continue
+        rows = part[row].copy()
+        rows[:, col[i]] += delta[digits[row, i], edge]
+        succ.append(rows)
+        pars.append(ids[row])
     for a, parts in sync_tabs.items():
         ok = offered[a]
         if not ok.any():
             continue
-        base = frontier[ok]
-        # one axis per owner of the label: every combination of their edges
-        total = base.reshape((-1,) + (1,) * len(parts))
-        valid = np.ones(total.shape, dtype=bool)
-        for n, (o, delta, mask) in enumerate(parts):
-            shape = [base.size] + [1] * len(parts)
-            shape[n + 1] = delta.shape[1]
-            sel = digits[ok, o]
-            total = total + delta[sel].reshape(shape)
-            valid = valid & mask[sel].reshape(shape)
-        succ.append(total[valid])
-        pars.append(np.broadcast_to(base.reshape((-1,) + (1,) * len(parts)), total.shape)[valid])
+        # every combination of the owners' edges, one owner at a time
+        rows, parent, picked = part[ok], ids[ok], digits[ok]
+        for o, delta, mask in parts:
+            row, edge = np.nonzero(mask[picked[:, o]])
+            rows = rows[row].copy()
+            rows[:, col[o]] += delta[picked[row, o], edge]
+            parent, picked = parent[row], picked[row]
+        succ.append(rows)
+        pars.append(parent)
     if not succ:
         return None
     return np.concatenate(succ), np.concatenate(pars)
 
 
 def _delta_table(
-    tables: ProductTables, component: int, label: str | None
+    tables: ProductTables, component: int, label: str | None, weight: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """Per location: code deltas of the live edges (local ones, or those with ``label``)."""
     c = tables.components[component]
     rows: list[list[int]] = []
     for loc in range(len(c.locations)):
         edges = c.local[loc] if label is None else c.sync[loc].get(label, ())
-        rows.append([(c.targets[e] - loc) * tables.weights[component] for e in edges])
+        rows.append([(c.targets[e] - loc) * weight for e in edges])
     width = max((len(r) for r in rows), default=0)
     delta = np.zeros((len(rows), max(width, 1)), dtype=np.int64)
     mask = np.zeros((len(rows), max(width, 1)), dtype=bool)
@@ -253,14 +305,14 @@ def _delta_table(
     return delta, mask
 
 
-def _record_reach(result: Exploration, digits: np.ndarray, frontier: np.ndarray) -> None:
+def _record_reach(result: Exploration, digits: np.ndarray, ids: np.ndarray) -> None:
     for i, reached in enumerate(result.reached):
         if reached.all():
             continue
         column = digits[:, i]
         present = np.bincount(column, minlength=reached.size) > 0
         for loc in np.flatnonzero(present & ~reached):
-            result.first_reach[(i, int(loc))] = int(frontier[np.argmax(column == loc)])
+            result.first_reach[(i, int(loc))] = int(ids[np.argmax(column == loc)])
         reached |= present
 
 
@@ -281,12 +333,12 @@ def _record_verdicts(
     tables: ProductTables,
     result: Exploration,
     digits: np.ndarray,
-    frontier: np.ndarray,
+    ids: np.ndarray,
     offered: dict[str, np.ndarray],
     stick_loc: list[np.ndarray],
     conflict_loc: list[np.ndarray],
 ) -> None:
-    size = frontier.size
+    size = ids.size
     dead = np.zeros(size, dtype=bool)
     clash = np.zeros(size, dtype=bool)
     for i, c in enumerate(tables.components):
@@ -326,59 +378,8 @@ def _record_verdicts(
     if dead.any():
         result.deadlocks += int(dead.sum())
         if result.first_deadlock is None:
-            result.first_deadlock = int(frontier[np.argmax(dead)])
+            result.first_deadlock = int(ids[np.argmax(dead)])
     if clash.any():
         result.conflicts += int(clash.sum())
         if result.first_conflict is None:
-            result.first_conflict = int(frontier[np.argmax(clash)])
-
-
-def explore_reference(tables: ProductTables, max_states: int = DEFAULT_MAX_STATES) -> Exploration:
-    """The same exploration in plain Python over tuples (slow; a cross-check)."""
-    start = time.perf_counter()
-    result = Exploration(tables)
-    result.reached = [np.zeros(n, dtype=bool) for n in tables.radices]
-    parents: dict[Mode, Mode | None] = {tables.initial: None}
-    queue: deque[Mode] = deque([tables.initial])
-    while queue:
-        mode = queue.popleft()
-        code = tables.encode(mode)
-        for i, loc in enumerate(mode):
-            if not result.reached[i][loc]:
-                result.reached[i][loc] = True
-                result.first_reach[(i, loc)] = code
-        offered = tables.offered(mode)
-        dead = clash = False
-        for i, loc in enumerate(mode):
-            bits = tables.bits(i, offered)
-            if tables.stuck(i, loc, bits):
-                result.stuck_at.add((i, loc))
-                dead = True
-            if tables.conflicted(i, loc, bits):
-                result.conflicted_at.add((i, loc))
-                clash = True
-        if dead:
-            result.deadlocks += 1
-            if result.first_deadlock is None:
-                result.first_deadlock = code
-        if clash:
-            result.conflicts += 1
-            if result.first_conflict is None:
-                result.first_conflict = code
-        for tr in tables.successors(mode):
-            if tr.label is not None and tr.label in tables.owners:
-                result.fired.update(tr.parts)
-            if tr.target not in parents:
-                if len(parents) >= max_states:
-                    result.complete = False
-                    continue
-                parents[tr.target] = mode
-                queue.append(tr.target)
-    result.states = len(parents)
-    result.seconds = time.perf_counter() - start
-    by_code = {
-        tables.encode(m): (None if p is None else tables.encode(p)) for m, p in parents.items()
-    }
-    result._parent = by_code.get
-    result.modes = list(by_code)
-    return result
+            result.first_conflict = int(ids[np.argmax(clash)])

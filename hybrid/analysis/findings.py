@@ -192,6 +192,8 @@ class Report:
     findings: tuple[Finding, ...] = ()
     name: str = ""
     file: str = ""
+    repeated: int = 0
+    """Findings left out because an earlier report of the same run had them."""
 
     @property
     def ok(self) -> bool:

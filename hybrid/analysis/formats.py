@@ -3,7 +3,10 @@
 Each writer takes the reports of all files checked (an invalid file is a
 report holding its ``invalid-spec`` findings) and returns the whole output as
 one string. The text writer leaves ``invalid-spec`` findings out: the command
-prints those to stderr, as ``hybrid validate`` does.
+prints those to stderr, as ``hybrid validate`` does. The ``github``, ``junit``
+and ``sarif`` writers give every path relative to the current directory when
+it is under it: code scanning and pull-request annotations attach only to
+paths relative to the workspace.
 
 Examples
 --------
@@ -19,8 +22,10 @@ b.yaml: ok
 from __future__ import annotations
 
 import json
+import os
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import PurePath
 from typing import Any
 from urllib.parse import quote
@@ -28,7 +33,7 @@ from urllib.parse import quote
 from hybrid.analysis.findings import RULES, Finding, Report
 from hybrid.version import __version__
 
-__all__ = ["FORMATS", "SARIF_SCHEMA", "write"]
+__all__ = ["FORMATS", "SARIF_SCHEMA", "relative", "write"]
 
 SARIF_SCHEMA = "https://json.schemastore.org/sarif-2.1.0.json"
 _GITHUB_LEVEL = {"error": "error", "warning": "warning", "note": "notice"}
@@ -38,13 +43,46 @@ def _all(reports: Sequence[Report]) -> list[Finding]:
     return [f for r in reports for f in r.findings]
 
 
+def relative(file: str) -> str:
+    """``file`` relative to the current directory when it is under it (as CI annotations need).
+
+    Examples
+    --------
+    >>> import os
+    >>> relative(os.path.abspath("specs/thermostat.yaml")), relative("/elsewhere/a.yaml")
+    ('specs/thermostat.yaml', '/elsewhere/a.yaml')
+    """
+    if file.startswith("<"):
+        return file
+    here = os.path.abspath(os.curdir)
+    full = os.path.abspath(file)
+    if full == here or full.startswith(here.rstrip(os.sep) + os.sep):
+        return PurePath(os.path.relpath(full, here)).as_posix()
+    return file
+
+
+def _placed(reports: Sequence[Report]) -> list[Report]:
+    """The reports with every file relative to the current directory when under it."""
+    return [
+        Report(
+            tuple(replace(f, file=relative(f.file)) for f in r.findings),
+            r.name,
+            relative(r.file),
+            r.repeated,
+        )
+        for r in reports
+    ]
+
+
 def text(reports: Sequence[Report], strict: bool = False) -> str:
     """One ``file:line:column: severity rule-id: message`` line per finding; ``file: ok`` if none."""
     lines: list[str] = []
     for report in reports:
         shown = [f for f in report.findings if f.rule != "invalid-spec"]
         lines.extend(f.text() for f in shown)
-        if not report.findings:
+        if report.repeated and not report.findings:
+            lines.append(f"{report.file}: {report.repeated} finding(s), shown above")
+        elif not report.findings:
             lines.append(f"{report.file}: ok")
     return "\n".join(lines)
 
@@ -67,7 +105,7 @@ def _escape_property(value: str) -> str:
 def github(reports: Sequence[Report], strict: bool = False) -> str:
     """GitHub Actions workflow commands: ``::error file=…,line=…,col=…,title=rule::message``."""
     lines = []
-    for f in _all(reports):
+    for f in _all(_placed(reports)):
         props = ",".join(
             f"{k}={_escape_property(str(v))}"
             for k, v in (("file", f.file), ("line", f.line), ("col", f.column), ("title", f.rule))
@@ -84,7 +122,7 @@ def junit(reports: Sequence[Report], strict: bool = False) -> str:
     """
     root = ET.Element("testsuites", name="hybrid check")
     total = failed = errored = 0
-    for report in reports:
+    for report in _placed(reports):
         suite = ET.SubElement(root, "testsuite", name=report.file)
         tests = failures = errors = 0
         for f in report.findings:
@@ -145,7 +183,7 @@ def sarif(reports: Sequence[Report], strict: bool = False) -> str:
         for r in RULES.values()
     ]
     results: list[dict[str, Any]] = []
-    for f in _all(reports):
+    for f in _all(_placed(reports)):
         location: dict[str, Any] = {
             "physicalLocation": {
                 "artifactLocation": {"uri": _uri(f.file)},

@@ -86,7 +86,7 @@ def product_graph(tables: ProductTables, max_states: int = 10_000) -> nx.MultiDi
     """
     exploration = explore(tables, max_states)
     graph = nx.MultiDiGraph(name=tables.system.name, complete=exploration.complete)
-    modes = [tables.decode(code) for code in exploration.modes]
+    modes = list(exploration.modes())
     for mode in modes:
         graph.add_node(tables.name(mode), initial=mode == tables.initial)
     for mode in modes:

@@ -1,12 +1,8 @@
 """Affine forms of expressions, and exact satisfiability of linear constraints.
 
 A comparison whose sides are affine in the variables (state, ``t``, inputs)
-becomes one row of a linear program; :func:`lp_feasible` decides a
-conjunction of such rows within the box bounds with
-:func:`scipy.optimize.linprog` (HiGHS). Strict inequalities are decided with
-a slack variable ``s``: maximise ``s`` subject to ``a.x + s <= b`` for every
-strict row (rows scaled to unit largest coefficient); the strict system is
-satisfiable iff the optimum exceeds :data:`STRICT_MARGIN`.
+becomes one row of a linear program; :func:`hybrid.analysis.lp.lp_feasible`
+decides a conjunction of such rows within the box bounds, strictness exactly.
 
 A sub-expression that is not affine (``x*y``, ``sin(x)``, a vector signal) is
 replaced by an auxiliary variable bounded by its interval over the box, and the
@@ -23,6 +19,7 @@ Examples
 >>> lin = Linearizer(IntervalEvaluator(box))
 >>> rows = lin.atom(parse_expression("x + y >= 12", scope, want="bool"))
 >>> rows += lin.atom(parse_expression("x - y > 9", scope, want="bool"))
+>>> from hybrid.analysis.lp import lp_feasible
 >>> lp_feasible(rows, lin.bounds(box))
 False
 """
@@ -30,19 +27,16 @@ False
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-
-import numpy as np
 
 from hybrid.expr import ir
 from hybrid.expr.functions import BUILTINS
-from hybrid.expr.interval import ENTIRE, Interval
+from hybrid.expr.interval import Interval
 from hybrid.expr.ranges import IntervalEvaluator
 
-__all__ = ["STRICT_MARGIN", "Affine", "Linearizer", "Row", "lp_feasible", "structural_key"]
+__all__ = ["Affine", "Linearizer", "Row", "structural_key"]
 
-STRICT_MARGIN = 1e-6
 _TIME = Interval(0.0, math.inf)
 
 
@@ -238,92 +232,3 @@ def _power(base: float, exponent: float) -> float | None:
         return None
     value = float(value)
     return value if math.isfinite(value) else None
-
-
-def lp_feasible(rows: Sequence[Row], bounds: Mapping[str, Interval]) -> bool:
-    """Whether some point within ``bounds`` satisfies every row.
-
-    Strict rows need a margin of :data:`STRICT_MARGIN` (rows scaled to unit
-    largest coefficient). When the solver fails, the answer is ``True``
-    (conservative: "may hold").
-
-    Examples
-    --------
-    >>> x = Affine({"x": 1.0}, 0.0)
-    >>> box = {"x": Interval(0.0, 1.0)}
-    >>> lp_feasible([Row(x, "<=")], box), lp_feasible([Row(x, "<")], box)
-    (True, False)
-    """
-    if any(not math.isfinite(c) for row in rows for c in row.form.coeffs.values()):
-        return True  # a coefficient overflowed: no exact answer, lean to "may hold"
-    variables = sorted({v for row in rows for v in row.form.coeffs})
-    if not variables:
-        return all(_constant_holds(row) for row in rows)
-    index = {v: k for k, v in enumerate(variables)}
-    strict = any(row.op == "<" for row in rows)
-    width = len(variables) + (1 if strict else 0)
-    a_ub: list[np.ndarray] = []
-    b_ub: list[float] = []
-    a_eq: list[np.ndarray] = []
-    b_eq: list[float] = []
-    for row in rows:
-        if not row.form.coeffs:
-            if not _constant_holds(row):
-                return False
-            continue
-        scale = max(abs(c) for c in row.form.coeffs.values())
-        line = np.zeros(width)
-        for v, c in row.form.coeffs.items():
-            line[index[v]] = c / scale
-        rhs = -row.form.const / scale
-        if not math.isfinite(rhs):
-            return True
-        if row.op == "==":
-            a_eq.append(line)
-            b_eq.append(rhs)
-            continue
-        if row.op == "<":
-            line[-1] = 1.0
-        a_ub.append(line)
-        b_ub.append(rhs)
-    lp_bounds: list[tuple[float | None, float | None]] = []
-    for v in variables:
-        interval = bounds.get(v, ENTIRE)
-        lp_bounds.append(
-            (
-                interval.lo if math.isfinite(interval.lo) else None,
-                interval.hi if math.isfinite(interval.hi) else None,
-            )
-        )
-    objective = np.zeros(width)
-    if strict:
-        lp_bounds.append((0.0, 1.0))
-        objective[-1] = -1.0
-    from scipy.optimize import linprog  # imported on first use: it is slow to import
-
-    try:
-        result = linprog(
-            objective,
-            A_ub=np.array(a_ub) if a_ub else None,
-            b_ub=np.array(b_ub) if b_ub else None,
-            A_eq=np.array(a_eq) if a_eq else None,
-            b_eq=np.array(b_eq) if b_eq else None,
-            bounds=lp_bounds,
-            method="highs",
-        )
-    except ValueError:  # the solver refused the problem (badly scaled); lean to "may hold"
-        return True
-    if result.status == 2:
-        return False
-    if result.status != 0:
-        return True
-    return not strict or -float(result.fun) > STRICT_MARGIN
-
-
-def _constant_holds(row: Row) -> bool:
-    k = row.form.const
-    if row.op == "<=":
-        return k <= 0.0
-    if row.op == "<":
-        return k < 0.0
-    return k == 0.0

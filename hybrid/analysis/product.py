@@ -98,6 +98,11 @@ class ProductTables:
             self.components.append(
                 _Component(comp.name, fa, locs, local, sync, shared, targets, conflicts)
             )
+        self.members: tuple[int, ...] = tuple(range(len(self.components)))
+        self.base: tuple[str, ...] = tuple(system.initial_mode)
+        self._layout()
+
+    def _layout(self) -> None:
         self.radices = [len(c.locations) for c in self.components]
         self.size = 1
         self.weights: list[int] = []
@@ -105,10 +110,27 @@ class ProductTables:
             self.weights.append(self.size)
             self.size *= n
         self.initial: Mode = tuple(
-            comp.index[loc] for comp, loc in zip(self.components, system.initial_mode, strict=True)
+            comp.index[self.base[g]] for comp, g in zip(self.components, self.members, strict=True)
         )
         self._stuck: dict[tuple[int, int, int], bool] = {}
         self._conflict: dict[tuple[int, int, int], bool] = {}
+
+    def subset(self, members: Sequence[int]) -> ProductTables:
+        """The same tables restricted to some components (the others stay in their initial
+        locations); labels shared with a component left out must not be among them."""
+        view = object.__new__(ProductTables)
+        view.system = self.system
+        local = {g: k for k, g in enumerate(members)}
+        view.components = [self.components[self.members.index(g)] for g in members]
+        view.owners = {
+            a: tuple(local[o] for o in owners)
+            for a, owners in self.system.shared_labels.items()
+            if all(o in local for o in owners)
+        }
+        view.members = tuple(members)
+        view.base = self.base
+        view._layout()
+        return view
 
     # --- modes ---------------------------------------------------------------------------
 
@@ -120,17 +142,20 @@ class ProductTables:
 
     def name(self, mode: Mode) -> str:
         """``loc`` for a plain automaton, ``comp.loc|comp.loc`` for a system."""
-        return self.system.mode_name(
-            tuple(c.locations[k] for c, k in zip(self.components, mode, strict=True))
-        )
+        full = list(self.base)
+        for c, g, k in zip(self.components, self.members, mode, strict=True):
+            full[g] = c.locations[k]
+        return self.system.mode_name(tuple(full))
 
     def location_name(self, component: int, location: int) -> str:
         """A component location as the user writes it (qualified in a system)."""
-        return self.system.qualified(component, self.components[component].locations[location])
+        return self.system.qualified(
+            self.members[component], self.components[component].locations[location]
+        )
 
     def edge_name(self, component: int, edge: int) -> str:
         name = self.components[component].facts.automaton.edges[edge].name
-        return self.system.qualified(component, name)
+        return self.system.qualified(self.members[component], name)
 
     def transition_name(self, transition: Transition) -> str:
         return "+".join(self.edge_name(i, e) for i, e in transition.parts)

@@ -38,7 +38,8 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from hybrid.analysis.linear import Linearizer, lp_feasible, structural_key
+from hybrid.analysis.linear import Linearizer, structural_key
+from hybrid.analysis.lp import lp_feasible
 from hybrid.expr import ir
 from hybrid.expr.interval import ENTIRE, Interval
 from hybrid.expr.ranges import IntervalEvaluator

@@ -1,20 +1,27 @@
 """Static facts of one automaton, decided over the declared bounds of its state.
 
 Everything here looks at one automaton alone (a component of a system sees
-its inputs as unknowns): which edges can ever fire (*live*), where the flow can
-leave each location, which same-priority edges can be enabled together, and
-which cycles of edges can be taken without time passing.
+its inputs as unknowns): which edges can ever fire (*live*), where a run may
+enter each location, where the flow can leave each location, and which
+same-priority edges can be enabled together. Cycles of edges taken without
+time passing are :mod:`hybrid.analysis.zerotime`'s.
 
-Semantics (see docs/cli.md, "How the checks decide"):
+Semantics (see docs/check.md, "What is proved"):
 
 - the state ranges over the box of declared ``bounds`` (unbounded if none);
   ``t`` over ``[0, inf)``; inputs and vector signals are unknown;
 - parameters are bound to the automaton's values and signals replaced by the
   definitions in force in the location (location overrides first);
-- a jump happens in the closure of the source invariant (strict comparisons of
-  an invariant count as non-strict), where the guard holds (strictness kept);
-- after a reset the reset variables take the range of their reset expression
-  over the box where the edge fires, the others keep theirs.
+- an edge may fire at a point of its source location where its guard may be
+  found enabled (:func:`~hybrid.analysis.flows.enabled_region`: where it
+  holds, or on the boundary of a strict comparison the flow enters), that
+  point being either in the closure of the source invariant (while flowing)
+  or an *entry* point: the initial state, or a state right after an edge into
+  the location fired, whether or not the invariant holds there;
+- entry points are over-approximated by a box per location, the least
+  fixpoint of "initial state, and the reset of every box where an edge into
+  the location may fire", widened to the declared bounds if it does not
+  settle within :data:`ENTRY_ROUNDS` rounds.
 
 Examples
 --------
@@ -23,42 +30,56 @@ Examples
 >>> facts = AutomatonFacts(ball)
 >>> [e.live for e in facts.edges], facts.locations["falling"].can_be_left
 ([True], True)
->>> facts.covered("falling", [0]), facts.zero_time_cycles()
-(True, [])
+>>> facts.covered("falling", [0])
+True
 """
 
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterable, Mapping, Sequence
+import math
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 
-import networkx as nx
-
-from hybrid.analysis.flows import exit_conditions
+from hybrid.analysis.flows import enabled_region, exit_conditions
 from hybrid.analysis.linear import structural_key
 from hybrid.analysis.solve import Box, Env, closure, conjoin, contract, negate, satisfiable
 from hybrid.expr import ir
-from hybrid.expr.interval import Interval
+from hybrid.expr.interval import ENTIRE, Interval
 from hybrid.expr.transform import bind_parameters
 from hybrid.model import Automaton, Edge
 
-__all__ = ["AutomatonFacts", "EdgeFacts", "Instant", "LocationFacts", "inline_signals"]
+__all__ = [
+    "ENTRY_ROUNDS",
+    "AutomatonFacts",
+    "EdgeFacts",
+    "LocationFacts",
+    "hull",
+    "initial_box",
+    "inline_signals",
+]
 
-CYCLE_CAP = 200
-FACTS_CAP = 16
+ENTRY_ROUNDS = 32
 INLINE_BUDGET = 400
+_TIME = Interval(0.0, math.inf)
 
 
 @dataclass(frozen=True)
 class EdgeFacts:
-    """An edge with parameters bound, and whether its guard can ever hold."""
+    """An edge with parameters bound, where it may be enabled, and whether it can ever fire.
+
+    ``enabled`` is the guard as the simulator may find it enabled in the
+    source location (:func:`~hybrid.analysis.flows.enabled_region`); ``fires``
+    a box holding every state it may fire from (``None``: never).
+    """
 
     edge: Edge
     guard: ir.Expr
     reset: Mapping[str, ir.Expr]
+    enabled: ir.Expr
     live: bool
+    fires: Box | None = None
 
 
 @dataclass(frozen=True)
@@ -73,6 +94,28 @@ class LocationFacts:
     region: Box | None
     exits: tuple[ir.Expr, ...]
     can_be_left: bool
+
+
+def initial_box(automaton: Automaton) -> dict[str, Interval]:
+    """The box of initial states (today a point: the initial state; ``t = 0``)."""
+    values = automaton.initial_vector()
+    box = {s.name: Interval.point(v) for s, v in zip(automaton.states, values, strict=True)}
+    box["t"] = Interval.point(0.0)
+    return box
+
+
+def hull(a: Box | None, b: Box | None) -> dict[str, Interval] | None:
+    """The smallest box holding both (a name absent from a box is unbounded there)."""
+    if a is None:
+        return None if b is None else dict(b)
+    if b is None:
+        return dict(a)
+    result: dict[str, Interval] = {}
+    for name in set(a) & set(b):
+        result[name] = a[name].hull(b[name])
+    if "t" in a or "t" in b:
+        result["t"] = a.get("t", _TIME).hull(b.get("t", _TIME))
+    return result
 
 
 class AutomatonFacts:
@@ -116,15 +159,7 @@ class AutomatonFacts:
             self.locations[name] = LocationFacts(
                 name, env, invariant, closed, MappingProxyType(flow), region, exits, can_be_left
             )
-        self.edges: list[EdgeFacts] = []
-        for edge in automaton.edges:
-            guard = bind_parameters(edge.guard, params)
-            reset = {k: bind_parameters(v, params) for k, v in edge.reset.items()}
-            src = self.locations[edge.source]
-            live = src.region is not None and satisfiable(
-                conjoin(src.closed, guard), src.env, src.region
-            )
-            self.edges.append(EdgeFacts(edge, guard, MappingProxyType(reset), live))
+        self.edges = self._edge_facts(automaton)
         self._out: dict[str, list[EdgeFacts]] = {name: [] for name in self.locations}
         self._in: dict[str, list[EdgeFacts]] = {name: [] for name in self.locations}
         for ef in self.edges:
@@ -132,6 +167,92 @@ class AutomatonFacts:
             self._in[ef.edge.target].append(ef)
         self._covered: dict[tuple[str, frozenset[int]], bool] = {}
         self._overlap: dict[tuple[int, int], bool] = {}
+
+    def _edge_facts(self, automaton: Automaton) -> list[EdgeFacts]:
+        """Every edge's enabled region, entry boxes of every location, then liveness."""
+        params = automaton.parameters
+        guards, resets, enabled, flowing = [], [], [], []
+        for edge in automaton.edges:
+            src = self.locations[edge.source]
+            guard = bind_parameters(edge.guard, params)
+            region = enabled_region(guard, src.flow, src.env.signals, self.opaque)
+            guards.append(guard)
+            resets.append({k: bind_parameters(v, params) for k, v in edge.reset.items()})
+            enabled.append(region)
+            # while flowing the state is in the closure of the invariant, within the bounds
+            flowing.append(
+                None
+                if src.region is None
+                else contract(conjoin(src.closed, region), src.env, src.region)
+            )
+        self.entries = self._entries(automaton, resets, enabled, flowing)
+        result: list[EdgeFacts] = []
+        for k, edge in enumerate(automaton.edges):
+            src = self.locations[edge.source]
+            entry = self.entries[edge.source]
+            live = False
+            if flowing[k] is not None:
+                live = satisfiable(conjoin(src.closed, enabled[k]), src.env, src.region or {})
+            if not live and entry is not None:
+                live = satisfiable(enabled[k], src.env, entry)
+            fires = hull(flowing[k], self._at_entry(k, enabled, entry)) if live else None
+            result.append(
+                EdgeFacts(edge, guards[k], MappingProxyType(resets[k]), enabled[k], live, fires)
+            )
+        return result
+
+    def _at_entry(self, k: int, enabled: list[ir.Expr], entry: Box | None) -> Box | None:
+        if entry is None:
+            return None
+        src = self.locations[self.automaton.edges[k].source]
+        return contract(enabled[k], src.env, entry)
+
+    def _entries(
+        self,
+        automaton: Automaton,
+        resets: list[dict[str, ir.Expr]],
+        enabled: list[ir.Expr],
+        flowing: list[dict[str, Interval] | None],
+    ) -> dict[str, dict[str, Interval] | None]:
+        """Per location, a box holding every state a run may enter it with (``None``: none)."""
+        entries: dict[str, dict[str, Interval] | None] = {name: None for name in self.locations}
+        entries[automaton.initial_location] = initial_box(automaton)
+        rounds = 0
+        while True:
+            changed = False
+            for k, edge in enumerate(automaton.edges):
+                fire = hull(flowing[k], self._at_entry(k, enabled, entries[edge.source]))
+                if fire is None:
+                    continue
+                post = self.reset_box(edge.source, resets[k], fire)
+                if post is None:
+                    continue
+                grown = hull(entries[edge.target], post)
+                if grown != entries[edge.target]:
+                    entries[edge.target] = grown
+                    changed = True
+            if not changed:
+                return entries
+            rounds += 1
+            if rounds >= ENTRY_ROUNDS:  # not settling (a growing loop): widen to the bounds
+                for name, box in entries.items():
+                    if box is not None:
+                        entries[name] = hull(box, self.bounds)
+
+    def reset_box(
+        self, location: str, reset: Mapping[str, ir.Expr], box: Box
+    ) -> dict[str, Interval] | None:
+        """The box of states right after a reset applied in ``box``, within the bounds."""
+        ev = self.locations[location].env.evaluator(box)
+        after = dict(box)
+        for var, expr in reset.items():
+            after[var] = ev.number(expr)
+        for var, bound in self.bounds.items():
+            narrowed = after.get(var, ENTIRE).intersect(bound)
+            if narrowed is None:
+                return None
+            after[var] = narrowed
+        return after
 
     def outgoing(self, location: str) -> list[EdgeFacts]:
         """Facts of the edges leaving ``location``, in file order."""
@@ -142,15 +263,27 @@ class AutomatonFacts:
         return self._in[location]
 
     def overlap(self, first: int, second: int) -> bool:
-        """Whether edges ``first`` and ``second`` (same source) can be enabled at once."""
+        """Whether edges ``first`` and ``second`` (same source) can be enabled at once.
+
+        While flowing (in the closure of the invariant) or at an entry point.
+        """
         key = (min(first, second), max(first, second))
         if key not in self._overlap:
             a, b = self.edges[key[0]], self.edges[key[1]]
-            src = self.locations[a.edge.source]
+            name = a.edge.source
+            src = self.locations[name]
+            both = conjoin(a.enabled, b.enabled)
+            entry = self.entries[name]
             self._overlap[key] = (
                 a.live
                 and b.live
-                and satisfiable(conjoin(src.closed, a.guard, b.guard), src.env, src.region or {})
+                and (
+                    (
+                        src.region is not None
+                        and satisfiable(conjoin(src.closed, both), src.env, src.region)
+                    )
+                    or (entry is not None and satisfiable(both, src.env, entry))
+                )
             )
         return self._overlap[key]
 
@@ -164,117 +297,32 @@ class AutomatonFacts:
         ]
 
     def covered(self, location: str, edges: Iterable[int]) -> bool:
-        """Whether every exit point of ``location`` enables one of ``edges``.
+        """Whether every point where a run may have to leave ``location`` enables one of ``edges``.
 
-        ``True`` also when the location cannot be left at all.
+        Those points are the exits of the invariant (its boundary, where the
+        flow points outward) and the entry points where the invariant does not
+        hold. ``True`` also when the location can be neither left nor entered
+        outside its invariant.
         """
         chosen = frozenset(edges)
         key = (location, chosen)
         if key not in self._covered:
             loc = self.locations[location]
-            negated = [negate(self.edges[i].guard) for i in sorted(chosen)]
-            self._covered[key] = not loc.can_be_left or not any(
+            guards = [self.edges[i].guard for i in sorted(chosen)]
+            negated = [negate(g) for g in guards]
+            stuck = loc.can_be_left and any(
                 satisfiable(conjoin(x, *negated), loc.env, self.bounds) for x in loc.exits
             )
+            entry = self.entries[location]
+            if not stuck and entry is not None:
+                # on entry an edge is enabled at most where its guard's closure holds
+                idle = [closure(negate(g)) for g in guards]
+                stuck = any(
+                    satisfiable(conjoin(v, *idle), loc.env, entry)
+                    for v in (negate(loc.invariant), *loc.exits)
+                )
+            self._covered[key] = not stuck
         return self._covered[key]
-
-    def post(self, index: int, box: Box) -> dict[str, Interval] | None:
-        """Box of the state right after edge ``index`` fires from a state in ``box``."""
-        after = self._step(index, Instant(box))
-        return None if after is None else dict(after.box)
-
-    def enabled_in(self, index: int, box: Box) -> bool:
-        """Whether edge ``index`` may be enabled somewhere in ``box``."""
-        return self._enabled(index, Instant(box))
-
-    def _enabled(self, index: int, at: Instant) -> bool:
-        facts = self.edges[index]
-        src = self.locations[facts.edge.source]
-        return satisfiable(conjoin(src.closed, *at.facts, facts.guard), src.env, at.box)
-
-    def _step(self, index: int, at: Instant) -> Instant | None:
-        """What is known right after edge ``index`` fires from a state described by ``at``."""
-        facts = self.edges[index]
-        src = self.locations[facts.edge.source]
-        box = contract(conjoin(src.closed, *at.facts), src.env, at.box)
-        if box is None:
-            return None
-        box = contract(facts.guard, src.env, box)
-        if box is None:
-            return None
-        ev = src.env.evaluator(box)
-        after = dict(box)
-        for var, expr in facts.reset.items():
-            after[var] = ev.number(expr)
-        for var, bound in self.bounds.items():
-            current = after.get(var)
-            narrowed = bound if current is None else current.intersect(bound)
-            if narrowed is None:
-                return None
-            after[var] = narrowed
-        # conditions on variables the reset leaves alone still hold after the jump
-        kept = [c for c in at.facts if not (ir.names_in(c, ir.STATE) & facts.reset.keys())]
-        for cond in (*_conjuncts(src.closed), *_conjuncts(facts.guard)):
-            inlined = inline_signals(cond, src.env.signals)
-            if inlined is not None and not (ir.names_in(inlined, ir.STATE) & facts.reset.keys()):
-                kept.append(inlined)
-        dst = self.locations[facts.edge.target]
-        narrowed_box = contract(conjoin(dst.closed, *kept), dst.env, after)
-        if narrowed_box is None:
-            return None
-        return Instant(narrowed_box, tuple(kept[-FACTS_CAP:]))
-
-    def zero_time_cycles(self, cap: int = CYCLE_CAP) -> list[tuple[int, ...]]:
-        """Cycles of live edges that may be taken again and again at one instant.
-
-        Each edge of such a cycle can be enabled right after the previous one's
-        reset: the state then lies in the box the reset produces, and still
-        satisfies the conditions (guards, invariants) on the variables the
-        reset left alone. The check goes twice around each candidate cycle.
-        Cycles start at their lowest edge index; at most ``cap`` candidates are
-        examined.
-        """
-        graph = nx.DiGraph()
-        start = Instant(self.bounds)
-        for facts in self.edges:
-            if not facts.live:
-                continue
-            after = self._step(facts.edge.index, start)
-            if after is None:
-                continue
-            for nxt in self.outgoing(facts.edge.target):
-                if nxt.live and self._enabled(nxt.edge.index, after):
-                    graph.add_edge(facts.edge.index, nxt.edge.index)
-        found: list[tuple[int, ...]] = []
-        for cycle in itertools.islice(nx.simple_cycles(graph), cap):
-            if self._survives(cycle):
-                first = cycle.index(min(cycle))
-                found.append(tuple(cycle[first:] + cycle[:first]))
-        return sorted(found)
-
-    def _survives(self, cycle: Sequence[int]) -> bool:
-        at: Instant | None = Instant(self.bounds)
-        for index in list(cycle) * 2:
-            if at is None or not self._enabled(index, at):
-                return False
-            at = self._step(index, at)
-        return at is not None
-
-
-@dataclass(frozen=True)
-class Instant:
-    """What is known of the state at one instant: a box and conditions (signals inlined)."""
-
-    box: Box
-    facts: tuple[ir.Expr, ...] = ()
-
-
-def _conjuncts(cond: ir.Expr) -> list[ir.Expr]:
-    if isinstance(cond, ir.BoolOp) and cond.op == "and":
-        return [c for v in cond.values for c in _conjuncts(v)]
-    if isinstance(cond, ir.BoolConst):
-        return []
-    return [cond]
 
 
 def inline_signals(

@@ -6,13 +6,16 @@ is an error, 1 when one is (or, with ``strict``, when one is a warning), 2
 when a file is not a valid spec. An invalid file's errors go to stderr as
 ``file:line:column: message`` (as ``hybrid validate`` prints them) and, in the
 structured formats, also appear as ``invalid-spec`` findings; the other files
-are still checked and reported.
+are still checked and reported. Each finding is reported once, however many
+of the files checked include the file it is placed in. The repository's
+defaults come from ``[tool.hybrid.check]`` in the nearest pyproject.toml
+(:mod:`hybrid.reader.project`).
 
 Examples
 --------
 >>> import io
 >>> out = io.StringIO()
->>> run_check(["specs/thermostat.yaml"], fmt="text", out=out)
+>>> run_check(["specs/thermostat.yaml"], fmt="text", out=out, config=CheckConfig())
 0
 >>> out.getvalue()
 'specs/thermostat.yaml: ok\\n'
@@ -20,6 +23,7 @@ Examples
 
 from __future__ import annotations
 
+import os
 import sys
 from collections.abc import Sequence
 from typing import TextIO
@@ -27,14 +31,16 @@ from typing import TextIO
 from hybrid.analysis import check, system_graph
 from hybrid.analysis.findings import Finding, Report
 from hybrid.analysis.formats import FORMATS, write
+from hybrid.analysis.ignore import check_rule_ids
 from hybrid.cli.exits import EXIT_FINDINGS, EXIT_INVALID, EXIT_OK
 from hybrid.errors import SpecError, UsageError
 from hybrid.export.atomic import atomic_write
 from hybrid.export.diagrams import DIAGRAM_FORMATS
 from hybrid.export.pictures import RENDERED_FORMATS, render
 from hybrid.reader.loader import load
+from hybrid.reader.project import CheckConfig, read_check_config
 
-__all__ = ["run_check", "run_graph"]
+__all__ = ["once", "run_check", "run_graph"]
 
 
 def run_check(
@@ -42,8 +48,10 @@ def run_check(
     *,
     fmt: str = "text",
     strict: bool = False,
+    ignore: Sequence[str] = (),
     out: TextIO | None = None,
     err: TextIO | None = None,
+    config: CheckConfig | None = None,
 ) -> int:
     """Check ``files`` and print the report; returns the exit code (0, 1 or 2).
 
@@ -55,13 +63,20 @@ def run_check(
         ``text``, ``json``, ``github``, ``junit`` or ``sarif``.
     strict
         Warnings fail the run too.
+    ignore
+        Rule ids not to report (added to the repository's ``[tool.hybrid.check]``).
     out, err
         Streams for the report and for spec errors (default: stdout, stderr).
+    config
+        The repository's defaults (default: read from the nearest pyproject.toml).
     """
     if fmt not in FORMATS:
         raise ValueError(f"unknown format '{fmt}'; choose from {', '.join(FORMATS)}")
     out = out or sys.stdout
     err = err or sys.stderr
+    config = config if config is not None else read_check_config()
+    rules = check_rule_ids((*config.ignore, *ignore))
+    strict = strict or config.strict
     reports: list[Report] = []
     invalid = False
     for file in files:
@@ -76,9 +91,9 @@ def run_check(
             )
             reports.append(Report(findings, "", file))
             continue
-        report = check(model)
+        report = check(model, ignore=rules)
         reports.append(Report(report.findings, report.name, file))
-    text = write(fmt, reports, strict=strict)
+    text = write(fmt, once(reports), strict=strict)
     if text:
         print(text, file=out)
     if invalid:
@@ -86,6 +101,28 @@ def run_check(
     if any(r.failed(strict=strict) for r in reports):
         return EXIT_FINDINGS
     return EXIT_OK
+
+
+def once(reports: Sequence[Report]) -> list[Report]:
+    """The reports with every finding kept only the first time its place and rule appear.
+
+    A component file checked on its own and as part of a system gives the same
+    findings twice (with unqualified and qualified names); CI annotations must
+    not repeat them.
+    """
+    seen: set[tuple[str, str, int, int]] = set()
+    result: list[Report] = []
+    for report in reports:
+        kept: list[Finding] = []
+        for f in report.findings:
+            key = (f.rule, os.path.normpath(os.path.abspath(f.file)), f.line, f.column)
+            if key not in seen:
+                seen.add(key)
+                kept.append(f)
+        result.append(
+            Report(tuple(kept), report.name, report.file, len(report.findings) - len(kept))
+        )
+    return result
 
 
 def run_graph(

@@ -91,6 +91,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("files", nargs="+", metavar="FILE", help="spec or system files")
     p.add_argument("--format", choices=tuple(REPORT_FORMATS), default="text", help="report format")
     p.add_argument("--strict", action="store_true", help="warnings fail too (exit 1)")
+    p.add_argument(
+        "--ignore",
+        action="append",
+        default=[],
+        metavar="RULE",
+        help="do not report this rule (repeatable)",
+    )
 
     p = sub.add_parser("simulate", help="simulate a spec")
     p.add_argument("file", metavar="FILE", help="spec or system file")
@@ -168,7 +175,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "check":
             from hybrid.cli.check import run_check
 
-            return run_check(args.files, fmt=args.format, strict=args.strict)
+            return run_check(
+                args.files, fmt=args.format, strict=args.strict, ignore=args.ignore
+            )
         if args.command == "graph":
             from hybrid.cli.check import run_graph
 

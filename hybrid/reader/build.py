@@ -13,6 +13,7 @@ import ast
 import keyword
 import math
 from collections.abc import Mapping
+from dataclasses import replace
 from types import MappingProxyType
 from typing import Any
 
@@ -29,6 +30,7 @@ from hybrid.expr.parse import (
     vector_call,
 )
 from hybrid.model import Automaton, Edge, Location, Properties, StateVar
+from hybrid.reader.characters import ascii_only
 from hybrid.reader.messages import closest
 from hybrid.reader.schema import AutomatonSpec, PropertiesSpec
 from hybrid.reader.yamlpos import PositionMap
@@ -52,6 +54,7 @@ class _Problems:
 
     def expression(self, path: tuple[Any, ...], source: str, scope: Scope, want: str) -> ir.Expr:
         try:
+            ascii_only(source)
             return parse_expression(source, scope, want=want)
         except ExprError as exc:
             self.items.append((self.positions.value(path).shifted(exc.col), exc.message))
@@ -118,6 +121,8 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
     edges = _edges(spec, positions, problems, scope, state_names)
     initial_location, initial_state = _initial(spec, problems, state_names)
     properties = build_properties(spec.properties, positions, problems.items, list(spec.locations))
+    if spec.checks is not None:
+        properties = replace(properties, ignore=tuple(spec.checks.ignore))
 
     if problems.items:
         raise SpecError.many(problems.items)
@@ -228,6 +233,7 @@ def _signals(
     for name, source in sources.items():
         path = (*base, name)
         try:
+            ascii_only(source)
             found = vector_call(source, scope)
         except ExprError as exc:
             problems.items.append((problems.positions.value(path).shifted(exc.col), exc.message))

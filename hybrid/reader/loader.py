@@ -10,6 +10,7 @@ Examples
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -135,18 +136,28 @@ def _components(
     problems: list[tuple[Position, str]] = []
     for i, comp in enumerate(spec.components):
         where = doc.positions.value(("components", i, "spec"))
-        path = (base_dir / comp.spec).resolve()
         automata.append(None)
-        if str(path) in stack:
-            problems.append((where, f"component spec '{comp.spec}' includes itself"))
-            continue
-        if not path.is_file():
-            problems.append(
-                (where, f"component spec '{comp.spec}' not found (looked in {base_dir})")
-            )
+        # shown as the user would write it (relative stays relative); resolved for cycles
+        path = Path(os.path.normpath(base_dir / comp.spec))
+        try:
+            document = read_yaml_file(path, where=where)
+        except SpecError as exc:
+            if exc.position == where and exc.message.endswith(": not found"):
+                exc = SpecError(
+                    f"component spec '{comp.spec}' not found (looked in {base_dir})", where
+                )
+            problems.extend(exc.problems)
             continue
         try:
-            model = load_document(read_yaml_file(path), path.parent, _stack=(*stack, str(path)))
+            real = str(path.resolve())
+        except (OSError, RuntimeError) as exc:
+            problems.append((where, f"component spec '{comp.spec}' cannot be resolved: {exc}"))
+            continue
+        if real in stack:
+            problems.append((where, f"component spec '{comp.spec}' includes itself"))
+            continue
+        try:
+            model = load_document(document, path.parent, _stack=(*stack, real))
         except SpecError as exc:
             problems.extend(exc.problems)
             continue

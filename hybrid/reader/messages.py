@@ -104,9 +104,15 @@ def validation_problems(
             shown = f" (got {_short(got)})" if got is not _MISSING else ""
             message = item["msg"]
             if kind == "string_pattern_mismatch":
-                message = "must be a name: a letter or _ then letters, digits or _"
+                message = "must be a name: an ASCII letter or _ then ASCII letters, digits or _"
             elif kind in ("too_short", "string_too_short") and got == "":
                 message = "must not be empty"
+            if loc and loc[-1] == "[key]":  # a mapping key: point at the key itself
+                key_path = loc[:-1]
+                problems.append(
+                    (positions.key(key_path), f"{describe_path(key_path)}: the key {message}")
+                )
+                continue
             problems.append((positions.value(loc), f"{describe_path(loc)}: {message}{shown}"))
     return problems
 

@@ -9,7 +9,7 @@ where an expression belongs are turned into their source text.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from pydantic import (
     BaseModel,
@@ -22,6 +22,7 @@ from pydantic import (
 
 __all__ = [
     "AutomatonSpec",
+    "ChecksSpec",
     "ComponentSpec",
     "EdgeSpec",
     "InitialSpec",
@@ -120,6 +121,38 @@ class PropertiesSpec(_Strict):
     deterministic: bool | None = None
 
 
+RULE_IDS = (
+    "unreachable-location",
+    "sink-location",
+    "dead-edge",
+    "nondeterminism",
+    "zero-time-cycle",
+    "unused-declaration",
+    "property-violated",
+    "analysis-incomplete",
+)
+"""The rules of `hybrid check` a spec may silence (hybrid.analysis.findings.RULES has them all)."""
+RuleId = Literal[
+    "unreachable-location",
+    "sink-location",
+    "dead-edge",
+    "nondeterminism",
+    "zero-time-cycle",
+    "unused-declaration",
+    "property-violated",
+    "analysis-incomplete",
+]
+
+
+class ChecksSpec(_Strict):
+    """How `hybrid check` treats this file."""
+
+    ignore: list[RuleId] = Field(
+        default_factory=list,
+        description="Rules not to report for findings placed in this file.",
+    )
+
+
 class AutomatonSpec(_Strict):
     """A hybrid automaton M = (L, X, A, W, E, Inv, Act)."""
 
@@ -141,6 +174,7 @@ class AutomatonSpec(_Strict):
     initial: InitialSpec | None = None
     edges: list[EdgeSpec] = Field(default_factory=list)
     properties: PropertiesSpec | None = None
+    checks: ChecksSpec | None = None
     uses: list[Name] = Field(default_factory=list)
 
 
@@ -160,3 +194,4 @@ class SystemSpec(_Strict):
     description: str = ""
     components: list[ComponentSpec] = Field(min_length=1)
     properties: PropertiesSpec | None = None
+    checks: ChecksSpec | None = None

@@ -8,6 +8,7 @@ qualified location names and composes the result. It reads no file.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 
 from hybrid.compose import Component, System, check_system
 from hybrid.errors import Position, SpecError
@@ -53,6 +54,8 @@ def build_system(
         system.qualified(i, loc) for i, c in enumerate(parts) for loc in c.automaton.locations
     ]
     properties = build_properties(spec.properties, positions, problems, qualified)
+    if spec.checks is not None:
+        properties = replace(properties, ignore=tuple(spec.checks.ignore))
     if problems:
         raise SpecError.many(problems)
     system = System(

@@ -28,6 +28,7 @@ from typing import Any
 import yaml
 
 from hybrid.errors import Position, SpecError
+from hybrid.reader.files import MAX_FILE_BYTES, read_bytes
 
 __all__ = [
     "MAX_FILE_BYTES",
@@ -38,8 +39,6 @@ __all__ = [
     "read_yaml_text",
 ]
 
-MAX_FILE_BYTES = 16 * 1024 * 1024
-"""Largest spec file accepted (16 MiB): beyond it, a spec is refused unread."""
 MAX_YAML_DEPTH = 64
 """Deepest nesting of mappings and sequences accepted (a spec needs about six)."""
 
@@ -206,24 +205,17 @@ def _position(file: str, mark: Any) -> Position:
     return Position(file, mark.line + 1, mark.column + 1)
 
 
-def read_yaml_file(path: str | Path, *, max_bytes: int = MAX_FILE_BYTES) -> YamlDocument:
-    """Read a spec file safely; every refusal is a :class:`SpecError` with a place."""
-    name = str(path)
-    p = Path(path)
-    try:
-        size = p.stat().st_size
-    except OSError as exc:
-        raise SpecError(f"cannot read file: {exc.strerror or exc}", Position(name)) from None
-    if size > max_bytes:
-        raise SpecError(
-            f"file is {size} bytes, over the limit of {max_bytes} bytes for a spec",
-            Position(name),
-        )
-    try:
-        raw = p.read_bytes()
-    except OSError as exc:
-        raise SpecError(f"cannot read file: {exc.strerror or exc}", Position(name)) from None
-    return read_yaml_bytes(raw, name, max_bytes=max_bytes)
+def read_yaml_file(
+    path: str | Path, *, max_bytes: int = MAX_FILE_BYTES, where: Position | None = None
+) -> YamlDocument:
+    """Read a spec file safely; every refusal is a :class:`SpecError` with a place.
+
+    Only a regular file is read, and at most ``max_bytes`` of it
+    (:func:`~hybrid.reader.files.read_bytes`); ``where`` is the position an
+    error reading the file points at (default: the file itself).
+    """
+    raw = read_bytes(path, max_bytes=max_bytes, where=where)
+    return read_yaml_bytes(raw, str(path), max_bytes=max_bytes)
 
 
 def read_yaml_bytes(raw: bytes, file: str, *, max_bytes: int = MAX_FILE_BYTES) -> YamlDocument:

@@ -43,7 +43,7 @@ from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
 from hybrid.expr.rho import guard_to_rho, levels, oriented_rho, snapped
 from hybrid.model import Automaton
-from hybrid.modes import Mode, ModeView, TransitionView, mode_of
+from hybrid.modes import Binder, Mode, ModeView, TransitionView, mode_of
 
 __all__ = [
     "CompiledCondition",
@@ -171,6 +171,13 @@ class CompiledModel:
         self.initial_key = self.system.initial_mode
         self.sources: dict[str, Source] = {}
         self._modes: dict[Mode, CompiledMode] = {}
+        # a product of many components meets the same guard, invariant and reset in many
+        # modes: bind and compile each once (keyed by the expressions and the definitions
+        # of the signals they read), not once per mode
+        self._binder = Binder(self.system)
+        self._functions: dict[tuple[object, ...], tuple[object, Fn]] = {}
+        self._rhos: dict[int, tuple[ir.Expr, ir.Expr]] = {}
+        self._reads: dict[int, tuple[ir.Expr, frozenset[str]]] = {}
 
     def _external_inputs(self) -> list[str]:
         if not self.system.single:
@@ -181,15 +188,81 @@ class CompiledModel:
         """The compiled mode ``key`` (compiled on first use, then cached)."""
         compiled = self._modes.get(key)
         if compiled is None:
-            compiled = self._compile(mode_of(self.system, key))
+            compiled = self._compile(mode_of(self.system, key, binder=self._binder))
             self._modes[key] = compiled
         return compiled
+
+    def _rho(self, cond: ir.Expr) -> ir.Expr:
+        """``guard_to_rho(cond)``, the same object each time ``cond`` is met again."""
+        found = self._rhos.get(id(cond))
+        if found is None or found[0] is not cond:
+            found = (cond, guard_to_rho(cond))
+            self._rhos[id(cond)] = found
+        return found[1]
 
     def _function(
         self, name: str, what: str, exprs: list[ir.Expr], ctx: CodeContext, **kwargs: Any
     ) -> Fn:
-        self.sources[name] = Source(what, tuple(exprs), ctx)
-        return compile_function(name, exprs, ctx, **kwargs)
+        signals = self._signals_read(exprs, ctx.signals)
+        key = (
+            what,
+            kwargs.get("shape"),
+            ctx.failure is self.flow_failure,
+            tuple(id(e) for e in exprs),
+            tuple((s, id(ctx.signals[s])) for s in signals),
+        )
+        found = self._functions.get(key)
+        if found is None:
+            self.sources[name] = Source(what, tuple(exprs), ctx)
+            keep = (exprs, [ctx.signals[s] for s in signals])  # the ids in the key stay valid
+            found = (keep, compile_function(name, exprs, ctx, **kwargs))
+            self._functions[key] = found
+        return found[1]
+
+    def _reset(self, name: str, tr: TransitionView, ctx: CodeContext) -> Fn:
+        """The reset of ``tr``, compiled when it first fires (most transitions never do)."""
+        exprs = list(tr.reset.values())
+        signals = self._signals_read(exprs, ctx.signals)
+        key = (
+            "reset",
+            tr.name,
+            tuple((k, id(v)) for k, v in tr.reset.items()),
+            tuple((s, id(ctx.signals[s])) for s in signals),
+        )
+        found = self._functions.get(key)
+        if found is None:
+            what = f"the reset of {tr.name}"
+            compiled: list[Fn] = []
+
+            def reset(t: float, x: Any) -> Any:
+                if not compiled:
+                    reset_of = [tr.reset.get(s) for s in self.state_names]
+                    self.sources[name] = Source(what, tuple(exprs), ctx)
+                    compiled.append(compile_function(name, exprs, ctx, reset_of=reset_of))
+                return compiled[0](t, x)
+
+            found = ((exprs, [ctx.signals[s] for s in signals]), reset)
+            self._functions[key] = found
+        return found[1]
+
+    def _signals_read(self, exprs: list[ir.Expr], signals: Mapping[str, ir.Expr]) -> list[str]:
+        """The signals ``exprs`` read, directly or through other signals, sorted."""
+        seen: set[str] = set()
+        todo = [n for e in exprs for n in self._reads_of(e)]
+        while todo:
+            name = todo.pop()
+            if name in seen or name not in signals:
+                continue
+            seen.add(name)
+            todo.extend(self._reads_of(signals[name]))
+        return sorted(seen)
+
+    def _reads_of(self, expr: ir.Expr) -> frozenset[str]:
+        found = self._reads.get(id(expr))
+        if found is None or found[0] is not expr:
+            found = (expr, frozenset(ir.names_in(expr, ir.SIGNAL)))
+            self._reads[id(expr)] = found
+        return found[1]
 
     def _compile(self, view: ModeView) -> CompiledMode:
         ctx = CodeContext(
@@ -225,16 +298,13 @@ class CompiledModel:
             invariants.append(
                 CompiledCondition(
                     name,
-                    self._function(
-                        f"inv_{tag}_{i}", what, [guard_to_rho(expr)], ctx, shape="scalar"
-                    ),
+                    self._function(f"inv_{tag}_{i}", what, [self._rho(expr)], ctx, shape="scalar"),
                     self._function(f"invb_{tag}_{i}", what, [expr], ctx, shape="scalar"),
                 )
             )
         transitions = []
         for i, tr in enumerate(view.transitions):
             what = f"the guard of {tr.name}"
-            reset_of = [tr.reset.get(s) for s in self.state_names]
             differences = levels(tr.guard)
 
             def variant(suffix: str, expr: ir.Expr, role: str, i: int = i, what: str = what) -> Fn:
@@ -247,17 +317,11 @@ class CompiledModel:
                 CompiledTransition(
                     name=tr.name,
                     rho=self._function(
-                        f"g_{tag}_{i}", what, [guard_to_rho(tr.guard)], ctx, shape="scalar"
+                        f"g_{tag}_{i}", what, [self._rho(tr.guard)], ctx, shape="scalar"
                     ),
                     holds=self._function(f"gb_{tag}_{i}", what, [tr.guard], ctx, shape="scalar"),
                     view=tr,
-                    reset=self._function(
-                        f"r_{tag}_{i}",
-                        f"the reset of {tr.name}",
-                        [e for e in reset_of if e is not None],
-                        ctx,
-                        reset_of=reset_of,
-                    ),
+                    reset=self._reset(f"r_{tag}_{i}", tr, ctx),
                     levels=tuple(
                         self._function(f"lvl_{tag}_{i}_{k}", what, [d], ctx, shape="scalar")
                         for k, d in enumerate(differences)

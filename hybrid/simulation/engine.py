@@ -21,6 +21,7 @@ from hybrid.compose import System
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.progress import Reporter, Tracker
+from hybrid.simulation.apart import independent_groups, simulate_apart
 from hybrid.simulation.compiled import CompiledModel
 from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.loop import EventLoop
@@ -132,9 +133,22 @@ def simulate(
     # a solution that blows up overflows inside the solver's linear algebra; the run
     # sees the non-finite state and ends with a message, so numpy's warnings are noise
     with sigint_watch(handle_sigint) as interrupts, np.errstate(all="ignore"):
-        loop = EventLoop(compiled, settings, interrupts, _updater(tracker))
-        termination = loop.run(settings.t_start, x0)
-    run = loop.recorder.run(model.name, termination)
+        if isinstance(model, System) and len(groups := independent_groups(model)) > 1:
+            # components that share no label and read no signal of each other: simulated
+            # apart and merged in hybrid time, never as a product
+
+            def run_group(
+                sub: System, start: np.ndarray, how: Settings
+            ) -> tuple[Run, CompiledModel]:
+                part = _compiled(sub, None)
+                loop = EventLoop(part, how, interrupts, None)
+                return loop.recorder.run(sub.name, loop.run(how.t_start, start)), part
+
+            run = simulate_apart(model, groups, x0, settings, run_group)
+        else:
+            loop = EventLoop(compiled, settings, interrupts, _updater(tracker))
+            run = loop.recorder.run(model.name, loop.run(settings.t_start, x0))
+    termination = run.termination
     if tracker is not None:
         tracker.finish(termination.t, jumps=len(run.jumps), points=len(run))
     return run

@@ -143,7 +143,7 @@ def test_six_copies_explore_every_combination():
     assert all(r.all() for r in result.reached)
     reference = explore_reference(tables)
     assert reference.states == result.states
-    far = tables.encode((2,) * 6)
+    far = list(result.modes()).index((2,) * 6)
     assert len(result.path_to(far)) == 12  # two steps per copy, breadth-first
     assert check(system).findings == ()
 
@@ -198,8 +198,8 @@ def test_numpy_and_reference_explorers_agree(seed, monkeypatch):
     monkeypatch.setattr("hybrid.analysis.explore.DENSE_LIMIT", 0)
     assert explore(tables).states == fast.states
     # every witness is a real path of live transitions ending where it should
-    for (i, k), code in fast.first_reach.items():
-        steps = fast.path_to(code)
+    for (i, k), index in fast.first_reach.items():
+        steps = fast.path_to(index)
         mode = tables.initial
         for transition, target in steps:
             assert transition in tables.successors(mode)

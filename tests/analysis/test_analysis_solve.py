@@ -8,9 +8,11 @@ import pytest
 
 import hybrid
 from hybrid.analysis.flows import derivative, exit_conditions
-from hybrid.analysis.linear import Affine, Linearizer, Row, lp_feasible
+from hybrid.analysis.linear import Affine, Linearizer, Row
+from hybrid.analysis.lp import lp_feasible
 from hybrid.analysis.solve import Env, closure, contract, dnf, negate, nnf, satisfiable
 from hybrid.analysis.static import AutomatonFacts, inline_signals
+from hybrid.analysis.zerotime import ZeroTimeGraph
 from hybrid.expr import ir
 from hybrid.expr.interval import Interval
 from hybrid.expr.parse import Scope, parse_expression
@@ -164,9 +166,8 @@ edges:
 
 def test_zero_time_cycles_remember_what_a_reset_leaves_alone():
     def cycles(reset: str, back: str = "{}") -> list[tuple[int, ...]]:
-        return AutomatonFacts(
-            hybrid.load_text(GAMMA.format(reset=reset, back=back))
-        ).zero_time_cycles()
+        facts = AutomatonFacts(hybrid.load_text(GAMMA.format(reset=reset, back=back)))
+        return [c.cycle for c in ZeroTimeGraph(facts).components()]
 
     assert cycles("{k: 1}") == []  # q untouched: gamma < 0.65 still holds after 'low'
     assert cycles("{q: 1.5}") == []  # q := 1.5 enables 'high', which keeps gamma > 1
@@ -175,8 +176,13 @@ def test_zero_time_cycles_remember_what_a_reset_leaves_alone():
 
 def test_post_box_of_the_bouncing_ball():
     facts = AutomatonFacts(hybrid.load("specs/bouncing_ball.yaml"))
-    after = facts.post(0, facts.bounds)
+    bounce = facts.edges[0]
+    assert bounce.fires is not None
+    # the bounce fires on the floor (h = 0) going down, v in [-20, 0]
+    assert bounce.fires["h"] == Interval(0.0, 0.0)
+    assert bounce.fires["v"].lo == -20.0 and bounce.fires["v"].hi == 0.0
+    after = facts.reset_box("falling", bounce.reset, bounce.fires)
     assert after is not None
     assert after["h"] == Interval(0.0, 0.0)
     assert after["v"].lo == 0.0 and math.isclose(after["v"].hi, 16.0)
-    assert not facts.enabled_in(0, after)
+    assert ZeroTimeGraph(facts).components() == []  # v >= 0 after it: no bounce at once

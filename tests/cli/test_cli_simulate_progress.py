@@ -12,7 +12,8 @@ from support import REPO, SPECS
 
 THERMOSTAT = SPECS / "thermostat.yaml"
 # long enough to be reported (every 0.2 s), writing a CSV large enough to be reported too
-ARGS = ["simulate", str(THERMOSTAT), "--t-end", "600", "--dt", "0.004"]
+# a run of about a second at least (short steps), so the 0.2 s reporter shows it
+ARGS = ["simulate", str(THERMOSTAT), "--t-end", "600", "--dt", "0.004", "--max-step", "0.05"]
 
 
 def run_on_a_terminal(*extra: str, out: Path) -> tuple[int, str, str]:

@@ -1,0 +1,343 @@
+"""Independent components simulated apart, their runs merged into the system's run.
+
+Components that share no label and read no signal of each other (directly
+or through other components) never influence each other: the system's run
+is the runs of its *groups* side by side. Simulating their product instead
+costs time and memory quadratic in the number of components (every jump of
+one component is a new product mode, and every solver step carries every
+component), so :func:`simulate_apart` runs each group on its own (with its
+interpolants kept) and :func:`merge` interleaves the runs in hybrid time:
+
+- the jumps of all groups, by time (at one instant: group order, then each
+  group's own order), numbered ``j = 0, 1, ...`` for the whole system;
+- the points of every group at its own times, the other groups' states there
+  from their interpolants (the solver's dense output, not a straight line),
+  their signals computed from those states; two points per jump;
+- the run ends where the first group ends other than at ``t_end`` (the others
+  are cut there), or with cause ``max_jumps`` at the jump after the
+  ``max_jumps``-th of the system.
+
+What a run of the product would give differs only in numbers below the
+solver's tolerance (each group's own steps instead of steps shared by all)
+and in ``Jump.enabled``, which lists the transitions of the jumping group.
+
+Examples
+--------
+>>> import hybrid
+>>> system = hybrid.compose(
+...     hybrid.load("specs/thermostat.yaml"), hybrid.load("specs/bouncing_ball.yaml")
+... )
+>>> independent_groups(system)
+[(0,), (1,)]
+>>> run = hybrid.simulate(system, t_end=3.0)
+>>> [(round(jump.t, 3), jump.edge, jump.j) for jump in run.jumps]
+[(1.428, 'bouncing_ball.bounce', 0), (2.231, 'thermostat.turn_on', 1)]
+"""
+
+from __future__ import annotations
+
+import bisect
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from hybrid.compose import System
+from hybrid.simulation.compiled import CompiledMode, CompiledModel
+from hybrid.simulation.result import Jump, Run, Termination
+from hybrid.simulation.settings import Settings
+
+__all__ = ["independent_groups", "merge", "simulate_apart"]
+
+GroupRunner = Callable[[System, np.ndarray, Settings], tuple[Run, CompiledModel]]
+
+
+def independent_groups(system: System) -> list[tuple[int, ...]]:
+    """Components linked by a shared label or a signal read as an input, as sorted tuples."""
+    parent = list(range(len(system.components)))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    def join(a: int, b: int) -> None:
+        ra, rb = find(a), find(b)
+        if ra != rb:
+            parent[max(ra, rb)] = min(ra, rb)
+
+    for owners in system.shared_labels.values():
+        for o in owners[1:]:
+            join(owners[0], o)
+    providers: dict[str, int] = {}
+    for i, c in enumerate(system.components):
+        for name in c.automaton.signal_names:
+            providers.setdefault(name, i)
+    for i, c in enumerate(system.components):
+        for name in c.automaton.inputs:
+            if name in providers:
+                join(i, providers[name])
+    members: dict[int, list[int]] = {}
+    for i in range(len(parent)):
+        members.setdefault(find(i), []).append(i)
+    return sorted(tuple(m) for m in members.values())
+
+
+def simulate_apart(
+    system: System,
+    groups: Sequence[tuple[int, ...]],
+    x0: np.ndarray,
+    settings: Settings,
+    run_group: GroupRunner,
+) -> Run:
+    """Run each group of ``system`` alone (from its part of ``x0``) and merge the runs."""
+    offsets = np.cumsum([0] + [len(c.automaton.states) for c in system.components])
+    dense = replace(settings, dense=True)
+    parts: list[_Part] = []
+    for members in groups:
+        sub = System(
+            system.name,
+            tuple(system.components[i] for i in members),
+            file=system.file,
+            position=system.position,
+        )
+        columns = np.concatenate([np.arange(offsets[i], offsets[i + 1]) for i in members])
+        run, compiled = run_group(sub, x0[columns.astype(int)], dense)
+        parts.append(_Part(members, run, compiled))
+    return merge(system, parts, settings)
+
+
+@dataclass
+class _Part:
+    members: tuple[int, ...]
+    run: Run
+    compiled: CompiledModel
+
+    def __post_init__(self) -> None:
+        self.modes: dict[str, CompiledMode] = {m.name: m for m in self.compiled._modes.values()}
+        self.segments = sorted(self.run.segments, key=lambda s: (s[0], s[1]))
+        self.rows: dict[tuple[float, int], int] = {}
+        for k, (t, j) in enumerate(zip(self.run.t.tolist(), self.run.j.tolist(), strict=True)):
+            self.rows.setdefault((t, j), k)
+        self.location_at = {
+            int(j): str(loc) for j, loc in zip(self.run.j, self.run.location, strict=True)
+        }
+
+    def fill(
+        self,
+        times: np.ndarray,
+        lj: np.ndarray,
+        states: np.ndarray,
+        xs: np.ndarray,
+        signals: np.ndarray,
+        ss: np.ndarray,
+    ) -> None:
+        """Write this group's states (columns ``xs``) and signals (``ss``) at every row.
+
+        ``times`` and ``lj`` (this group's hybrid time) give the rows: values come
+        from this group's own points where it has one, else from the interpolant
+        of its stay (one vectorised call per stay), signals computed from them.
+        """
+        own = np.array(
+            [self.rows.get((t, j), -1) for t, j in zip(times.tolist(), lj.tolist(), strict=True)]
+        )
+        exact = own >= 0
+        if exact.any():
+            states[np.ix_(exact, xs)] = self.run.states[own[exact]]
+            if ss.size:
+                signals[np.ix_(exact, ss)] = self.run.signals[own[exact]]
+        todo = ~exact
+        for j, t0, t1, sol in self.segments:
+            if not todo.any():
+                break
+            mask = todo & (lj == j) & (times >= t0) & (times <= t1)
+            if mask.any():
+                values = np.asarray(sol(times[mask]), dtype=float).reshape(len(xs), -1).T
+                states[np.ix_(mask, xs)] = values
+                if ss.size:
+                    mode = self.modes[self.location_at[j]]
+                    signals[np.ix_(mask, ss)] = [
+                        mode.outputs(t, x)
+                        for t, x in zip(times[mask].tolist(), values, strict=True)
+                    ]
+                todo &= ~mask
+        if todo.any():  # pragma: no cover - every row is a point or inside a stay
+            raise RuntimeError("a point of a group is neither stored nor inside a stay")
+
+    def location_columns(self, lj: np.ndarray) -> list[list[str]]:
+        """Per member component, its location (``comp.loc``) at each row."""
+        by_j = {j: name.split("|") for j, name in self.location_at.items()}
+        table = np.array([by_j[j] for j in sorted(by_j)], dtype=object)
+        order = {j: k for k, j in enumerate(sorted(by_j))}
+        picked = table[np.array([order[j] for j in lj.tolist()], dtype=int)]
+        return [picked[:, m].tolist() for m in range(len(self.members))]
+
+
+def merge(system: System, parts: Sequence[_Part], settings: Settings) -> Run:
+    """The system's run from the runs of its groups (see the module's docstring)."""
+    ends = [p.run.termination for p in parts]
+    stopper = min(
+        (k for k, e in enumerate(ends) if e.cause != "t_end"),
+        key=lambda k: ends[k].t,
+        default=None,
+    )
+    t_stop = settings.t_end if stopper is None else ends[stopper].t
+    events = sorted(
+        (jump.t, g, jump.j, jump)
+        for g, p in enumerate(parts)
+        for jump in p.run.jumps
+        if jump.t <= t_stop
+    )
+    termination_cause = None
+    if len(events) > settings.max_jumps:
+        t_stop = events[settings.max_jumps][0]
+        events = events[: settings.max_jumps]
+        termination_cause = "max_jumps"
+    # the hybrid time of each group after k jumps of the system
+    local = np.zeros((len(events) + 1, len(parts)), dtype=np.int64)
+    for k, (_, g, _, _) in enumerate(events):
+        local[k + 1] = local[k]
+        local[k + 1, g] += 1
+    jump_times = [e[0] for e in events]
+
+    rows: list[tuple[float, int]] = [(settings.t_start, 0)]
+    for k, (t, _, _, _) in enumerate(events):
+        rows += [(t, k), (t, k + 1)]
+    for g, p in enumerate(parts):
+        for t, j in zip(p.run.t.tolist(), p.run.j.tolist(), strict=True):
+            if t > t_stop:
+                continue
+            big_j = _global_j(local, g, j, t, jump_times)
+            if big_j is not None:
+                rows.append((t, big_j))
+    rows.append((t_stop, len(events)))
+    rows = sorted(set(rows))
+
+    names = system.state_names
+    signal_names = system.signal_columns
+    times = np.array([t for t, _ in rows], dtype=float)
+    big_js = np.array([j for _, j in rows], dtype=np.int64)
+    states = np.empty((len(rows), len(names)))
+    signals = np.empty((len(rows), len(signal_names)))
+    state_col = {n: k for k, n in enumerate(names)}
+    signal_col = {n: k for k, n in enumerate(signal_names)}
+    per_component: list[list[str]] = [[] for _ in system.components]
+    for g, p in enumerate(parts):
+        lj = local[big_js, g]
+        xs = np.array([state_col[n] for n in p.run.state_names], dtype=int)
+        ss = np.array([signal_col[n] for n in p.run.signal_names], dtype=int)
+        p.fill(times, lj, states, xs, signals, ss)
+        for i, column in zip(p.members, p.location_columns(lj), strict=True):
+            per_component[i] = column
+    locations = ["|".join(parts_) for parts_ in zip(*per_component, strict=True)]
+
+    index = {row: r for r, row in enumerate(rows)}
+    jumps: list[Jump] = []
+    for k, (t, _g, _, jump) in enumerate(events):
+        before, after = index[(t, k)], index[(t, k + 1)]
+        jumps.append(
+            replace(
+                jump,
+                j=k,
+                source=locations[before],
+                target=locations[after],
+                before=dict(zip(names, states[before].tolist(), strict=True)),
+                after=dict(zip(names, states[after].tolist(), strict=True)),
+            )
+        )
+    where = locations[-1]
+    if termination_cause == "max_jumps":
+        message = f"reached max_jumps={settings.max_jumps}"
+        termination = Termination("max_jumps", t_stop, len(events), message, location=where)
+    elif stopper is None:
+        termination = Termination("t_end", t_stop, len(events), "reached t_end", location=where)
+    else:
+        termination = replace(ends[stopper], j=len(events), location=where)
+    return Run(
+        model=system.name,
+        state_names=tuple(names),
+        signal_names=tuple(signal_names),
+        t=np.array([t for t, _ in rows], dtype=float),
+        j=np.array([j for _, j in rows], dtype=np.int64),
+        location=np.array(locations, dtype=np.str_),
+        states=states,
+        signals=signals,
+        jumps=jumps,
+        termination=termination,
+        settings=settings.as_dict(),
+        segments=_segments(parts, local, jump_times, settings, t_stop) if settings.dense else [],
+    )
+
+
+def _global_j(
+    local: np.ndarray, g: int, j: int, t: float, jump_times: Sequence[float]
+) -> int | None:
+    """The system's hybrid time of a point of group ``g`` at ``(t, j)``, or ``None`` if cut."""
+    # the system's jumps after which group g is in its hybrid time j
+    candidates = np.flatnonzero(local[:, g] == j)
+    if candidates.size == 0:
+        return None
+    first, last = int(candidates[0]), int(candidates[-1])
+    # among them, the last one whose jump happened at or before t (flow points sit after jumps)
+    k = bisect.bisect_right(jump_times, t)
+    return max(first, min(last, k))
+
+
+class _Joined:
+    """The system's interpolant over one of its stays: every group's, side by side."""
+
+    def __init__(self, pieces: list[tuple[_Piecewise, np.ndarray]], width: int) -> None:
+        self.pieces = pieces
+        self.width = width
+
+    def __call__(self, t: float | np.ndarray) -> np.ndarray:
+        ts = np.atleast_1d(np.asarray(t, dtype=float))
+        out = np.empty((self.width, ts.size))
+        for piece, cols in self.pieces:
+            out[cols] = piece(ts)
+        return out if np.ndim(t) else out[:, 0]
+
+
+class _Piecewise:
+    """One group's interpolants of its stays at one hybrid time, as one callable."""
+
+    def __init__(self, stays: list[tuple[int, float, float, object]]) -> None:
+        self.stays = sorted(stays, key=lambda s: s[1])
+        self.starts = [s[1] for s in self.stays]
+
+    def __call__(self, ts: np.ndarray) -> np.ndarray:
+        cols = []
+        for t in ts.tolist():
+            k = max(0, bisect.bisect_right(self.starts, t) - 1)
+            sol: Callable[[float], np.ndarray] = self.stays[k][3]  # type: ignore[assignment]
+            cols.append(np.asarray(sol(t), dtype=float).reshape(-1))
+        return np.stack(cols, axis=1)
+
+
+def _segments(
+    parts: Sequence[_Part],
+    local: np.ndarray,
+    jump_times: Sequence[float],
+    settings: Settings,
+    t_stop: float,
+) -> list[tuple[int, float, float, object]]:
+    """With ``dense``: one joined interpolant per stay of the system between its jumps."""
+    columns, start = [], 0
+    for p in parts:
+        columns.append(np.arange(start, start + len(p.run.state_names)))
+        start += len(p.run.state_names)
+    result: list[tuple[int, float, float, object]] = []
+    bounds = zip([settings.t_start, *jump_times], [*jump_times, t_stop], strict=True)
+    for k, (t0, t1) in enumerate(bounds):
+        if t1 <= t0:
+            continue
+        pieces = []
+        for g, p in enumerate(parts):
+            stays = [s for s in p.segments if s[0] == int(local[k, g])]
+            if not stays:
+                break
+            pieces.append((_Piecewise(stays), columns[g]))
+        else:
+            result.append((k, t0, t1, _Joined(pieces, start)))
+    return result
