@@ -260,7 +260,8 @@ class CompiledModel:
     def _reads_of(self, expr: ir.Expr) -> frozenset[str]:
         found = self._reads.get(id(expr))
         if found is None or found[0] is not expr:
-            found = (expr, frozenset(ir.names_in(expr, ir.SIGNAL)))
+            # an input of a component reads the signal another component defines
+            found = (expr, frozenset(ir.names_in(expr, ir.SIGNAL) | ir.names_in(expr, ir.INPUT)))
             self._reads[id(expr)] = found
         return found[1]
 

@@ -147,3 +147,44 @@ def test_qualified_parameter_override(system: hybrid.System) -> None:
 def test_misspelt_system_parameter_suggests_the_right_one(system: hybrid.System) -> None:
     with pytest.raises(hybrid.SpecError, match=r"'Pp'; did you mean 'P'\?"):
         system.with_parameters({"Pp": 2.0})
+
+
+SOURCE = """
+automaton: source
+state: {c: {initial: 0.0}}
+signals: {u: 1}
+locations:
+  low: {flow: {c: 1}}
+  high: {flow: {c: 1}, signals: {u: 2}}
+edges:
+  - {name: raise, from: low, to: high, guard: c >= 1}
+"""
+
+READER = """
+automaton: reader
+state: {x: {initial: 0.0}, y: {initial: 0.0}, k: {initial: 0.0}}
+inputs: [u]
+locations:
+  a: {flow: {x: u, k: 1}}
+  b: {flow: {x: u, k: 1}}
+edges:
+  - {name: take, from: a, to: b, guard: k >= 2.5, reset: {y: u}}
+"""
+
+
+def test_an_input_follows_its_provider_s_location(tmp_path: Path) -> None:
+    """The reader's flow and reset read input u, which the source defines per location.
+
+    u = 1 until t = 1, then 2; so x(3) = 1 + 2 * 2 = 5 and the reset at t = 2.5 takes
+    y = 2. (Functions compiled for one mode must not be reused in a mode where an
+    input's provider defines it otherwise.)
+    """
+    (tmp_path / "source.yaml").write_text(SOURCE)
+    (tmp_path / "reader.yaml").write_text(READER)
+    (tmp_path / "sys.yaml").write_text(
+        "system: s\ncomponents:\n  - spec: source.yaml\n  - spec: reader.yaml\n"
+    )
+    run = hybrid.simulate(hybrid.load(tmp_path / "sys.yaml"), t_end=3.0, rtol=1e-10, atol=1e-12)
+    assert [j.edge for j in run.jumps] == ["source.raise", "reader.take"]
+    assert run.jumps[1].after["y"] == pytest.approx(2.0)
+    assert run["x"][-1] == pytest.approx(5.0, abs=1e-9)
