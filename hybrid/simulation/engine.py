@@ -45,6 +45,7 @@ def simulate(
     max_jumps_per_instant: int = MAX_JUMPS_PER_INSTANT,
     handle_sigint: bool = True,
     dense: bool = False,
+    backend: str = "scipy",
 ) -> Run:
     """Simulate ``model`` from ``t_start`` to ``t_end``.
 
@@ -77,6 +78,9 @@ def simulate(
         Turn Ctrl-C into a clean end (cause ``interrupted``), keeping the output.
     dense : bool
         Keep each segment's interpolant in ``run.segments`` (smooth plots).
+    backend : str
+        ``"scipy"`` (the reference engine) or ``"compiled"`` (the same semantics
+        compiled to machine code with numba: the ``fast`` extra; docs/backends.md).
 
     Returns
     -------
@@ -103,12 +107,19 @@ def simulate(
         dense=dense,
         zeno=zeno,
         max_jumps_per_instant=max_jumps_per_instant,
+        backend=backend,
     )
     model = model.with_parameters(parameters) if parameters else model
     if isinstance(model, Automaton) and (initial or initial_location):
         model = model.with_initial(initial_location, initial)
     elif isinstance(model, System) and initial_location:
         raise UsageError("initial_location applies to an automaton; set it per component")
+    if settings.backend == "compiled":
+        from hybrid.simulation.native.engine import simulate_compiled
+
+        return simulate_compiled(
+            model, settings, initial=initial, inputs=inputs, handle_sigint=handle_sigint
+        )
     compiled = _compiled(model, inputs)
     x0 = np.array(_initial_vector(model, compiled, initial), dtype=float)
     with sigint_watch(handle_sigint) as interrupted:
