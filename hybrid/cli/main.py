@@ -63,7 +63,7 @@ def _count(text: str) -> int:
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``hybrid`` command (the CLI reference is generated from it)."""
     from hybrid.export.diagrams import DIAGRAM_FORMATS
-    from hybrid.simulation.settings import METHODS
+    from hybrid.simulation.settings import BACKENDS, METHODS
 
     parser = _Parser(prog="hybrid", description="Hybrid automata: validate, check, simulate.")
     parser.add_argument("--version", action="version", version=f"hybrid {__version__}")
@@ -90,6 +90,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="largest solver step; lower it to catch narrow guard windows",
     )
     p.add_argument("--method", default=METHODS[0], choices=METHODS)
+    p.add_argument(
+        "--backend",
+        default=BACKENDS[0],
+        choices=BACKENDS,
+        help="scipy (reference) or compiled (numba, the 'fast' extra; docs/backends.md)",
+    )
     p.add_argument("--param", type=_param, action="append", default=[], metavar="NAME=VALUE")
     p.add_argument("--dt", type=_positive, default=None, help="write points on a uniform grid")
     p.add_argument("--out", help="trajectory file (.csv or .npz)")

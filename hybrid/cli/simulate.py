@@ -38,6 +38,7 @@ def run_simulate(args: argparse.Namespace) -> int:
         method=args.method,
         dt=args.dt,
         dense=args.plot is not None,
+        backend=args.backend,
     )
     _write_outputs(run, args)
     term = run.termination

@@ -38,6 +38,12 @@ class Layout:
     """Per global transition: (source mode, place in its mode, NativeTransition)."""
     invariant_first: tuple[int, ...]
     """Per mode, the global index of its first invariant (as ``MODE_INV``)."""
+    describe: tuple[tuple[str, str | None, str, str], ...]
+    """Per global transition: its name, label, source and target mode names."""
+    choices: dict[tuple[int, tuple[float, ...]], tuple[tuple[str, ...], str]]
+    """Enabled names and ``chosen_by`` per (transition, enabled flags) seen so far."""
+    modes: tuple[Any, ...]
+    """The modes (:class:`~hybrid.simulation.native.structure.NativeMode`)."""
 
     @classmethod
     def of(cls, native: NativeModel) -> Layout:
@@ -47,7 +53,28 @@ class Layout:
             rows += [(m, k, tr) for k, tr in enumerate(mode.transitions)]
             first.append(first[-1] + len(mode.invariants))
         names = np.array([mode.name for mode in native.modes], dtype=np.str_)
-        return cls(names, tuple(rows), tuple(first))
+        describe = tuple(
+            (tr.view.name, tr.view.label, native.modes[m].name,
+             native.modes[native.index[tr.view.target]].name)
+            for m, _, tr in rows
+        )  # fmt: skip
+        return cls(names, tuple(rows), tuple(first), describe, {}, tuple(native.modes))
+
+    def enabled(self, tr: int, flags: tuple[float, ...]) -> tuple[tuple[str, ...], str]:
+        """The names of the transitions enabled with ``tr`` chosen, and how it was chosen."""
+        key = (tr, flags)
+        hit = self.choices.get(key)
+        if hit is None:
+            m, _, chosen = self.transitions[tr]
+            mode = self.modes[m]
+            on = [t for k, t in enumerate(mode.transitions) if flags[k]]
+            if len(on) <= 1:
+                how = "only"
+            else:
+                top = [t for t in on if t.view.priority == chosen.view.priority]
+                how = "priority" if len(top) == 1 else "file order"
+            hit = self.choices[key] = (tuple(t.view.name for t in on), how)
+        return hit
 
 
 class DenseSegment:
@@ -73,32 +100,25 @@ class DenseSegment:
 def _jumps(native: NativeModel, layout: Layout, buf: b.RunArrays) -> list[Jump]:
     names = native.state_names
     d = len(names)
-    jumps = []
     n = int(buf.oi[b.I_JUMPS])
-    rows = buf.jps[:n]
-    for i in range(n):
-        row = rows[i]
-        m, _, tr = layout.transitions[int(row[b.J_TR])]
-        mode = native.modes[m]
-        flags = row[b.J_X + 2 * d :]
-        enabled = [t for k, t in enumerate(mode.transitions) if flags[k]]
-        view = tr.view
-        if len(enabled) <= 1:
-            how = "only"
-        else:
-            top = [t for t in enabled if t.view.priority == view.priority]
-            how = "priority" if len(top) == 1 else "file order"
+    rows = buf.jps[:n].tolist()
+    jumps = []
+    for row in rows:
+        tr = int(row[b.J_TR])
+        flags = tuple(row[b.J_X + 2 * d :])
+        enabled, how = layout.enabled(tr, flags)
+        name, label, source, target = layout.describe[tr]
         jumps.append(
             Jump(
-                float(row[b.J_T]),
+                row[b.J_T],
                 int(row[b.J_J]),
-                view.name,
-                view.label,
-                mode.name,
-                str(layout.mode_names[native.index[view.target]]),
-                dict(zip(names, row[b.J_X : b.J_X + d].tolist(), strict=True)),
-                dict(zip(names, row[b.J_X + d : b.J_X + 2 * d].tolist(), strict=True)),
-                tuple(t.view.name for t in enabled),
+                name,
+                label,
+                source,
+                target,
+                dict(zip(names, row[b.J_X : b.J_X + d], strict=True)),
+                dict(zip(names, row[b.J_X + d : b.J_X + 2 * d], strict=True)),
+                enabled,
                 how,
             )
         )

@@ -14,6 +14,7 @@ thread turns the first Ctrl-C into a flag the loop reads at every step, as
 from __future__ import annotations
 
 import threading
+import warnings
 from collections.abc import Callable, Mapping
 from types import ModuleType
 from typing import Any
@@ -33,7 +34,15 @@ from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
 
-__all__ = ["INTERIOR_SAMPLES", "CompiledNative", "compiled_native", "config", "simulate_compiled"]
+__all__ = [
+    "INTERIOR_SAMPLES",
+    "CompiledNative",
+    "compiled_native",
+    "config",
+    "run_arrays",
+    "run_in_worker",
+    "simulate_compiled",
+]
 
 INTERIOR_SAMPLES = 10
 """Interior points of each step where the watch is sampled (the first-crossing rule)."""
@@ -43,15 +52,22 @@ _CACHE: dict[tuple[Any, ...], tuple[tuple[Any, ...], CompiledNative]] = {}
 _CACHE_LOCK = threading.Lock()
 
 
-_KERNEL: list[ModuleType] = []
+_KERNEL: dict[str, ModuleType] = {}
 
 
-def kernel() -> ModuleType:
-    """The compiled loop (generated, compiled or loaded from the disk cache, once per process)."""
+def kernel(parallel: bool = False) -> ModuleType:
+    """The compiled loop, or its ensemble loop (compiled or loaded once per process)."""
     with _CACHE_LOCK:
         if not _KERNEL:
-            _KERNEL.append(load_generated(kernel_module()))
-        return _KERNEL[0]
+            from numba.core.errors import NumbaExperimentalFeatureWarning
+
+            # numba warns on every use of function pointers (its "first-class functions")
+            warnings.filterwarnings("ignore", category=NumbaExperimentalFeatureWarning)
+        if "one" not in _KERNEL:
+            _KERNEL["one"] = load_generated(kernel_module())
+        if parallel and "many" not in _KERNEL:
+            _KERNEL["many"] = load_generated(kernel_module(_KERNEL["one"].__name__))
+        return _KERNEL["many" if parallel else "one"]
 
 
 class CompiledNative:
@@ -66,18 +82,22 @@ class CompiledNative:
         self.functions: tuple[Any, ...] = self.module.FUNCTIONS
         self.tab = self.generated.tab
         self.max_transitions = max(1, *(len(m.transitions) for m in self.native.modes))
+        self._one = _entry_point(self.kernel.run_one)
+        self._many: Callable[..., None] | None = None
 
     def run_one(self, p: Any, x0: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
                 flag: Any) -> None:  # fmt: skip
         """One run into ``arrays`` (see :func:`hybrid.simulation.native.loop.run_one`)."""
-        self.kernel.run_one(self.functions, self.tab, p, x0, t0, m0, cfg[0], cfg[1],
-                            arrays.pts, arrays.jps, arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
+        self._one(self.functions, self.tab, p, x0, t0, m0, cfg[0], cfg[1],
+                  arrays.pts, arrays.jps, arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
 
     def run_many(self, ps: Any, x0s: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
                  flag: Any) -> None:  # fmt: skip
         """Runs into the rows of ``arrays`` (see :func:`hybrid.simulation.native.ensemble.run_many`)."""
-        self.kernel.run_many(self.functions, self.tab, ps, x0s, t0, m0, cfg[0], cfg[1],
-                             arrays.pts, arrays.jps, arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
+        if self._many is None:
+            self._many = _entry_point(kernel(parallel=True).run_many)
+        self._many(self.functions, self.tab, ps, x0s, t0, m0, cfg[0], cfg[1],
+                   arrays.pts, arrays.jps, arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
 
     def buffers(self, points: int, jumps: int, steps: int, runs: int | None = None) -> b.RunArrays:
         return b.allocate(
@@ -92,6 +112,17 @@ class CompiledNative:
 
     def initial_mode(self, model: Automaton | System) -> int:
         return self.native.index[as_system(model).initial_mode]
+
+
+def _entry_point(dispatcher: Any) -> Callable[..., None]:
+    """The compiled function behind a dispatcher of one signature, called without dispatch.
+
+    Resolving the argument types (a tuple of function pointers among them) on
+    every call costs far more than a short run; the types never change.
+    """
+    (signature,) = dispatcher.signatures
+    entry: Callable[..., None] = dispatcher.overloads[signature].entry_point
+    return entry
 
 
 def _structure_key(model: Automaton | System) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
@@ -157,9 +188,13 @@ def check_supported(settings: Settings, inputs: Mapping[str, Any] | None) -> Non
         )
 
 
-def run_in_worker(call: Callable[[NDArray[np.int64]], None], handle_sigint: bool) -> bool:
+def run_in_worker(
+    call: Callable[[NDArray[np.int64]], None],
+    handle_sigint: bool,
+    flag: NDArray[np.int64] | None = None,
+) -> bool:
     """Run ``call(flag)``; with ``handle_sigint`` a first Ctrl-C sets ``flag``. True if it did."""
-    flag = np.zeros(1, dtype=np.int64)
+    flag = np.zeros(1, dtype=np.int64) if flag is None else flag
     if not handle_sigint or threading.current_thread() is not threading.main_thread():
         call(flag)
         return False
@@ -202,6 +237,19 @@ def simulate_compiled(
     p = np.array(native.parameter_vector(model), dtype=float)
     x0 = np.array(initial_vector(model, native.state_names, initial), dtype=float)
     m0 = compiled.initial_mode(model)
+    arrays = run_arrays(compiled, p, x0, m0, settings, handle_sigint)
+    return run_from(native, compiled.layout, model, settings, arrays)
+
+
+def run_arrays(
+    compiled: CompiledNative,
+    p: NDArray[np.float64],
+    x0: NDArray[np.float64],
+    m0: int,
+    settings: Settings,
+    handle_sigint: bool,
+) -> b.RunArrays:
+    """One run's arrays, run again with four times the room until they hold it all."""
     cfg = config(settings)
     points, jumps = 256, 64
     steps = 256 if settings.dense else 1
@@ -213,7 +261,7 @@ def simulate_compiled(
 
         run_in_worker(call, handle_sigint)
         if not arrays.oi[b.I_OVERFLOW]:
-            return run_from(native, compiled.layout, model, settings, arrays)
+            return arrays
         points, jumps = points * 4, jumps * 4
         steps = steps * 4 if settings.dense else 1
 
