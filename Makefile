@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP_DEMO := $(VENV)/.installed-demo
 STAMP_TEST := $(VENV)/.installed-test
 
-.PHONY: demo test lint typecheck check-specs bench clean
+.PHONY: demo test lint typecheck check-specs bench fuzz clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -37,6 +37,9 @@ test: lint typecheck check-specs
 
 bench: $(STAMP_TEST)
 	$(BIN)/python -m bench
+
+fuzz: $(STAMP_TEST)
+	HYBRID_FUZZ=1 $(BIN)/python -m pytest -q tests/simulation/native/test_native_property.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .mypy_cache .ruff_cache

@@ -28,7 +28,7 @@ from hybrid.model import Automaton
 from hybrid.simulation.events import sigint_watch
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import Layout, run_from
-from hybrid.simulation.native.cache import load_generated
+from hybrid.simulation.native.cache import load_generated, require_numba
 from hybrid.simulation.native.source import generate, kernel_module
 from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Run
@@ -57,6 +57,7 @@ _KERNEL: dict[str, ModuleType] = {}
 
 def kernel(parallel: bool = False) -> ModuleType:
     """The compiled loop, or its ensemble loop (compiled or loaded once per process)."""
+    require_numba()
     with _CACHE_LOCK:
         if not _KERNEL:
             from numba.core.errors import NumbaExperimentalFeatureWarning
@@ -176,6 +177,7 @@ def config(settings: Settings) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
 
 def check_supported(settings: Settings, inputs: Mapping[str, Any] | None) -> None:
     """Refuse what the compiled backend does not do, naming it (never run otherwise)."""
+    require_numba()
     if settings.method != "RK45":
         raise UsageError(
             f"the compiled backend integrates with RK45 (Dormand–Prince 5(4)); method "
