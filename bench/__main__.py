@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from bench import engine_overhead, peers, rhs_call, spec_scaling, uvms_realtime
+from bench import engine_overhead, native_backend, peers, rhs_call, spec_scaling, uvms_realtime
 from bench.harness import machine
 
 RESULTS = Path(__file__).resolve().parent / "results.json"
@@ -27,6 +27,7 @@ def main(argv: list[str] | None = None) -> int:
         (engine_overhead, {"repeats": repeats}),
         (rhs_call, {"repeats": repeats}),
         (uvms_realtime, {"repeats": max(3, repeats // 2)}),
+        (native_backend, {"repeats": repeats, "ensemble_size": 1_000 if quick else 10_000}),
     ):
         for result in module.run(**kwargs):
             print(result.line(), json.dumps(result.extra))
@@ -41,6 +42,8 @@ def main(argv: list[str] | None = None) -> int:
     for row in scaling["rows"]:
         print(scaling["name"], row)
     report["scaling"] = scaling
+    report["native_compile"] = native_backend.compile_times()
+    print("compiled backend, compile times", report["native_compile"])
     report["peers"] = peers.run()
     print("peers", report["peers"])
     report["total_s"] = time.perf_counter() - started

@@ -63,6 +63,19 @@ def render(report: dict[str, Any]) -> str:
         "|" + "---|" * len(p),
         "| " + " | ".join(_fmt(v) for v in p.values()) + " |",
         "",
+    ]
+    compile_s = report.get("native_compile")
+    if compile_s:
+        lines += [
+            "Compiled backend, compile times (fresh processes, one new cache directory):",
+            "",
+            "| first process: kernel | first process: model | new model, kernel cached | cached process |",
+            "|---|---|---|---|",
+            f"| {compile_s['first_process_kernel_s']:.1f} s | {compile_s['first_process_model_s']:.1f} s | "
+            f"{compile_s['new_model_kernel_cached_s']:.2f} s | {compile_s['cached_process_s']:.2f} s |",
+            "",
+        ]
+    lines += [
         "Peers:",
         "",
     ]

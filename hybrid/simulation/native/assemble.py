@@ -93,7 +93,7 @@ class DenseSegment:
         k = np.clip(np.searchsorted(self.t_old, flat, side="right") - 1, 0, self.t_old.size - 1)
         s = (flat - self.t_old[k]) / self.h[k]
         powers = np.stack([s, s * s, s**3, s**4])  # (4, n)
-        y = self.h[k] * np.einsum("nic,cn->in", self.q[k], powers) + self.y_old[k].T
+        y: NDArray[np.float64] = self.h[k] * np.einsum("nic,cn->in", self.q[k], powers) + self.y_old[k].T
         return y[:, 0] if times.ndim == 0 else y
 
 

@@ -93,7 +93,6 @@ __all__ = [
     "Q_T0",
     "Q_TV",
     "Q_Y",
-    "RunArrays",
     "S_FAIL_T",
     "S_FLOW_FAIL",
     "S_FLOW_T",
@@ -148,6 +147,7 @@ __all__ = [
     "W_YTMP",
     "W_ZENO",
     "ZENO_SIZE",
+    "RunArrays",
     "allocate",
 ]
 

@@ -20,7 +20,7 @@ global index. An evaluation failure (NaN) is recorded once, the first, like
 :class:`hybrid.expr.codegen.EvalFailure`: what failed in ``wi``, where in
 ``wf``.
 
-Copied into every generated model module (below the ``kernel`` marker).
+Copied into the kernel module (below the ``kernel`` marker).
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ row of the chunk's buffers. ``prange`` spreads the runs over numba's threads
 fills its row stops with ``I_OVERFLOW``; Python runs it again alone, with
 room for more.
 
-Copied into every generated model module (below the ``kernel`` marker) and
+Copied into the kernel module (below the ``kernel`` marker) and
 compiled with ``parallel=True``.
 """
 

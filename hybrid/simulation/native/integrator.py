@@ -16,7 +16,7 @@ event times agree to the root finder's tolerance. Evaluation failures of the
 right-hand side (NaN) at trial points are remembered (the latest one, like :class:`hybrid.simulation.compiled.LatestFailure`): they
 only matter if the step size then collapses.
 
-Copied into every generated model module (below the ``kernel`` marker).
+Copied into the kernel module (below the ``kernel`` marker).
 """
 
 from __future__ import annotations

@@ -14,7 +14,9 @@ model and is compiled once per machine:
 - ``outputs(m, t, x*, p*, out*)``: every signal column in mode ``m``;
 - ``value(f, t, x*, p*) -> float``: scalar form ``f`` (a rho, a level);
 - ``truth(f, t, x*, p*) -> int``: boolean form ``f`` (1 holds, 0 not);
-- ``reset(tr, t, x*, p*, out*)``: the state after global transition ``tr``.
+- ``reset(tr, t, x*, p*, out*)``: the state after global transition ``tr``;
+- ``terms(m, t, x*, p*, out*)``: the watch's terms of mode ``m`` at once (each
+  guard's rho, each equality level, each invariant's rho), one call a sample.
 
 NaN from any of them is an evaluation failure (docs/semantics.md).
 """
@@ -49,8 +51,9 @@ Fns = tuple[Callable[..., Any], ...]
 
 def model_signatures() -> dict[str, Any]:
     """numba signatures of the model's functions: ``state`` (rhs, outputs, reset), ``value``, ``truth``."""
-    from numba import types
+    import numba
 
+    types: Any = numba.types
     pointer = types.CPointer(types.float64)
     return {
         "state": types.void(types.int64, types.float64, pointer, pointer, pointer),
@@ -61,8 +64,9 @@ def model_signatures() -> dict[str, Any]:
 
 def numba_types() -> dict[str, Any]:
     """The numba type of each annotation name (imports numba)."""
-    from numba import types
+    import numba
 
+    types: Any = numba.types
     signatures = model_signatures()
     state_fn = types.FunctionType(signatures["state"])
     value_fn = types.FunctionType(signatures["value"])
@@ -77,7 +81,7 @@ def numba_types() -> dict[str, Any]:
         "Array3": types.float64[:, :, ::1],
         "Ints": types.int64[::1],
         "Ints2": types.int64[:, ::1],
-        "Fns": types.Tuple((state_fn, state_fn, value_fn, truth_fn, state_fn)),
+        "Fns": types.Tuple((state_fn, state_fn, value_fn, truth_fn, state_fn, state_fn)),
     }
 
 
@@ -87,8 +91,9 @@ def numba_signature(annotations: dict[str, str], known: dict[str, Any]) -> Any:
     def of(text: str) -> Any:
         text = text.strip()
         if text.startswith("tuple[") and text.endswith("]"):
-            from numba import types
+            import numba
 
+            types: Any = numba.types
             return types.Tuple(tuple(of(part) for part in text[6:-1].split(",")))
         return known[text]
 

@@ -16,7 +16,7 @@ Function by function:
 The flow of a stay is :func:`~hybrid.simulation.native.stay.flow_stay`; the
 decisions at a point are :mod:`~hybrid.simulation.native.decide`'s.
 
-Copied into every generated model module (below the ``kernel`` marker).
+Copied into the kernel module (below the ``kernel`` marker).
 """
 
 from __future__ import annotations
@@ -170,7 +170,8 @@ def zeno_update(z: Array, t: float) -> float:
         z[Z_START] = z[Z_GAP0]
     if gap > ZENO_SHRINK * z[Z_START]:
         return math.nan
-    return t + gap * latest / (1.0 - latest)
+    estimate: float = t + gap * latest / (1.0 - latest)
+    return estimate
 
 
 def jump(fns: Fns, tab: Ints, pts: Array2, jps: Array2, oi: Ints, m: int, tr: int, t: float,

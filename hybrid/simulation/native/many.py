@@ -117,7 +117,9 @@ class Ensemble(Sequence[Run]):
     @property
     def causes(self) -> NDArray[np.str_]:
         """The termination cause of each run."""
-        return np.array(b.CAUSE_CODES, dtype=np.str_)[self._summary(b.I_CAUSE, False)]
+        names: NDArray[np.str_] = np.array(b.CAUSE_CODES, dtype=np.str_)
+        causes: NDArray[np.str_] = names[self._summary(b.I_CAUSE, False)]
+        return causes
 
     @property
     def t(self) -> NDArray[np.float64]:
@@ -251,7 +253,8 @@ def simulate_many(
     if threads is not None:
         import numba
 
-        numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
+        most = int(getattr(numba.config, "NUMBA_NUM_THREADS", 1))
+        numba.set_num_threads(max(1, min(int(threads), most)))
     cfg = config(settings)
     m0 = compiled.initial_mode(model)
     pilot = run_arrays(compiled, params[0], x0s[0], m0, settings, False)  # sizes the rows

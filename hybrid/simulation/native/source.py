@@ -2,7 +2,7 @@
 
 **The kernel** (:func:`kernel_module`): a copy of the kernel modules
 (everything below their ``# --- kernel ---`` line: integrator, decide, store,
-stay, loop, ensemble), each function compiled by numba with the explicit
+watch, stay, loop, ensemble), each function compiled by numba with the explicit
 signature its annotations give (:mod:`~hybrid.simulation.native.kernel_types`).
 It does not depend on any model: it receives the model as five C function
 pointers and a table of integers, so it is compiled once per machine.
@@ -46,7 +46,7 @@ from hybrid.simulation.native.structure import COMPILED_FORM, NativeMode, Native
 
 __all__ = ["KERNEL_MODULES", "Generated", "generate", "kernel_module", "kernel_source"]
 
-KERNEL_MODULES = ("integrator", "decide", "store", "stay", "loop", "ensemble")
+KERNEL_MODULES = ("integrator", "decide", "store", "watch", "stay", "loop", "ensemble")
 """The kernel modules, in this order (callees first); the last is the parallel ensemble loop."""
 
 MARKER = "# --- kernel ---"
@@ -161,7 +161,7 @@ def generate(model: NativeModel) -> Generated:
         names.update({s: f"s_{s}" for s in mode.signals})
     forms = _Forms()
     tables: dict[str, list[int]] = {k: [] for k in TABLES}
-    rhs_cases, out_cases, reset_cases = [], [], []
+    rhs_cases, out_cases, reset_cases, term_cases = [], [], [], []
     outputs_ir = _output_exprs(model)
     for mode in model.modes:
         flows = [mode.flow.get(s, ir.Num(0.0)) for s in states]
@@ -191,6 +191,11 @@ def generate(model: NativeModel) -> Generated:
         for _, expr in mode.invariants:
             tables["INV_RHO"].append(forms.value(mode, guard_to_rho(expr)))
             tables["INV_BOOL"].append(forms.truth(mode, expr))
+        terms = [guard_to_rho(tr.guard) for tr in mode.transitions]
+        terms += [level.difference for tr in mode.transitions for level in tr.levels]
+        terms += [guard_to_rho(expr) for _, expr in mode.invariants]
+        pre, items = body_lines(terms, mode.signals, names)
+        term_cases.append(pre + [f"out[{k}] = {v}" for k, v in enumerate(items)])
     tables["MODE_TR"].append(len(tables["TR_TARGET"]))
     tables["MODE_INV"].append(len(tables["INV_RHO"]))
     tables["TR_LV"].append(len(tables["LV_E"]))
@@ -215,7 +220,12 @@ def generate(model: NativeModel) -> Generated:
     mathlib, helpers = kernel_source(("mathlib",))
     x_view = f"    x = carray(xp, ({len(states)},))"
     p_view = f"    p = carray(pp, ({len(model.slot_names)},))" if model.slot_names else ""
-    out_n = {"model_rhs": len(states), "model_outputs": len(model.columns), "model_reset": len(states)}
+    out_n = {
+        "model_rhs": len(states),
+        "model_outputs": len(model.columns),
+        "model_reset": len(states),
+        "model_terms": sizes[2] + sizes[3] + sizes[4],
+    }
     body = {
         "model_rhs": rhs_cases,
         "model_outputs": out_cases,
@@ -225,6 +235,7 @@ def generate(model: NativeModel) -> Generated:
             for case in form_cases(forms.truths)
         ],
         "model_reset": reset_cases,
+        "model_terms": term_cases,
     }
     functions: list[str] = []
     for name, cases in body.items():
@@ -238,7 +249,7 @@ def generate(model: NativeModel) -> Generated:
         lines = _function(name, args, cases, fallback)
         functions += [lines[0], *(v for v in views if v), *lines[1:]]
     kinds = {"model_rhs": "state", "model_outputs": "state", "model_value": "value",
-             "model_truth": "truth", "model_reset": "state"}  # fmt: skip
+             "model_truth": "truth", "model_reset": "state", "model_terms": "state"}  # fmt: skip
     footer = [
         "",
         "# ---- compiled with numba (cached on disk beside this file) ----",
@@ -250,7 +261,7 @@ def generate(model: NativeModel) -> Generated:
         f"    for _name, _kind in {tuple(kinds.items())!r}:",
         "        globals()[_name] = cfunc(_SIGNATURES[_kind], cache=True, error_model='numpy')("
         "globals()[_name])",
-        "FUNCTIONS = (model_rhs, model_outputs, model_value, model_truth, model_reset)",
+        "FUNCTIONS = (model_rhs, model_outputs, model_value, model_truth, model_reset, model_terms)",
         "",
     ]
     source = "\n".join([*header, mathlib, "", *functions, *footer])

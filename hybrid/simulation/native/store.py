@@ -9,7 +9,7 @@ point is stored (a signal that fails ends the run there, as in the recorder).
 A full buffer sets ``I_OVERFLOW`` and the call returns False: Python then runs
 again with room for more.
 
-Copied into every generated model module (below the ``kernel`` marker).
+Copied into the kernel module (below the ``kernel`` marker).
 """
 
 from __future__ import annotations

@@ -40,7 +40,7 @@ def test_cli_backend_compiled_writes_what_scipy_writes(tmp_path: Path) -> None:
 
 def test_library_functions_without_a_compiled_form_are_refused() -> None:
     model = hybrid.load(SPECS / "uvms_mission_2.yaml")
-    with pytest.raises(UsageError, match="library function '.*' has no compiled form"):
+    with pytest.raises(UsageError, match=r"library function '.*' has no compiled form"):
         hybrid.simulate(model, t_end=1.0, backend="compiled")
     done = run_cli("simulate", SPECS / "uvms_mission_2.yaml", "--t-end", "1", "--backend", "compiled")
     assert done.returncode == 2 and "has no compiled form" in done.stderr
