@@ -41,7 +41,14 @@ from hybrid.simulation.native.buffers import (
 )
 from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints
 
-__all__ = ["P_DENSE", "dense_eval", "eval_rhs", "initial_step", "rk45_step"]
+__all__ = [
+    "P_DENSE",
+    "dense_eval",
+    "eval_rhs",
+    "initial_step",
+    "remember_flow_failure",
+    "rk45_step",
+]
 
 # --- kernel ---
 
@@ -79,10 +86,8 @@ P_DENSE = np.array(
 )  # fmt: skip
 
 
-def eval_rhs(fns: Fns, m: int, t: float, x: Array, p: Array, out: Array, wf: Array, wi: Ints) -> None:
-    """The right-hand side into ``out``; a NaN there is remembered (the latest wins)."""
-    rhs = fns[0]
-    rhs(m, t, x.ctypes, p.ctypes, out.ctypes)
+def remember_flow_failure(t: float, x: Array, out: Array, wf: Array, wi: Ints) -> None:
+    """If ``out`` (the right-hand side at ``(t, x)``) has a NaN, remember where (the latest wins)."""
     for i in range(out.shape[0]):
         if out[i] != out[i]:
             sc = wi[W_SCAL]
@@ -92,6 +97,13 @@ def eval_rhs(fns: Fns, m: int, t: float, x: Array, p: Array, out: Array, wf: Arr
             for k in range(x.shape[0]):
                 wf[fx + k] = x[k]
             return
+
+
+def eval_rhs(fns: Fns, m: int, t: float, x: Array, p: Array, out: Array, wf: Array, wi: Ints) -> None:
+    """The right-hand side into ``out``; a NaN there is remembered (the latest wins)."""
+    rhs = fns[0]
+    rhs(m, t, x.ctypes, p.ctypes, out.ctypes)
+    remember_flow_failure(t, x, out, wf, wi)
 
 
 def rk45_step(
@@ -118,6 +130,9 @@ def rk45_step(
     y_new = wf[wi[W_YNEW] : wi[W_YNEW] + d]
     z = wf[wi[W_YTMP] : wi[W_YTMP] + d]
     K = wf[wi[W_K] : wi[W_K] + 7 * d].reshape((7, d))
+    rhs = fns[0]
+    p_c, z_c, yn_c = p.ctypes, z.ctypes, y_new.ctypes
+    k1, k2, k3, k4, k5, k6 = K[1], K[2], K[3], K[4], K[5], K[6]
     min_step = 10.0 * abs(np.nextafter(t, math.inf) - t)
     if h_abs > max_step:
         h_abs = max_step
@@ -135,26 +150,50 @@ def rk45_step(
         for i in range(d):
             K[0, i] = f[i]
             z[i] = y[i] + (K[0, i] * A21) * h
-        eval_rhs(fns, m, t + C2 * h, z, p, K[1], wf, wi)
+        rhs(m, t + C2 * h, z_c, p_c, k1.ctypes)
+        for i in range(d):
+            if k1[i] != k1[i]:
+                remember_flow_failure(t + C2 * h, z, k1, wf, wi)
+                break
         for i in range(d):
             z[i] = y[i] + (K[0, i] * A31 + K[1, i] * A32) * h
-        eval_rhs(fns, m, t + C3 * h, z, p, K[2], wf, wi)
+        rhs(m, t + C3 * h, z_c, p_c, k2.ctypes)
+        for i in range(d):
+            if k2[i] != k2[i]:
+                remember_flow_failure(t + C3 * h, z, k2, wf, wi)
+                break
         for i in range(d):
             z[i] = y[i] + (K[0, i] * A41 + K[1, i] * A42 + K[2, i] * A43) * h
-        eval_rhs(fns, m, t + C4 * h, z, p, K[3], wf, wi)
+        rhs(m, t + C4 * h, z_c, p_c, k3.ctypes)
+        for i in range(d):
+            if k3[i] != k3[i]:
+                remember_flow_failure(t + C4 * h, z, k3, wf, wi)
+                break
         for i in range(d):
             z[i] = y[i] + (K[0, i] * A51 + K[1, i] * A52 + K[2, i] * A53 + K[3, i] * A54) * h
-        eval_rhs(fns, m, t + C5 * h, z, p, K[4], wf, wi)
+        rhs(m, t + C5 * h, z_c, p_c, k4.ctypes)
+        for i in range(d):
+            if k4[i] != k4[i]:
+                remember_flow_failure(t + C5 * h, z, k4, wf, wi)
+                break
         for i in range(d):
             z[i] = y[i] + (
                 K[0, i] * A61 + K[1, i] * A62 + K[2, i] * A63 + K[3, i] * A64 + K[4, i] * A65
             ) * h
-        eval_rhs(fns, m, t + h, z, p, K[5], wf, wi)
+        rhs(m, t + h, z_c, p_c, k5.ctypes)
+        for i in range(d):
+            if k5[i] != k5[i]:
+                remember_flow_failure(t + h, z, k5, wf, wi)
+                break
         for i in range(d):
             y_new[i] = y[i] + h * (
                 K[0, i] * B1 + K[2, i] * B3 + K[3, i] * B4 + K[4, i] * B5 + K[5, i] * B6
             )
-        eval_rhs(fns, m, t + h, y_new, p, K[6], wf, wi)
+        rhs(m, t + h, yn_c, p_c, k6.ctypes)
+        for i in range(d):
+            if k6[i] != k6[i]:
+                remember_flow_failure(t + h, y_new, k6, wf, wi)
+                break
         total = 0.0
         for i in range(d):
             scale = atol + max(abs(y[i]), abs(y_new[i])) * rtol

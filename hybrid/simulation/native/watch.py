@@ -36,7 +36,6 @@ from hybrid.simulation.native.buffers import (
     T_TR_LV,
     W_CUR,
     W_D,
-    W_FAILI,
     W_INVARMED,
     W_LVARMED,
     W_LVSIGN,
@@ -237,24 +236,61 @@ def scan_step(fns: Fns, tab: Ints, m: int, t: float, t_new: float, h: float, sam
     xs = wf[wi[W_XS] : wi[W_XS] + d]
     prev = wf[wi[W_PREV] : wi[W_PREV] + n_terms]
     cur = wf[wi[W_CUR] : wi[W_CUR] + n_terms]
-    fail = wi[W_FAILI]
+    n_lv = tab[tab[T_TR_LV] + first + n_tr] - tab[tab[T_TR_LV] + first]
+    tr_armed, lv_armed, inv_armed = wi[W_TRARMED], wi[W_LVARMED], wi[W_INVARMED]
+    lv_sign = wi[W_LVSIGN]
+    # the hot loop: the watch, its arming and the interpolant are written out here,
+    # not called (a call of a kernel function passes every array field by field)
+    terms = fns[5]
+    p_c, xs_c, yn_c, cur_c = p.ctypes, xs.ctypes, y_new.ctypes, cur.ctypes
     t_prev = t
     for i in range(1, samples + 2):
         if i <= samples:
             tau = t + h * (i / (samples + 1.0))
-            dense_eval(tau, t, h, y, q, xs)
-            terms_at(fns, tab, m, tau, xs, p, cur, wf, wi)
+            s1 = (tau - t) / h
+            s2 = s1 * s1
+            s3 = s2 * s1
+            s4 = s3 * s1
+            for k in range(d):
+                xs[k] = h * (q[k, 0] * s1 + q[k, 1] * s2 + q[k, 2] * s3 + q[k, 3] * s4) + y[k]
+            terms(m, tau, xs_c, p_c, cur_c)
         else:
             tau = t_new
-            terms_at(fns, tab, m, tau, y_new, p, cur, wf, wi)
-        if wi[fail] != 0:
+            terms(m, tau, yn_c, p_c, cur_c)
+        fb = 1.0e308
+        failed = False
+        for k in range(used):
+            value = cur[k]
+            if value != value:
+                failed = True
+            elif k < n_tr:
+                if wi[tr_armed + k] != 0 and value < fb:
+                    fb = value
+            elif k < n_tr + n_lv:
+                signed = wf[lv_sign + k - n_tr] * value
+                if wi[lv_armed + k - n_tr] != 0 and signed < fb:
+                    fb = signed
+            elif wi[inv_armed + k - n_tr - n_lv] != 0 and -value < fb:
+                fb = -value
+        if failed:  # name the failing term (rare: evaluate again, recording)
+            terms_at(fns, tab, m, tau, xs if i <= samples else y_new, p, cur, wf, wi)
             return math.nan
-        fb = watch_of(tab, m, cur, wf, wi)
+        if fb >= 1.0e308:
+            fb = 1.0
         if fb <= 0.0:
             fa = watch_of(tab, m, prev, wf, wi)
             return locate(fns, tab, m, t_prev, tau, fa, fb, t, h, p, wf, wi)
-        arm_from(tab, m, cur, True, wf, wi)
         for k in range(used):
-            prev[k] = cur[k]
+            value = cur[k]
+            if k < n_tr:
+                if value > 0.0:
+                    wi[tr_armed + k] = 1
+            elif k < n_tr + n_lv:
+                if value > 0.0 or value < 0.0:
+                    wf[lv_sign + k - n_tr] = 1.0 if value > 0.0 else -1.0
+                    wi[lv_armed + k - n_tr] = 1
+            elif -value > 0.0:
+                wi[inv_armed + k - n_tr - n_lv] = 1
+            prev[k] = value
         t_prev = tau
     return math.nan
