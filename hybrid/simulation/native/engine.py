@@ -89,6 +89,12 @@ class CompiledNative:
     def run_one(self, p: Any, x0: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
                 flag: Any) -> None:  # fmt: skip
         """One run into ``arrays`` (see :func:`hybrid.simulation.native.loop.run_one`)."""
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # numba: "first-class function type is experimental"
+            self._run_one(p, x0, t0, m0, cfg, arrays, flag)
+
+    def _run_one(self, p: Any, x0: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
+                 flag: Any) -> None:  # fmt: skip
         self._one(self.functions, self.tab, p, x0, t0, m0, cfg[0], cfg[1],
                   arrays.pts, arrays.jps, arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
 
@@ -97,6 +103,13 @@ class CompiledNative:
         """Runs into the rows of ``arrays`` (see :func:`hybrid.simulation.native.ensemble.run_many`)."""
         if self._many is None:
             self._many = _entry_point(kernel(parallel=True).run_many)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # numba: "first-class function type is experimental"
+            self._many_call(ps, x0s, t0, m0, cfg, arrays, flag)
+
+    def _many_call(self, ps: Any, x0s: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
+                   flag: Any) -> None:  # fmt: skip
+        assert self._many is not None
         self._many(self.functions, self.tab, ps, x0s, t0, m0, cfg[0], cfg[1],
                    arrays.pts, arrays.jps, arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
 
