@@ -217,7 +217,7 @@ def simulate_many(
     >>> ball = hybrid.load("specs/bouncing_ball.yaml")
     >>> runs = hybrid.simulate_many(ball, t_end=2.0, parameters={"init.h": [5.0, 10.0, 20.0]})
     >>> runs.n_jumps.tolist(), [round(run.jumps[0].t, 6) for run in runs if run.jumps]
-    ([1, 1, 0], [1.009653, 1.427843])
+    ([1, 1, 0], [1.009638, 1.427843])
     """
     settings = Settings(
         t_end=t_end,

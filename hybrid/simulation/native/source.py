@@ -22,7 +22,7 @@ Examples
 >>> import hybrid
 >>> from hybrid.simulation.native.structure import NativeModel
 >>> generated = generate(NativeModel(hybrid.load("specs/bouncing_ball.yaml")))
->>> "out[1] = (-p[0])" in generated.source, generated.tab[:6].tolist()
+>>> "out[1] = -p[0]" in generated.source, generated.tab[:6].tolist()
 (True, [2, 1, 1, 1, 1, 2])
 """
 
