@@ -79,7 +79,15 @@ class CompiledNative:
         self.layout = Layout.of(self.native)
         self.generated = generate(self.native)
         self.kernel = kernel()
-        self.module: ModuleType = load_generated(self.generated)
+        try:
+            self.module: ModuleType = load_generated(self.generated)
+        except Exception as exc:  # numba refusing a library's compiled form, say
+            lines = [line for line in str(exc).splitlines() if line.strip()]
+            what = ", ".join(sorted(self.native.functions)) or "its expressions"
+            raise UsageError(
+                f"the compiled backend could not compile {self.native.system.name} "
+                f"(library functions: {what}): {lines[0] if lines else type(exc).__name__}"
+            ) from exc
         self.functions: tuple[Any, ...] = self.module.FUNCTIONS
         self.tab = self.generated.tab
         self.max_transitions = max(1, *(len(m.transitions) for m in self.native.modes))
