@@ -101,6 +101,13 @@ class NativeModel:
 
     def __init__(self, model: Automaton | System) -> None:
         self.system = as_system(model)
+        if self.system.single and self.system.components[0].automaton.inputs:
+            name = self.system.components[0].automaton.inputs[0]
+            raise UsageError(
+                f"input '{name}' of {self.system.name} needs a value, and the compiled backend "
+                "cannot take inputs given as Python functions: use backend='scipy' with "
+                f"inputs={{'{name}': f}}, or compose the automaton with one that defines '{name}'"
+            )
         slots: dict[tuple[int, str], int] = {}
         labels: list[str] = []
         values: list[float] = []

@@ -53,6 +53,8 @@ def test_what_the_compiled_backend_cannot_do_is_refused(ball: hybrid.Automaton) 
     polarization = hybrid.load(SPECS / "polarization.yaml")
     with pytest.raises(UsageError, match="external inputs"):
         hybrid.simulate(polarization, t_end=1.0, inputs={"gamma": lambda t: 1.0}, backend="compiled")
+    with pytest.raises(UsageError, match="input 'gamma' of polarization needs a value"):
+        hybrid.simulate(polarization, t_end=1.0, backend="compiled")
     with pytest.raises(UsageError, match="unknown backend 'gpu'"):
         hybrid.simulate(ball, t_end=1.0, backend="gpu")
 
