@@ -83,6 +83,12 @@ __all__ = [
     "N_OUT_F",
     "N_OUT_I",
     "N_SCALARS",
+    "OP_OUTPUTS",
+    "OP_RESET",
+    "OP_RHS",
+    "OP_TERMS",
+    "OP_TRUTH",
+    "OP_VALUE",
     "P_J",
     "P_M",
     "P_T",
@@ -177,6 +183,9 @@ D_STEP_TOO_SMALL, D_STATE_NONFINITE = 10, 11
 # which compiled function could not be evaluated (out_i[I_FAIL_KIND])
 F_NONE, F_GUARD, F_INVARIANT, F_SIGNALS, F_RESET, F_FLOW = 0, 1, 2, 3, 4, 5
 
+
+# what the model's one compiled function computes: fns(op, index, t, x*, p*, out*)
+OP_RHS, OP_OUTPUTS, OP_VALUE, OP_TRUTH, OP_RESET, OP_TERMS = 0, 1, 2, 3, 4, 5
 
 # the model's tables (one int64 array, ``tab``): sizes, then where each table starts
 T_N_STATES, T_N_SIGNALS, T_MAX_TR, T_MAX_LV, T_MAX_INV, T_N_PARAMS = 0, 1, 2, 3, 4, 5

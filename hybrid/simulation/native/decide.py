@@ -29,6 +29,9 @@ from hybrid.simulation.native.buffers import (
     F_FLOW,
     F_GUARD,
     F_INVARIANT,
+    OP_RHS,
+    OP_TRUTH,
+    OP_VALUE,
     S_FAIL_T,
     T_INV_BOOL,
     T_INV_RHO,
@@ -97,8 +100,7 @@ def value_checked(
     wi: Ints,
 ) -> float:  # fmt: skip
     """Form ``f`` at ``(t, x)``, a NaN recorded as a failure of ``kind``/``index``."""
-    value = fns[2]
-    v: float = value(f, t, x.ctypes, p.ctypes)
+    v: float = fns(OP_VALUE, f, t, x.ctypes, p.ctypes, x.ctypes)
     if v != v:
         note_failure(kind, index, m, t, x, wf, wi)
     return v
@@ -113,8 +115,7 @@ def slope(
     rate = wf[wi[W_RATE] : wi[W_RATE] + d]
     ahead = wf[wi[W_AHEAD] : wi[W_AHEAD] + d]
     h = 1e-7 * max(1.0, abs(t))
-    rhs = fns[0]
-    rhs(m, t, x.ctypes, p.ctypes, rate.ctypes)
+    fns(OP_RHS, m, t, x.ctypes, p.ctypes, rate.ctypes)
     for i in range(d):
         if rate[i] != rate[i]:
             note_failure(F_FLOW, m, m, t, x, wf, wi)
@@ -140,8 +141,7 @@ def holds_now(
         return True, True
     if rate > width:
         return False, False  # on the boundary, moving away: disarm until strictly false
-    truth = fns[3]
-    return truth(bool_f, t, x.ctypes, p.ctypes) != 0, False
+    return fns(OP_TRUTH, bool_f, t, x.ctypes, p.ctypes, x.ctypes) != 0.0, False
 
 
 def choose(tab: Ints, m: int, wi: Ints) -> int:
@@ -178,7 +178,6 @@ def invariant_left_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, p: Array,
     """The place in its mode of an invariant that does not hold or is being left (-1: none)."""
     width = band(x)
     first = tab[tab[T_MODE_INV] + m]
-    truth = fns[3]
     for k in range(tab[tab[T_MODE_INV] + m + 1] - first):
         inv = first + k
         rho_f = tab[tab[T_INV_RHO] + inv]
@@ -187,7 +186,7 @@ def invariant_left_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, p: Array,
             return k
         if value >= -width:
             rate = slope(fns, rho_f, F_INVARIANT, inv, m, t, x, p, wf, wi)
-            holds = truth(tab[tab[T_INV_BOOL] + inv], t, x.ctypes, p.ctypes) != 0
+            holds = fns(OP_TRUTH, tab[tab[T_INV_BOOL] + inv], t, x.ctypes, p.ctypes, x.ctypes) != 0.0
             if rate > width or (abs(rate) <= width and not holds):
                 return k
     return -1

@@ -88,7 +88,7 @@ class CompiledNative:
                 f"the compiled backend could not compile {self.native.system.name} "
                 f"(library functions: {what}): {lines[0] if lines else type(exc).__name__}"
             ) from exc
-        self.functions: tuple[Any, ...] = self.module.FUNCTIONS
+        self.functions: Any = self.module.model
         self.tab = self.generated.tab
         self.max_transitions = max(1, *(len(m.transitions) for m in self.native.modes))
         self._one = _entry_point(self.kernel.run_one)

@@ -6,17 +6,21 @@ scalars); the generated kernel module turns each annotation into numba's
 explicit signature (:func:`numba_signature`), so every function compiles once,
 eagerly, for exactly these types (no specialisation per literal argument).
 
-``Fns`` is the model: its five compiled functions as C function pointers
-(numba first-class functions), so the kernel itself does not depend on the
-model and is compiled once per machine:
+``Fns`` is the model: one compiled function, ``model(op, index, t, x*, p*,
+out*) -> float``, passed as a C function pointer (a numba first-class
+function), so the kernel itself does not depend on the model and is compiled
+once per machine. By ``op`` (``OP_*`` of :mod:`~hybrid.simulation.native.buffers`):
 
-- ``rhs(m, t, x*, p*, out*)``: ``out = dx/dt`` in mode ``m``;
-- ``outputs(m, t, x*, p*, out*)``: every signal column in mode ``m``;
-- ``value(f, t, x*, p*) -> float``: scalar form ``f`` (a rho, a level);
-- ``truth(f, t, x*, p*) -> int``: boolean form ``f`` (1 holds, 0 not);
-- ``reset(tr, t, x*, p*, out*)``: the state after global transition ``tr``;
-- ``terms(m, t, x*, p*, out*)``: the watch's terms of mode ``m`` at once (each
-  guard's rho, each equality level, each invariant's rho), one call a sample.
+- ``OP_RHS``, ``index`` a mode: ``out = dx/dt``;
+- ``OP_OUTPUTS``, a mode: every signal column;
+- ``OP_VALUE``, a form: returns the scalar form (a rho, an equality level);
+- ``OP_TRUTH``, a form: returns 1.0 if the boolean form holds, else 0.0;
+- ``OP_RESET``, a global transition: the state after it;
+- ``OP_TERMS``, a mode: the watch's terms at once (each guard's rho, each
+  equality level, each invariant's rho), one call a sample.
+
+One function rather than six: each function pointer costs a load from the
+cache and a conversion on every call from Python.
 
 NaN from any of them is an evaluation failure (docs/semantics.md).
 """
@@ -36,7 +40,7 @@ __all__ = [
     "Fns",
     "Ints",
     "Ints2",
-    "model_signatures",
+    "model_signature",
     "numba_signature",
     "numba_types",
 ]
@@ -46,20 +50,16 @@ Array2 = NDArray[np.float64]
 Array3 = NDArray[np.float64]
 Ints = NDArray[np.int64]
 Ints2 = NDArray[np.int64]
-Fns = tuple[Callable[..., Any], ...]
+Fns = Callable[..., float]
 
 
-def model_signatures() -> dict[str, Any]:
-    """numba signatures of the model's functions: ``state`` (rhs, outputs, reset), ``value``, ``truth``."""
+def model_signature() -> Any:
+    """numba's signature of the model's function ``model(op, index, t, x*, p*, out*) -> float``."""
     import numba
 
     types: Any = numba.types
     pointer = types.CPointer(types.float64)
-    return {
-        "state": types.void(types.int64, types.float64, pointer, pointer, pointer),
-        "value": types.float64(types.int64, types.float64, pointer, pointer),
-        "truth": types.int64(types.int64, types.float64, pointer, pointer),
-    }
+    return types.float64(types.int64, types.int64, types.float64, pointer, pointer, pointer)
 
 
 def numba_types() -> dict[str, Any]:
@@ -67,10 +67,6 @@ def numba_types() -> dict[str, Any]:
     import numba
 
     types: Any = numba.types
-    signatures = model_signatures()
-    state_fn = types.FunctionType(signatures["state"])
-    value_fn = types.FunctionType(signatures["value"])
-    truth_fn = types.FunctionType(signatures["truth"])
     return {
         "int": types.int64,
         "float": types.float64,
@@ -81,7 +77,7 @@ def numba_types() -> dict[str, Any]:
         "Array3": types.float64[:, :, ::1],
         "Ints": types.int64[::1],
         "Ints2": types.int64[:, ::1],
-        "Fns": types.Tuple((state_fn, state_fn, value_fn, truth_fn, state_fn, state_fn)),
+        "Fns": types.FunctionType(model_signature()),
     }
 
 

@@ -40,6 +40,7 @@ from hybrid.simulation.native.buffers import (
     D_ZENO_INSTANT,
     F_RESET,
     N_SCALARS,
+    OP_RESET,
     S_FAIL_T,
     T_MAX_INV,
     T_MAX_LV,
@@ -179,8 +180,7 @@ def jump(fns: Fns, tab: Ints, pts: Array2, jps: Array2, oi: Ints, m: int, tr: in
     """Take transition ``tr`` at ``t``: reset into ``x``, record the jump and the new point."""
     d = wi[W_D]
     x_new = wf[wi[W_XNEW] : wi[W_XNEW] + d]
-    reset = fns[4]
-    reset(tr, t, x.ctypes, p.ctypes, x_new.ctypes)
+    fns(OP_RESET, tr, t, x.ctypes, p.ctypes, x_new.ctypes)
     failed = False
     for i in range(d):
         if x_new[i] != x_new[i]:

@@ -7,10 +7,11 @@ signature its annotations give (:mod:`~hybrid.simulation.native.kernel_types`).
 It does not depend on any model: it receives the model as five C function
 pointers and a table of integers, so it is compiled once per machine.
 
-**A model** (:func:`generate`): its five functions (``rhs``, ``outputs``,
-``value``, ``truth``, ``reset``; see ``kernel_types``) generated from the
-expression IR by :mod:`~hybrid.simulation.native.printer` as numba ``cfunc``
-s, with :mod:`~hybrid.simulation.native.mathlib` inlined, and the table
+**A model** (:func:`generate`): its function ``model(op, index, t, x*, p*,
+out*)`` (see ``kernel_types``) generated from the expression IR by
+:mod:`~hybrid.simulation.native.printer` as one numba ``cfunc``, with
+:mod:`~hybrid.simulation.native.mathlib` and the per-operation functions
+inlined into it, and the table
 ``tab`` (which transitions, levels and invariants each mode has, and the form
 numbers of their expressions). One module per model *structure*: parameters
 are slots, so their values are not in it. The source is built from checked
@@ -218,50 +219,50 @@ def generate(model: NativeModel) -> Generated:
     ]
     header, library_modules = _header(model)
     mathlib, helpers = kernel_source(("mathlib",))
-    x_view = f"    x = carray(xp, ({len(states)},))"
-    p_view = f"    p = carray(pp, ({len(model.slot_names)},))" if model.slot_names else ""
-    out_n = {
-        "model_rhs": len(states),
-        "model_outputs": len(model.columns),
-        "model_reset": len(states),
-        "model_terms": sizes[2] + sizes[3] + sizes[4],
-    }
+    out_size = max(1, len(states), len(model.columns), sizes[2] + sizes[3] + sizes[4])
     body = {
         "model_rhs": rhs_cases,
         "model_outputs": out_cases,
         "model_value": form_cases(forms.values),
-        "model_truth": [
-            [*case[:-1], case[-1].replace("return ", "return 1 if (", 1) + ") else 0"]
-            for case in form_cases(forms.truths)
-        ],
+        "model_truth": form_cases(forms.truths),
         "model_reset": reset_cases,
         "model_terms": term_cases,
     }
     functions: list[str] = []
     for name, cases in body.items():
         index = {"model_value": "f", "model_truth": "f", "model_reset": "tr"}.get(name, "m")
-        state_fn = name in out_n
-        args = f"{index}, t, xp, pp, outp" if state_fn else f"{index}, t, xp, pp"
-        views = [x_view, p_view]
-        if state_fn:
-            views.append(f"    out = carray(outp, ({out_n[name]},))")
-        fallback = "return" if state_fn else ("return _NAN" if name == "model_value" else "return 0")
-        lines = _function(name, args, cases, fallback)
-        functions += [lines[0], *(v for v in views if v), *lines[1:]]
-    kinds = {"model_rhs": "state", "model_outputs": "state", "model_value": "value",
-             "model_truth": "truth", "model_reset": "state", "model_terms": "state"}  # fmt: skip
+        fallback = {"model_value": "return _NAN", "model_truth": "return False"}.get(name, "return")
+        functions += _function(name, f"{index}, t, x, p, out", cases, fallback)
+    p_view = f"carray(pp, ({len(model.slot_names)},))" if model.slot_names else "np.zeros(0)"
+    functions += [
+        "def model(op, i, t, xp, pp, outp):",
+        f"    x = carray(xp, ({len(states)},))",
+        f"    p = {p_view}",
+        f"    out = carray(outp, ({out_size},))",
+        "    if op == OP_VALUE:",
+        "        return model_value(i, t, x, p, out)",
+        "    if op == OP_TRUTH:",
+        "        return 1.0 if model_truth(i, t, x, p, out) else 0.0",
+        "    if op == OP_TERMS:",
+        "        model_terms(i, t, x, p, out)",
+        "    elif op == OP_RHS:",
+        "        model_rhs(i, t, x, p, out)",
+        "    elif op == OP_OUTPUTS:",
+        "        model_outputs(i, t, x, p, out)",
+        "    elif op == OP_RESET:",
+        "        model_reset(i, t, x, p, out)",
+        "    return 0.0",
+        "",
+    ]
+    inlined = (*helpers, *body)
     footer = [
         "",
         "# ---- compiled with numba (cached on disk beside this file) ----",
-        f"for _name in {tuple(helpers)!r}:",
+        f"for _name in {tuple(inlined)!r}:",
         f"    globals()[_name] = njit(inline='always', {JIT})(globals()[_name])",
-        "_SIGNATURES = model_signatures()",
         "with warnings.catch_warnings():",
         "    warnings.simplefilter('ignore', NumbaExperimentalFeatureWarning)",
-        f"    for _name, _kind in {tuple(kinds.items())!r}:",
-        "        globals()[_name] = cfunc(_SIGNATURES[_kind], cache=True, error_model='numpy')("
-        "globals()[_name])",
-        "FUNCTIONS = (model_rhs, model_outputs, model_value, model_truth, model_reset, model_terms)",
+        "    model = cfunc(model_signature(), cache=True, error_model='numpy')(model)",
         "",
     ]
     source = "\n".join([*header, mathlib, "", *functions, *footer])
@@ -302,7 +303,9 @@ def _header(model: NativeModel) -> tuple[list[str], tuple[str, ...]]:
         "import warnings",
         "from numba import carray, cfunc, njit",
         "from numba.core.errors import NumbaExperimentalFeatureWarning",
-        "from hybrid.simulation.native.kernel_types import model_signatures",
+        "from hybrid.simulation.native.buffers import OP_OUTPUTS, OP_RESET, OP_RHS, OP_TERMS",
+        "from hybrid.simulation.native.buffers import OP_TRUTH, OP_VALUE",
+        "from hybrid.simulation.native.kernel_types import model_signature",
         "_NAN = math.nan",
         "_INF = math.inf",
     ]

@@ -36,6 +36,7 @@ from hybrid.simulation.native.buffers import (
     J_TR,
     J_X,
     N_OUT_F,
+    OP_OUTPUTS,
     P_J,
     P_M,
     P_T,
@@ -77,8 +78,7 @@ def record_point(fns: Fns, pts: Array2, oi: Ints, t: float, j: int, m: int, x: A
     for i in range(d):
         row[P_X + i] = x[i]
     signals = row[P_X + d :]
-    outputs = fns[1]
-    outputs(m, t, x.ctypes, p.ctypes, signals.ctypes)
+    fns(OP_OUTPUTS, m, t, x.ctypes, p.ctypes, signals.ctypes)
     for c in range(signals.shape[0]):
         if signals[c] != signals[c]:
             note_failure(F_SIGNALS, m, m, t, x, wf, wi)

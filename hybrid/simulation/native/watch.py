@@ -29,6 +29,7 @@ import math
 from hybrid.simulation.native.buffers import (
     F_GUARD,
     F_INVARIANT,
+    OP_TERMS,
     T_INV_RHO,
     T_LV_E,
     T_MODE_INV,
@@ -65,8 +66,7 @@ def terms_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, p: Array, out: Arr
     One call of the model's ``terms``; a NaN is recorded as the failure of its
     guard or invariant.
     """
-    terms = fns[5]
-    terms(m, t, x.ctypes, p.ctypes, out.ctypes)
+    fns(OP_TERMS, m, t, x.ctypes, p.ctypes, out.ctypes)
     first = tab[tab[T_MODE_TR] + m]
     n_tr = tab[tab[T_MODE_TR] + m + 1] - first
     lv0 = tab[tab[T_TR_LV] + first]
@@ -241,7 +241,6 @@ def scan_step(fns: Fns, tab: Ints, m: int, t: float, t_new: float, h: float, sam
     lv_sign = wi[W_LVSIGN]
     # the hot loop: the watch, its arming and the interpolant are written out here,
     # not called (a call of a kernel function passes every array field by field)
-    terms = fns[5]
     p_c, xs_c, yn_c, cur_c = p.ctypes, xs.ctypes, y_new.ctypes, cur.ctypes
     t_prev = t
     for i in range(1, samples + 2):
@@ -253,10 +252,10 @@ def scan_step(fns: Fns, tab: Ints, m: int, t: float, t_new: float, h: float, sam
             s4 = s3 * s1
             for k in range(d):
                 xs[k] = h * (q[k, 0] * s1 + q[k, 1] * s2 + q[k, 2] * s3 + q[k, 3] * s4) + y[k]
-            terms(m, tau, xs_c, p_c, cur_c)
+            fns(OP_TERMS, m, tau, xs_c, p_c, cur_c)
         else:
             tau = t_new
-            terms(m, tau, yn_c, p_c, cur_c)
+            fns(OP_TERMS, m, tau, yn_c, p_c, cur_c)
         fb = 1.0e308
         failed = False
         for k in range(used):
