@@ -26,7 +26,7 @@ from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Jump, Run, Termination
 from hybrid.simulation.settings import Settings
 
-__all__ = ["DenseSegment", "Layout", "run_from"]
+__all__ = ["DenseSegment", "Layout", "run_from", "settings_record"]
 
 
 @dataclass(frozen=True)
@@ -103,26 +103,36 @@ def _jumps(native: NativeModel, layout: Layout, buf: b.RunArrays) -> list[Jump]:
     n = int(buf.oi[b.I_JUMPS])
     rows = buf.jps[:n].tolist()
     jumps = []
+    new = object.__new__
     for row in rows:
         tr = int(row[b.J_TR])
-        flags = tuple(row[b.J_X + 2 * d :])
-        enabled, how = layout.enabled(tr, flags)
+        enabled, how = layout.enabled(tr, tuple(row[b.J_X + 2 * d :]))
         name, label, source, target = layout.describe[tr]
-        jumps.append(
-            Jump(
-                row[b.J_T],
-                int(row[b.J_J]),
-                name,
-                label,
-                source,
-                target,
-                dict(zip(names, row[b.J_X : b.J_X + d], strict=True)),
-                dict(zip(names, row[b.J_X + d : b.J_X + 2 * d], strict=True)),
-                enabled,
-                how,
-            )
+        jump = new(Jump)
+        # the fields set directly: Jump is a frozen dataclass without slots, and its
+        # generated __init__ (one object.__setattr__ per field) costs as much as the run
+        jump.__dict__.update(
+            t=row[b.J_T],
+            j=int(row[b.J_J]),
+            edge=name,
+            label=label,
+            source=source,
+            target=target,
+            before=dict(zip(names, row[b.J_X : b.J_X + d], strict=True)),
+            after=dict(zip(names, row[b.J_X + d : b.J_X + 2 * d], strict=True)),
+            enabled=enabled,
+            chosen_by=how,
         )
+        jumps.append(jump)
     return jumps
+
+
+def settings_record(settings: Settings) -> dict[str, Any]:
+    """``settings.as_dict()`` without ``dataclasses.asdict``'s deep copy (flat fields only)."""
+    record = dict(settings.__dict__)
+    if math.isinf(settings.max_step):
+        record["max_step"] = None
+    return record
 
 
 def _segments(buf: b.RunArrays, d: int) -> list[tuple[int, float, float, Any]]:
@@ -167,7 +177,7 @@ def run_from(
         signals=pts[:, b.P_X + d :].copy(),
         jumps=_jumps(native, layout, buf),
         termination=termination_of(native, layout, model, settings, buf),
-        settings=settings.as_dict(),
+        settings=settings_record(settings),
         segments=_segments(buf, d),
     )
 

@@ -129,3 +129,18 @@ def test_cause_codes_follow_the_reference() -> None:
     assert buffers.CAUSE_CODES == CAUSES
     codes = (stay.C_T_END, stay.C_BLOCKED, stay.C_NONFINITE, stay.C_SOLVER_FAILURE, stay.C_INTERRUPTED)
     assert [CAUSES[c] for c in codes] == ["t_end", "blocked", "nonfinite", "solver_failure", "interrupted"]
+
+
+def test_runs_are_built_like_the_reference(thermostat: hybrid.Automaton) -> None:
+    from dataclasses import fields
+
+    from hybrid.simulation.native.assemble import settings_record
+    from hybrid.simulation.settings import Settings
+
+    run = hybrid.simulate(thermostat, t_end=30.0, backend="compiled", handle_sigint=False)
+    reference = hybrid.simulate(thermostat, t_end=30.0, handle_sigint=False)
+    assert run.jumps[0] == hybrid.Jump(**{f.name: getattr(run.jumps[0], f.name) for f in fields(hybrid.Jump)})
+    assert run.jumps[0].as_dict().keys() == reference.jumps[0].as_dict().keys()
+    settings = Settings(t_end=3.0, dt=0.5, backend="compiled")
+    assert settings_record(settings) == settings.as_dict()
+    assert run.settings == {**reference.settings, "backend": "compiled"}
