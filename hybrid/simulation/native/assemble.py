@@ -101,28 +101,29 @@ def _jumps(native: NativeModel, layout: Layout, buf: b.RunArrays) -> list[Jump]:
     names = native.state_names
     d = len(names)
     n = int(buf.oi[b.I_JUMPS])
-    rows = buf.jps[:n].tolist()
+    rows = buf.jps[:n]
+    times = rows[:, b.J_T].tolist()
+    hybrid_times = rows[:, b.J_J].astype(np.int64).tolist()
+    transitions = rows[:, b.J_TR].astype(np.int64).tolist()
+    befores = rows[:, b.J_X : b.J_X + d].tolist()
+    afters = rows[:, b.J_X + d : b.J_X + 2 * d].tolist()
+    flags = rows[:, b.J_X + 2 * d :].tolist()
     jumps = []
-    new = object.__new__
-    for row in rows:
-        tr = int(row[b.J_TR])
-        enabled, how = layout.enabled(tr, tuple(row[b.J_X + 2 * d :]))
-        name, label, source, target = layout.describe[tr]
+    new, enabled_of, describe = object.__new__, layout.enabled, layout.describe
+    for t, j, tr, before, after, on in zip(
+        times, hybrid_times, transitions, befores, afters, flags, strict=True
+    ):
+        enabled, how = enabled_of(tr, tuple(on))
+        name, label, source, target = describe[tr]
         jump = new(Jump)
         # the fields set directly: Jump is a frozen dataclass without slots, and its
         # generated __init__ (one object.__setattr__ per field) costs as much as the run
         jump.__dict__.update(
-            t=row[b.J_T],
-            j=int(row[b.J_J]),
-            edge=name,
-            label=label,
-            source=source,
-            target=target,
-            before=dict(zip(names, row[b.J_X : b.J_X + d], strict=True)),
-            after=dict(zip(names, row[b.J_X + d : b.J_X + 2 * d], strict=True)),
-            enabled=enabled,
-            chosen_by=how,
-        )
+            t=t, j=j, edge=name, label=label, source=source, target=target,
+            before=dict(zip(names, before, strict=True)),
+            after=dict(zip(names, after, strict=True)),
+            enabled=enabled, chosen_by=how,
+        )  # fmt: skip
         jumps.append(jump)
     return jumps
 
