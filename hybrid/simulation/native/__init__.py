@@ -6,15 +6,16 @@ imports no numba; numba is imported when a model is first compiled.
 
 Modules: :mod:`~hybrid.simulation.native.structure` (the model with parameter
 slots), :mod:`~hybrid.simulation.native.printer` and
-:mod:`~hybrid.simulation.native.source` (the generated module),
-:mod:`~hybrid.simulation.native.cache` (on disk), the kernel copied into every
-generated module (:mod:`~hybrid.simulation.native.mathlib`,
-:mod:`~hybrid.simulation.native.integrator`,
+:mod:`~hybrid.simulation.native.source` (the generated modules; the model's
+one function with :mod:`~hybrid.simulation.native.mathlib` inlined),
+:mod:`~hybrid.simulation.native.cache` (on disk); the kernel, compiled once
+per machine, whose modules mirror the reference engine function by function
+(:mod:`~hybrid.simulation.native.integrator`,
 :mod:`~hybrid.simulation.native.decide`, :mod:`~hybrid.simulation.native.store`,
-:mod:`~hybrid.simulation.native.stay`, :mod:`~hybrid.simulation.native.loop`,
-:mod:`~hybrid.simulation.native.ensemble`, declared by
-:mod:`~hybrid.simulation.native.model_api` and
-:mod:`~hybrid.simulation.native.buffers`), and on the Python side
+:mod:`~hybrid.simulation.native.watch`, :mod:`~hybrid.simulation.native.stay`,
+:mod:`~hybrid.simulation.native.loop`, :mod:`~hybrid.simulation.native.ensemble`;
+their layouts and types in :mod:`~hybrid.simulation.native.buffers` and
+:mod:`~hybrid.simulation.native.kernel_types`); and on the Python side
 :mod:`~hybrid.simulation.native.engine` (one run),
 :mod:`~hybrid.simulation.native.many` (ensembles) and
 :mod:`~hybrid.simulation.native.assemble` (the ``Run``).

@@ -109,11 +109,12 @@ def _jumps(native: NativeModel, layout: Layout, buf: b.RunArrays) -> list[Jump]:
     afters = rows[:, b.J_X + d : b.J_X + 2 * d].tolist()
     flags = rows[:, b.J_X + 2 * d :].tolist()
     jumps = []
-    new, enabled_of, describe = object.__new__, layout.enabled, layout.describe
+    new, enabled_of, describe, seen = object.__new__, layout.enabled, layout.describe, layout.choices
     for t, j, tr, before, after, on in zip(
         times, hybrid_times, transitions, befores, afters, flags, strict=True
     ):
-        enabled, how = enabled_of(tr, tuple(on))
+        key = (tr, tuple(on))
+        enabled, how = seen.get(key) or enabled_of(*key)
         name, label, source, target = describe[tr]
         jump = new(Jump)
         # the fields set directly: Jump is a frozen dataclass without slots, and its
