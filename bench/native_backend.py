@@ -56,7 +56,7 @@ def run(repeats: int = 9, ensemble_size: int = 10_000) -> list[Comparison]:
             "max_jump_time_difference_s": max(abs(a - b) for a, b in zip(ours, reference, strict=True)),
         }
         results.append(c)
-    results.append(_ensemble(thermo, ensemble_size, max(3, repeats // 3)))
+    results.append(_ensemble(thermo, ensemble_size, max(5, repeats // 3)))
     return results
 
 
