@@ -49,8 +49,6 @@ docs: $(STAMP_DOCS)
 bench: $(STAMP_TEST)
 	$(BIN)/python -m bench
 
-# The large campaigns behind the small in-suite ones: 2,000 generated models with every
-# solver method, and 20 Ctrl-C at random moments of a long run (2 to 3 minutes).
 # Randomized tests at full size (well over an hour on 2 cores): every test marked `fuzz`,
 # with HYBRID_FUZZ=1 scaling the example counts (check vs simulate: 5,000 models; loader:
 # 100,000 mutated specs), and the simulation fuzz (2,000 generated models with every
@@ -60,6 +58,8 @@ fuzz: $(STAMP_TEST)
 	HYBRID_FUZZ_MODELS=2000 HYBRID_FUZZ_ALL_METHODS=1 HYBRID_INTERRUPT_MOMENTS=20 \
 		$(BIN)/python -m pytest -q -s -p no:cacheprovider \
 		tests/fuzz/test_fuzz_simulation.py tests/cli/test_cli_simulate_interrupts.py
+	HYBRID_FUZZ=1 $(BIN)/python -m pytest -q -p no:cacheprovider \
+		tests/simulation/native/test_native_property.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .mypy_cache .ruff_cache docs/_build docs/api docs/_generated

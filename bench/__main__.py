@@ -11,7 +11,15 @@ import time
 from pathlib import Path
 from typing import Any
 
-from bench import engine_overhead, peers, rhs_call, spec_scaling, step_search, uvms_realtime
+from bench import (
+    engine_overhead,
+    native_backend,
+    peers,
+    rhs_call,
+    spec_scaling,
+    step_search,
+    uvms_realtime,
+)
 from bench.harness import machine
 
 RESULTS = Path(__file__).resolve().parent / "results.json"
@@ -28,6 +36,7 @@ def main(argv: list[str] | None = None) -> int:
         (step_search, {"repeats": repeats}),
         (rhs_call, {"repeats": repeats}),
         (uvms_realtime, {"repeats": max(3, repeats // 2)}),
+        (native_backend, {"repeats": repeats, "ensemble_size": 1_000 if quick else 10_000}),
     ):
         for result in module.run(**kwargs):
             print(result.line(), json.dumps(result.extra))
@@ -47,6 +56,8 @@ def main(argv: list[str] | None = None) -> int:
     for row in scaling["rows"]:
         print(scaling["name"], row)
     report["scaling"] = scaling
+    report["native_compile"] = native_backend.compile_times()
+    print("compiled backend, compile times", report["native_compile"])
     report["peers"] = peers.run()
     print("peers", report["peers"])
     report["total_s"] = time.perf_counter() - started

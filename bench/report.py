@@ -64,6 +64,18 @@ def render(report: dict[str, Any]) -> str:
         "| " + " | ".join(_fmt(v) for v in p.values()) + " |",
         "",
     ]
+    compile_s = report.get("native_compile")
+    if compile_s:
+        lines += [
+            "Compiled backend, compile and load times (fresh processes, one new cache directory):",
+            "",
+            "| first process: kernel | first process: model | new model (kernel cached) | cached: kernel + model + first run | cached: numba import | cached: whole process |",
+            "|---|---|---|---|---|---|",
+            f"| {compile_s['first_process_kernel_s']:.1f} s | {compile_s['first_process_model_s']:.2f} s | "
+            f"{compile_s['new_model_compile_s']:.2f} s | {compile_s['cached_compiled_code_s']:.2f} s | "
+            f"{compile_s['numba_import_s']:.2f} s | {compile_s['cached_process_total_s']:.2f} s |",
+            "",
+        ]
     lines += _components(report.get("components"))
     lines += ["Peers:", ""]
     for name, info in report["peers"].items():

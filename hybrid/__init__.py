@@ -27,10 +27,12 @@ if TYPE_CHECKING:
     from hybrid.analysis.api import check
     from hybrid.analysis.findings import Report
     from hybrid.simulation.engine import simulate
+    from hybrid.simulation.native.many import Ensemble, simulate_many
     from hybrid.simulation.result import Jump, Run, Termination
 
 __all__ = [
     "Automaton",
+    "Ensemble",
     "HybridError",
     "Jump",
     "Position",
@@ -47,6 +49,7 @@ __all__ = [
     "load",
     "load_text",
     "simulate",
+    "simulate_many",
 ]
 
 # The simulator (scipy) and the analysis (networkx) load on first use, so that
@@ -56,6 +59,8 @@ _LAZY = {
     "Run": "hybrid.simulation.result",
     "Termination": "hybrid.simulation.result",
     "simulate": "hybrid.simulation.engine",
+    "simulate_many": "hybrid.simulation.native.many",
+    "Ensemble": "hybrid.simulation.native.many",
     "Report": "hybrid.analysis.findings",
     "check": "hybrid.analysis.api",
 }

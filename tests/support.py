@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import os
 import subprocess
 import sys
@@ -57,3 +58,42 @@ def main_in_process(*args: str | Path) -> int:
         return main([str(a) for a in args])
     except SystemExit as exc:  # argparse usage errors
         return int(exc.code) if isinstance(exc.code, int) else 2
+
+
+# --- a function library with compiled forms (tests/simulation/native) -----------------
+
+
+def polar(x: float, y: float) -> tuple[float, float]:
+    """Radius and angle of (x, y): the Python form of a two-output library function."""
+    return math.hypot(x, y), math.atan2(y, x)
+
+
+def polar_compiled(x: float, y: float) -> tuple[float, float]:
+    """The same, written for numba's nopython mode."""
+    return math.sqrt(x * x + y * y), math.atan2(y, x)
+
+
+def spin(r: float) -> float:
+    """A one-output function: the angular speed wanted at radius r."""
+    return 1.0 / (1.0 + r * r)
+
+
+def spin_compiled(r: float) -> float:
+    return 1.0 / (1.0 + r * r)
+
+
+polar.hybrid_outputs = 2  # type: ignore[attr-defined]
+polar.hybrid_arity = (2, 2)  # type: ignore[attr-defined]
+polar.hybrid_compiled = polar_compiled  # type: ignore[attr-defined]
+spin.hybrid_arity = (1, 1)  # type: ignore[attr-defined]
+spin.hybrid_compiled = spin_compiled  # type: ignore[attr-defined]
+
+
+def plain(r: float) -> float:
+    """A library function without a compiled form."""
+    return 2.0 * r
+
+
+def native_library() -> dict[str, object]:
+    """The function table a package would register under ``hybrid.functions``."""
+    return {"polar": polar, "spin": spin, "plain": plain}

@@ -78,7 +78,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``hybrid`` command (the CLI reference is generated from it)."""
     from hybrid.export.diagrams import DIAGRAM_FORMATS
     from hybrid.export.pictures import RENDERED_FORMATS
-    from hybrid.simulation.settings import METHODS
+    from hybrid.simulation.settings import BACKENDS, METHODS
 
     parser = _Parser(prog="hybrid", description="Hybrid automata: validate, check, simulate.")
     parser.add_argument("--version", action="version", version=f"hybrid {__version__}")
@@ -112,6 +112,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="largest solver step; lower it to catch narrow guard windows",
     )
     p.add_argument("--method", default=METHODS[0], choices=METHODS, help="solve_ivp method")
+    p.add_argument(
+        "--backend",
+        default=BACKENDS[0],
+        choices=BACKENDS,
+        help="scipy (reference) or compiled (numba, the 'fast' extra; docs/backends.md)",
+    )
     p.add_argument(
         "--param",
         type=_param,

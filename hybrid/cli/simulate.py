@@ -59,6 +59,7 @@ def run_simulate(args: argparse.Namespace) -> int:
             dense=args.plot is not None,
             inputs=inputs or None,
             progress=line,
+            backend=args.backend,
         )
         term = run.termination
         pending = [path for _, path in outputs if path is not None]

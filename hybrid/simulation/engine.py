@@ -51,6 +51,7 @@ def simulate(
     handle_sigint: bool = True,
     dense: bool = False,
     progress: Reporter | None = None,
+    backend: str = "scipy",
 ) -> Run:
     """Simulate ``model`` from ``t_start`` to ``t_end``.
 
@@ -90,6 +91,9 @@ def simulate(
         Called with a :class:`hybrid.progress.Status` (simulated time of
         ``t_end``, ``jumps`` and ``points`` so far, rate, time left) at most
         five times a second while the run goes on, and once when it ends.
+    backend : str
+        ``"scipy"`` (the reference engine) or ``"compiled"`` (the same semantics
+        compiled to machine code with numba: the ``fast`` extra; docs/backends.md).
 
     Returns
     -------
@@ -116,6 +120,7 @@ def simulate(
         dense=dense,
         zeno=zeno,
         max_jumps_per_instant=max_jumps_per_instant,
+        backend=backend,
     )
     parameters = _numbers("parameter", parameters)
     initial = _numbers("initial value of", initial)
@@ -125,6 +130,12 @@ def simulate(
         model = model.with_initial(initial_location, initial)
     elif isinstance(model, System) and initial_location:
         raise UsageError("initial_location applies to an automaton; set it per component")
+    if settings.backend == "compiled":
+        from hybrid.simulation.native.engine import simulate_compiled
+
+        return simulate_compiled(
+            model, settings, initial=initial, inputs=inputs, handle_sigint=handle_sigint
+        )
     compiled = _compiled(model, inputs)
     x0 = np.array(_initial_vector(model, compiled, initial), dtype=float)
     tracker = None

@@ -30,6 +30,7 @@ from typing import Any
 from hybrid.errors import UsageError
 
 __all__ = [
+    "BACKENDS",
     "MAX_GRID_POINTS",
     "MAX_JUMPS_PER_INSTANT",
     "MAX_STEPS",
@@ -41,6 +42,9 @@ __all__ = [
 
 METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 """The integration methods of :func:`scipy.integrate.solve_ivp` a run may use."""
+
+BACKENDS = ("scipy", "compiled")
+"""``scipy``: the solve_ivp engine (the reference); ``compiled``: hybrid.simulation.native."""
 
 MAX_JUMPS_PER_INSTANT = 1000
 """Jumps allowed at one instant before a run ends as ``zeno`` (a zero-time cycle)."""
@@ -98,6 +102,7 @@ class Settings:
     dense: bool = False
     zeno: bool = True
     max_jumps_per_instant: int = MAX_JUMPS_PER_INSTANT
+    backend: str = "scipy"
 
     def __post_init__(self) -> None:
         t0 = finite_number("t_start", self.t_start)
@@ -144,6 +149,8 @@ class Settings:
                 )
         if self.method not in METHODS:
             raise UsageError(f"unknown method '{self.method}'; choose one of {', '.join(METHODS)}")
+        if self.backend not in BACKENDS:
+            raise UsageError(f"unknown backend '{self.backend}'; choose one of {', '.join(BACKENDS)}")
 
     @property
     def keeps_interpolants(self) -> bool:

@@ -1,0 +1,161 @@
+"""(7) The compiled backend against the scipy backend, and what compiling costs.
+
+Ratios in one process after a warm-up call (so compiling is not timed there):
+the bouncing ball for 40 bounces and the thermostat for 10 periods, each
+``backend="compiled"`` / ``backend="scipy"`` with the same tolerances; an
+ensemble of 10,000 thermostat runs (``simulate_many``, every core) against a
+serial loop of scipy runs (timed on a sample, per run). Jump times of both are
+compared in the same run. Compile times are measured in fresh processes with
+their own cache directory: the first process on a machine (the kernel and the
+model), a new model once the kernel is cached, and a process that finds both.
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import hybrid
+from bench.harness import Comparison, compare, time_call
+
+__all__ = ["compile_times", "run"]
+
+RTOL, ATOL = 1e-10, 1e-12
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _jumps(model: Any, backend: str, **kwargs: Any) -> list[float]:
+    run = hybrid.simulate(model, rtol=RTOL, atol=ATOL, backend=backend, handle_sigint=False, **kwargs)
+    return [j.t for j in run.jumps]
+
+
+def run(repeats: int = 9, ensemble_size: int = 10_000) -> list[Comparison]:
+    ball = hybrid.load(ROOT / "specs" / "bouncing_ball.yaml", parameters={"e": 0.95})
+    thermo = hybrid.load(ROOT / "specs" / "thermostat.yaml")
+    results = []
+    for name, model, kwargs in (
+        ("bouncing ball, 40 bounces", ball, {"t_end": 1e3, "max_jumps": 40}),
+        ("thermostat, 10 periods", thermo, {"t_end": 1e4, "max_jumps": 20}),
+    ):
+        c = compare(
+            f"compiled backend: {name}",
+            ("backend='compiled'", lambda m=model, k=kwargs: _jumps(m, "compiled", **k)),
+            ("backend='scipy'", lambda m=model, k=kwargs: _jumps(m, "scipy", **k)),
+            repeats=repeats,
+        )
+        ours, reference = _jumps(model, "compiled", **kwargs), _jumps(model, "scipy", **kwargs)
+        c.extra = {
+            "jumps": len(ours),
+            "max_jump_time_difference_s": max(abs(a - b) for a, b in zip(ours, reference, strict=True)),
+        }
+        results.append(c)
+    results.append(_ensemble(thermo, ensemble_size, max(5, repeats // 3)))
+    return results
+
+
+def _ensemble(thermo: Any, n: int, repeats: int) -> Comparison:
+    """10,000 thermostat runs (10 periods each, initial temperatures spread) per run."""
+    starts = np.linspace(18.5, 21.5, n)
+    kwargs = {"t_end": 1e4, "max_jumps": 20, "rtol": 1e-8, "atol": 1e-10, "handle_sigint": False}
+
+    def compiled() -> Any:
+        return hybrid.simulate_many(thermo, parameters={"init.T": starts}, **kwargs)
+
+    sample = starts[:: max(1, n // 40)]
+
+    def serial() -> None:
+        for t0 in sample:
+            hybrid.simulate(thermo, initial={"T": float(t0)}, **kwargs)
+
+    compiled()
+    serial()
+    c_times = [time_call(compiled) / n for _ in range(repeats)]
+    s_times = [time_call(serial) / sample.size for _ in range(repeats)]
+    ensemble = compiled()
+    materialize = time_call(lambda: list(ensemble)) / n
+    ratios = [c / s for c, s in zip(c_times, s_times, strict=True)]
+    check = hybrid.simulate(thermo, initial={"T": float(starts[-1])}, **kwargs)
+    return Comparison(
+        name=f"compiled backend: ensemble of {n:,} thermostat runs, per run",
+        contender="simulate_many (summaries)",
+        baseline="serial loop of backend='scipy' runs",
+        ratio_median=statistics.median(ratios),
+        ratio_min=min(ratios),
+        ratio_max=max(ratios),
+        contender_median_s=statistics.median(c_times),
+        baseline_median_s=statistics.median(s_times),
+        repeats=repeats,
+        extra={
+            "throughput_gain": statistics.median(s_times) / statistics.median(c_times),
+            "threads": os.cpu_count(),
+            "every_Run_built_per_run_s": materialize,
+            "last_run_jump_time_difference_s": float(
+                np.max(np.abs(ensemble[n - 1].jump_times - check.jump_times))
+            ),
+        },
+    )
+
+
+_PROBE = """
+import time
+t0 = time.perf_counter()
+import hybrid
+import hybrid.simulation.engine
+t1 = time.perf_counter()
+import numba
+t2 = time.perf_counter()
+from hybrid.simulation.native.engine import compiled_native, kernel
+kernel()
+t3 = time.perf_counter()
+model = hybrid.load({spec!r})
+compiled_native(model)
+t4 = time.perf_counter()
+hybrid.simulate(model, t_end=1.0, backend="compiled", handle_sigint=False)
+t5 = time.perf_counter()
+print(t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4)
+"""
+
+
+def compile_times() -> dict[str, float]:
+    """Seconds, in fresh processes sharing one new cache directory, to a compiled run.
+
+    Each probe reports: importing hybrid's simulator (scipy), importing numba,
+    compiling or loading the kernel, generating and compiling or loading the
+    model, and the first run. The first process compiles both; the second a new
+    model only; the third finds both cached.
+    """
+
+    def probe(spec: str, cache: str) -> list[float]:
+        env = {**os.environ, "HYBRID_NATIVE_CACHE": cache}
+        code = _PROBE.format(spec=str(ROOT / "specs" / spec))
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             env=env, cwd=ROOT, check=True)  # fmt: skip
+        return [float(v) for v in out.stdout.split()]
+
+    with tempfile.TemporaryDirectory() as cache:
+        first = probe("thermostat.yaml", cache)
+        new_model = probe("bouncing_ball.yaml", cache)
+        cached = probe("bouncing_ball.yaml", cache)
+    return {
+        "first_process_kernel_s": first[2],
+        "first_process_model_s": first[3],
+        "new_model_compile_s": new_model[3],
+        "cached_kernel_load_s": cached[2],
+        "cached_model_load_s": cached[3],
+        "cached_compiled_code_s": cached[2] + cached[3] + cached[4],
+        "numba_import_s": cached[1],
+        "cached_process_total_s": sum(cached),
+    }
+
+
+if __name__ == "__main__":
+    for result in run():
+        print(result.line(), result.extra)
+    print(compile_times())

@@ -1,0 +1,225 @@
+"""Kernel source: the decisions at a point, as :mod:`hybrid.simulation.boundary` makes them.
+
+Function by function (docs/semantics.md, "Deciding a guard at a point"):
+
+- :func:`band` is ``boundary.band``; :func:`slope` is ``boundary.slope``;
+- :func:`holds_now` is ``boundary.holds_now`` (band, slope test, boolean form);
+- :func:`enabled_at_entry` is ``boundary.enabled_at_entry``;
+- :func:`invariant_left_at` is ``boundary.invariant_left_at``;
+- :func:`choose` is ``boundary.choose`` (highest priority, then file order;
+  ``boundary.chosen_by`` is computed in Python from the recorded flags);
+- :func:`decide_at_event` is the end of ``EventLoop._flow`` (every transition
+  decided at the point where the integration stopped), plus the announced rule
+  for equality guards: an equality ``a == b`` (or ``a >= b and a <= b``) whose
+  level was reached during the stay counts as holding there, and the guard is
+  decided with that equality taken as true (its *relaxed* form).
+
+Indices: ``m`` a mode; ``k`` a transition's place in its mode (the
+``enabled`` and ``tr_armed`` flags in ``wi``); ``tr = MODE_TR[m] + k`` its
+global index. An evaluation failure (NaN) is recorded once, the first, like
+:class:`hybrid.expr.codegen.EvalFailure`: what failed in ``wi``, where in
+``wf``.
+
+Copied into the kernel module (below the ``kernel`` marker).
+"""
+
+from __future__ import annotations
+
+from hybrid.simulation.native.buffers import (
+    F_FLOW,
+    F_GUARD,
+    F_INVARIANT,
+    OP_RHS,
+    OP_TRUTH,
+    OP_VALUE,
+    S_FAIL_T,
+    T_INV_BOOL,
+    T_INV_RHO,
+    T_LV_BOOL,
+    T_LV_E,
+    T_LV_RHO,
+    T_MODE_INV,
+    T_MODE_TR,
+    T_TR_BOOL,
+    T_TR_LV,
+    T_TR_PRIORITY,
+    T_TR_RHO,
+    W_AHEAD,
+    W_D,
+    W_ENABLED,
+    W_FAILI,
+    W_FAILX,
+    W_LVARMED,
+    W_RATE,
+    W_SCAL,
+    W_TRARMED,
+)
+from hybrid.simulation.native.kernel_types import Array, Fns, Ints
+
+__all__ = [
+    "band",
+    "choose",
+    "decide_at_event",
+    "enabled_at_entry",
+    "holds_now",
+    "invariant_left_at",
+    "note_failure",
+    "slope",
+    "value_checked",
+]
+
+# --- kernel ---
+
+
+def band(x: Array) -> float:
+    """Values of rho within this of 0 count as on the boundary."""
+    big = 0.0
+    for i in range(x.shape[0]):
+        a = abs(x[i])
+        if a > big:
+            big = a
+    return 1e-10 * (1.0 + big)
+
+
+def note_failure(kind: int, index: int, m: int, t: float, x: Array, wf: Array, wi: Ints) -> None:
+    """Record an evaluation failure at ``(t, x)`` unless one is recorded already."""
+    fi = wi[W_FAILI]
+    if wi[fi] != 0:
+        return
+    wi[fi] = kind
+    wi[fi + 1] = index
+    wi[fi + 2] = m
+    wf[wi[W_SCAL] + S_FAIL_T] = t
+    fx = wi[W_FAILX]
+    for i in range(x.shape[0]):
+        wf[fx + i] = x[i]
+
+
+def value_checked(
+    fns: Fns, f: int, kind: int, index: int, m: int, t: float, x: Array, p: Array, wf: Array,
+    wi: Ints,
+) -> float:  # fmt: skip
+    """Form ``f`` at ``(t, x)``, a NaN recorded as a failure of ``kind``/``index``."""
+    v: float = fns(OP_VALUE, f, t, x.ctypes, p.ctypes, x.ctypes)
+    if v != v:
+        note_failure(kind, index, m, t, x, wf, wi)
+    return v
+
+
+def slope(
+    fns: Fns, f: int, kind: int, index: int, m: int, t: float, x: Array, p: Array, wf: Array,
+    wi: Ints,
+) -> float:  # fmt: skip
+    """d/dt of form ``f`` along the flow of mode ``m``, by a small forward difference."""
+    d = wi[W_D]
+    rate = wf[wi[W_RATE] : wi[W_RATE] + d]
+    ahead = wf[wi[W_AHEAD] : wi[W_AHEAD] + d]
+    h = 1e-7 * max(1.0, abs(t))
+    fns(OP_RHS, m, t, x.ctypes, p.ctypes, rate.ctypes)
+    for i in range(d):
+        if rate[i] != rate[i]:
+            note_failure(F_FLOW, m, m, t, x, wf, wi)
+        ahead[i] = x[i] + h * rate[i]
+    later = value_checked(fns, f, kind, index, m, t + h, ahead, p, wf, wi)
+    return (later - value_checked(fns, f, kind, index, m, t, x, p, wf, wi)) / h
+
+
+def holds_now(
+    fns: Fns, rho_f: int, bool_f: int, index: int, m: int, t: float, x: Array, p: Array,
+    armed: bool, width: float, wf: Array, wi: Ints,
+) -> tuple[bool, bool]:  # fmt: skip
+    """``(enabled now, armed)`` for a guard at a point where no event says so."""
+    value = value_checked(fns, rho_f, F_GUARD, index, m, t, x, p, wf, wi)
+    if value < -width:
+        return True, True
+    if value > width:
+        return False, True
+    if not armed:
+        return False, False
+    rate = slope(fns, rho_f, F_GUARD, index, m, t, x, p, wf, wi)
+    if rate < -width:
+        return True, True
+    if rate > width:
+        return False, False  # on the boundary, moving away: disarm until strictly false
+    return fns(OP_TRUTH, bool_f, t, x.ctypes, p.ctypes, x.ctypes) != 0.0, False
+
+
+def choose(tab: Ints, m: int, wi: Ints) -> int:
+    """The global index of the transition that fires among the enabled ones (-1: none)."""
+    first = tab[tab[T_MODE_TR] + m]
+    count = tab[tab[T_MODE_TR] + m + 1] - first
+    priority = tab[T_TR_PRIORITY]
+    enabled = wi[W_ENABLED]
+    best = -1
+    for k in range(count):
+        if wi[enabled + k] != 0:
+            tr = first + k
+            if best < 0 or tab[priority + tr] > tab[priority + best]:
+                best = tr
+    return best
+
+
+def enabled_at_entry(fns: Fns, tab: Ints, m: int, t: float, x: Array, p: Array, wf: Array,
+                     wi: Ints) -> int:  # fmt: skip
+    """At a point where a stay starts: the transition that fires (-1: none); flags in ``wi``."""
+    width = band(x)
+    first = tab[tab[T_MODE_TR] + m]
+    for k in range(tab[tab[T_MODE_TR] + m + 1] - first):
+        tr = first + k
+        rho_f, bool_f = tab[tab[T_TR_RHO] + tr], tab[tab[T_TR_BOOL] + tr]
+        now, armed = holds_now(fns, rho_f, bool_f, tr, m, t, x, p, True, width, wf, wi)
+        wi[wi[W_TRARMED] + k] = 1 if armed else 0
+        wi[wi[W_ENABLED] + k] = 1 if now else 0
+    return choose(tab, m, wi)
+
+
+def invariant_left_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, p: Array, wf: Array,
+                      wi: Ints) -> int:  # fmt: skip
+    """The place in its mode of an invariant that does not hold or is being left (-1: none)."""
+    width = band(x)
+    first = tab[tab[T_MODE_INV] + m]
+    for k in range(tab[tab[T_MODE_INV] + m + 1] - first):
+        inv = first + k
+        rho_f = tab[tab[T_INV_RHO] + inv]
+        value = value_checked(fns, rho_f, F_INVARIANT, inv, m, t, x, p, wf, wi)
+        if value > width:
+            return k
+        if value >= -width:
+            rate = slope(fns, rho_f, F_INVARIANT, inv, m, t, x, p, wf, wi)
+            holds = fns(OP_TRUTH, tab[tab[T_INV_BOOL] + inv], t, x.ctypes, p.ctypes, x.ctypes) != 0.0
+            if rate > width or (abs(rate) <= width and not holds):
+                return k
+    return -1
+
+
+def decide_at_event(fns: Fns, tab: Ints, m: int, t: float, x: Array, p: Array, wf: Array,
+                    wi: Ints) -> int:  # fmt: skip
+    """Where the integration stopped: every transition decided; the one that fires (-1: none).
+
+    A crossing the watch found still has to pass the boundary rule (a strict
+    guard whose rho reaches 0 and stays there never holds). An equality level
+    that was armed and is reached here makes its guard hold if the rest of
+    the guard does (the relaxed form, decided by the same rule).
+    """
+    width = band(x)
+    first = tab[tab[T_MODE_TR] + m]
+    lv0 = tab[tab[T_TR_LV] + first]
+    for k in range(tab[tab[T_MODE_TR] + m + 1] - first):
+        tr = first + k
+        rho_f, bool_f = tab[tab[T_TR_RHO] + tr], tab[tab[T_TR_BOOL] + tr]
+        rho = value_checked(fns, rho_f, F_GUARD, tr, m, t, x, p, wf, wi)
+        armed_now = wi[wi[W_TRARMED] + k] != 0 or rho <= width
+        now = holds_now(fns, rho_f, bool_f, tr, m, t, x, p, armed_now, width, wf, wi)[0]
+        if not now:
+            for a in range(tab[tab[T_TR_LV] + tr], tab[tab[T_TR_LV] + tr + 1]):
+                if wi[wi[W_LVARMED] + a - lv0] == 0:
+                    continue
+                level = value_checked(fns, tab[tab[T_LV_E] + a], F_GUARD, tr, m, t, x, p, wf, wi)
+                if abs(level) <= width:
+                    relaxed_rho, relaxed_bool = tab[tab[T_LV_RHO] + a], tab[tab[T_LV_BOOL] + a]
+                    if holds_now(fns, relaxed_rho, relaxed_bool, tr, m, t, x, p, True, width,
+                                 wf, wi)[0]:  # fmt: skip
+                        now = True
+                        break
+        wi[wi[W_ENABLED] + k] = 1 if now else 0
+    return choose(tab, m, wi)

@@ -1,0 +1,271 @@
+"""Kernel source: the event loop of one run, as :class:`hybrid.simulation.loop.EventLoop` runs it.
+
+Function by function:
+
+- :func:`run_one` is ``EventLoop.run``: decide at the entry point (a jump
+  enabled there fires at once), else flow until the watch stops the stay;
+  ``max_jumps``, the per-instant cap (a zero-time cycle ends as ``zeno``), the
+  stall counter (events without an enabled transition, ``solver_failure``),
+  ``blocked`` at entry, non-finite resets, Zeno by geometric accumulation;
+- :func:`jump` is ``EventLoop._jump`` (reset on pre-jump values, record the
+  jump and the post-jump point);
+- :func:`zeno_update` is :meth:`hybrid.simulation.zeno.ZenoDetector.update`
+  (window 6, spread 2 %, shrink 1e-3), its state in ``wf``;
+- :func:`new_work` allocates the scratch space (``wf``, ``wi``) of a run.
+
+The flow of a stay is :func:`~hybrid.simulation.native.stay.flow_stay`; the
+decisions at a point are :mod:`~hybrid.simulation.native.decide`'s.
+
+Copied into the kernel module (below the ``kernel`` marker).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from hybrid.simulation.native.buffers import (
+    CF_T_END,
+    CI_MAX_JUMPS,
+    CI_PER_INSTANT,
+    CI_ZENO,
+    D_BLOCKED_ENTRY,
+    D_EVAL,
+    D_INITIAL,
+    D_NONE,
+    D_RESET_NONFINITE,
+    D_STALL,
+    D_ZENO_GEOMETRIC,
+    D_ZENO_INSTANT,
+    F_RESET,
+    N_SCALARS,
+    OP_RESET,
+    S_FAIL_T,
+    T_MAX_INV,
+    T_MAX_LV,
+    T_MAX_TR,
+    T_N_STATES,
+    T_TR_TARGET,
+    W_AHEAD,
+    W_CUR,
+    W_D,
+    W_ENABLED,
+    W_F,
+    W_FAILI,
+    W_FAILX,
+    W_FLOWX,
+    W_INVARMED,
+    W_K,
+    W_LVARMED,
+    W_LVSIGN,
+    W_NT,
+    W_PREV,
+    W_Q,
+    W_RATE,
+    W_SCAL,
+    W_TRARMED,
+    W_XNEW,
+    W_XS,
+    W_Y,
+    W_YNEW,
+    W_YTMP,
+    W_ZENO,
+    WI_HEADER,
+    ZENO_SIZE,
+)
+from hybrid.simulation.native.decide import enabled_at_entry, invariant_left_at, note_failure
+from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints
+from hybrid.simulation.native.stay import STAY_EVENT, flow_stay
+from hybrid.simulation.native.store import finish, record_jump, record_point
+
+__all__ = ["jump", "new_work", "run_one", "zeno_update"]
+
+# --- kernel ---
+
+ZENO_WINDOW = 6
+ZENO_SPREAD = 0.02
+ZENO_SHRINK = 1e-3
+Z_LAST, Z_START, Z_GAPS, Z_RATIOS = 0, 1, 2, 3  # counts of gaps and ratios at 2 and 3
+Z_GAP0 = 4  # gaps (up to window + 1, oldest first) from here
+Z_RATIO0 = Z_GAP0 + ZENO_WINDOW + 1  # ratios (up to window) from here
+L_T_END, L_MAX_JUMPS, L_ZENO, L_BLOCKED, L_NONFINITE, L_SOLVER_FAILURE, L_INTERRUPTED = (
+    0, 1, 2, 3, 4, 5, 6,
+)  # fmt: skip  # CAUSE_CODES
+
+
+def new_work(tab: Ints, wi: Ints) -> Array:
+    """The float scratch space of a run, with ``wi`` (``WI_HEADER`` + flags) laid out."""
+    d, max_tr, max_lv, max_inv = tab[T_N_STATES], tab[T_MAX_TR], tab[T_MAX_LV], tab[T_MAX_INV]
+    n_terms = max_tr + max_lv + max_inv
+    sizes = (
+        (W_K, 7 * d), (W_Y, d), (W_F, d), (W_YNEW, d), (W_YTMP, d), (W_XS, d), (W_Q, 4 * d),
+        (W_RATE, d), (W_AHEAD, d), (W_XNEW, d), (W_LVSIGN, max_lv), (W_PREV, n_terms),
+        (W_CUR, n_terms), (W_ZENO, ZENO_SIZE), (W_FAILX, d), (W_FLOWX, d), (W_SCAL, N_SCALARS),
+    )  # fmt: skip
+    at = 0
+    for slot, size in sizes:
+        wi[slot] = at
+        at += size
+    wf = np.zeros(at)
+    at = WI_HEADER
+    for slot, size in ((W_TRARMED, max_tr), (W_ENABLED, max_tr), (W_LVARMED, max_lv),
+                       (W_INVARMED, max_inv), (W_FAILI, 3)):  # fmt: skip
+        wi[slot] = at
+        at += size
+    for i in range(WI_HEADER, wi.shape[0]):
+        wi[i] = 0
+    wi[W_D] = d
+    wi[W_NT] = n_terms
+    for i in range(wi[W_LVSIGN], wi[W_LVSIGN] + max_lv):
+        wf[i] = 1.0
+    z = wi[W_ZENO]
+    for i in range(ZENO_SIZE):
+        wf[z + i] = math.nan
+    wf[z + Z_GAPS] = 0.0
+    wf[z + Z_RATIOS] = 0.0
+    sc = wi[W_SCAL]
+    for i in range(N_SCALARS):
+        wf[sc + i] = math.nan
+    wf[sc + 1] = 0.0  # no flow failure
+    return wf
+
+
+def zeno_update(z: Array, t: float) -> float:
+    """Record a jump at ``t``; the estimated accumulation time if Zeno, else NaN."""
+    if z[Z_LAST] != z[Z_LAST]:
+        z[Z_LAST] = t
+        return math.nan
+    gap = t - z[Z_LAST]
+    z[Z_LAST] = t
+    if gap <= 0.0:
+        return math.nan  # zero-time jumps are counted by the per-instant cap
+    n_gaps = int(z[Z_GAPS])
+    n_ratios = int(z[Z_RATIOS])
+    if n_gaps > 0:
+        ratio = gap / z[Z_GAP0 + n_gaps - 1]
+        if n_ratios == ZENO_WINDOW:
+            for i in range(ZENO_WINDOW - 1):
+                z[Z_RATIO0 + i] = z[Z_RATIO0 + i + 1]
+            n_ratios -= 1
+        z[Z_RATIO0 + n_ratios] = ratio
+        n_ratios += 1
+    if n_gaps == ZENO_WINDOW + 1:
+        for i in range(ZENO_WINDOW):
+            z[Z_GAP0 + i] = z[Z_GAP0 + i + 1]
+        n_gaps -= 1
+    z[Z_GAP0 + n_gaps] = gap
+    n_gaps += 1
+    z[Z_GAPS] = n_gaps
+    z[Z_RATIOS] = n_ratios
+    if n_ratios < ZENO_WINDOW:
+        return math.nan
+    latest = z[Z_RATIO0 + n_ratios - 1]
+    limit = ZENO_SPREAD * latest
+    for i in range(n_ratios):
+        r = z[Z_RATIO0 + i]
+        if not (0.0 < r < 1.0 and abs(r - latest) <= limit):
+            z[Z_START] = math.nan
+            return math.nan
+    if z[Z_START] != z[Z_START]:
+        z[Z_START] = z[Z_GAP0]
+    if gap > ZENO_SHRINK * z[Z_START]:
+        return math.nan
+    estimate: float = t + gap * latest / (1.0 - latest)
+    return estimate
+
+
+def jump(fns: Fns, tab: Ints, pts: Array2, jps: Array2, oi: Ints, m: int, tr: int, t: float,
+         j: int, x: Array, p: Array, wf: Array, wi: Ints) -> bool:  # fmt: skip
+    """Take transition ``tr`` at ``t``: reset into ``x``, record the jump and the new point."""
+    d = wi[W_D]
+    x_new = wf[wi[W_XNEW] : wi[W_XNEW] + d]
+    fns(OP_RESET, tr, t, x.ctypes, p.ctypes, x_new.ctypes)
+    failed = False
+    for i in range(d):
+        if x_new[i] != x_new[i]:
+            failed = True
+    if failed:  # as a reset that raises: every value NaN, the failure named
+        note_failure(F_RESET, tr, m, t, x, wf, wi)
+        for i in range(d):
+            x_new[i] = math.nan
+    if not record_jump(tab, jps, oi, t, j, m, tr, x, x_new, wi):
+        return False
+    for i in range(d):
+        x[i] = x_new[i]
+    return record_point(fns, pts, oi, t, j + 1, tab[tab[T_TR_TARGET] + tr], x, p, wf, wi)
+
+
+def run_one(fns: Fns, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f: Array,
+            cfg_i: Ints, pts: Array2, jps: Array2, sts: Array2, oi: Ints, of: Array,
+            flag: Ints) -> None:  # fmt: skip
+    """Simulate from ``(t0, x0)`` in mode ``m0`` until the run ends; all of it into the arrays."""
+    wi = np.zeros(WI_HEADER + 2 * tab[T_MAX_TR] + tab[T_MAX_LV] + tab[T_MAX_INV] + 3, np.int64)
+    wf = new_work(tab, wi)
+    fail, sc = wi[W_FAILI], wi[W_SCAL]
+    x = x0.copy()
+    t, m, j = t0, m0, 0
+    t_end = cfg_f[CF_T_END]
+    max_jumps, per_instant = cfg_i[CI_MAX_JUMPS], cfg_i[CI_PER_INSTANT]
+    for i in range(x.shape[0]):
+        if not math.isfinite(x[i]):
+            finish(oi, of, L_NONFINITE, t, j, m, D_INITIAL, 0, math.nan, wf, wi)
+            return
+    if not record_point(fns, pts, oi, t, j, m, x, p, wf, wi):
+        return
+    same_instant, last_jump_t, stalls, stay = 0, math.nan, 0, 0
+    while True:
+        if wi[fail] != 0:
+            finish(oi, of, L_NONFINITE, wf[sc + S_FAIL_T], j, m, D_EVAL, 0, math.nan, wf, wi)
+            return
+        if flag[0] != 0:
+            finish(oi, of, L_INTERRUPTED, t, j, m, D_NONE, 0, math.nan, wf, wi)
+            return
+        chosen = enabled_at_entry(fns, tab, m, t, x, p, wf, wi)
+        if chosen < 0:
+            left = invariant_left_at(fns, tab, m, t, x, p, wf, wi)
+            if wi[fail] != 0:
+                continue  # ends as nonfinite above
+            if left >= 0:
+                finish(oi, of, L_BLOCKED, t, j, m, D_BLOCKED_ENTRY, left, math.nan, wf, wi)
+                return
+            if t >= t_end:  # a jump landed exactly at t_end: nothing left to flow
+                finish(oi, of, L_T_END, t, j, m, D_NONE, 0, math.nan, wf, wi)
+                return
+            outcome, t_after, chosen = flow_stay(fns, tab, m, t, x, j, stay, p, cfg_f, cfg_i,
+                                                 pts, sts, oi, of, wf, wi, flag)  # fmt: skip
+            stay += 1
+            if outcome != STAY_EVENT:
+                return
+            t_before, t = t, t_after
+            if chosen < 0:
+                stalls = stalls + 1 if t == t_before else 0
+                if stalls > per_instant:
+                    finish(oi, of, L_SOLVER_FAILURE, t, j, m, D_STALL, 0, math.nan, wf, wi)
+                    return
+                continue
+        elif wi[fail] != 0:
+            continue
+        if j >= max_jumps:
+            finish(oi, of, L_MAX_JUMPS, t, j, m, D_NONE, 0, math.nan, wf, wi)
+            return
+        same_instant = same_instant + 1 if t == last_jump_t else 1
+        last_jump_t = t
+        if same_instant > per_instant:
+            finish(oi, of, L_ZENO, t, j, m, D_ZENO_INSTANT, chosen, t, wf, wi)
+            return
+        if not jump(fns, tab, pts, jps, oi, m, chosen, t, j, x, p, wf, wi):
+            return
+        m = tab[tab[T_TR_TARGET] + chosen]
+        j += 1
+        if wi[fail] != 0:
+            continue
+        for i in range(x.shape[0]):
+            if not math.isfinite(x[i]):
+                finish(oi, of, L_NONFINITE, t, j, m, D_RESET_NONFINITE, chosen, math.nan, wf, wi)
+                return
+        if cfg_i[CI_ZENO] != 0:
+            estimate = zeno_update(wf[wi[W_ZENO] : wi[W_ZENO] + ZENO_SIZE], t)
+            if estimate == estimate and estimate <= t_end:
+                finish(oi, of, L_ZENO, t, j, m, D_ZENO_GEOMETRIC, 0, estimate, wf, wi)
+                return

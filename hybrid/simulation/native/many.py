@@ -1,0 +1,293 @@
+"""``hybrid.simulate_many``: many runs of one model in one compiled, multithreaded loop.
+
+Each row of a table gives one run its parameter values and initial values;
+all runs share the model's structure (compiled once), the settings and the
+initial location, and each has its own events and termination. Runs go to
+numba's threads in chunks (:func:`hybrid.simulation.native.ensemble.run_many`);
+a run whose trajectory outgrows its row is run again alone, with room. The
+result, an :class:`Ensemble`, has a summary per run as arrays (cause, end
+time, jumps) and builds each run's :class:`~hybrid.simulation.result.Run` on
+access.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Mapping, Sequence
+from typing import Any, overload
+
+import numpy as np
+from numpy.typing import NDArray
+
+from hybrid.compose import System, as_system
+from hybrid.errors import UsageError
+from hybrid.model import Automaton
+from hybrid.simulation.native import buffers as b
+from hybrid.simulation.native.assemble import run_from
+from hybrid.simulation.native.engine import (
+    CompiledNative,
+    compiled_native,
+    config,
+    run_arrays,
+    run_in_worker,
+    simulate_compiled,
+)
+from hybrid.simulation.result import Run
+from hybrid.simulation.settings import MAX_JUMPS_PER_INSTANT, Settings
+
+__all__ = ["Ensemble", "simulate_many"]
+
+CHUNK = 1024
+"""Runs handed to the threads at once (their arrays are allocated together)."""
+
+Table = Mapping[str, Sequence[float]] | Sequence[Mapping[str, float]] | Any
+
+
+def _columns(table: Table, what: str) -> dict[str, NDArray[np.float64]]:
+    """A table as columns: a mapping of columns, a list of rows, or a data frame."""
+    if table is None:
+        return {}
+    if hasattr(table, "to_dict") and hasattr(table, "columns"):
+        table = table.to_dict("list")
+    if isinstance(table, Mapping):
+        columns = {str(k): np.asarray(v, dtype=float).reshape(-1) for k, v in table.items()}
+    elif isinstance(table, Sequence) and all(isinstance(row, Mapping) for row in table):
+        keys = list(table[0]) if table else []
+        if any(list(row) != keys for row in table):
+            raise UsageError(f"{what}: every row must name the same columns")
+        columns = {k: np.array([float(row[k]) for row in table]) for k in keys}
+    else:
+        raise UsageError(f"{what}: give a mapping of columns, a list of rows or a data frame")
+    sizes = {len(v) for v in columns.values()}
+    if len(sizes) > 1:
+        raise UsageError(f"{what}: columns of different lengths {sorted(sizes)}")
+    return columns
+
+
+def _slot(model: Automaton | System, compiled: CompiledNative, key: str) -> int:
+    """The parameter slot a user's name (``name`` or ``comp.name``) refers to."""
+    model.with_parameters({key: 0.0})  # the reference's errors for unknown or ambiguous names
+    system = as_system(model)
+    if system.single or "." not in key:
+        owners = [i for i, c in enumerate(system.components) if key in c.automaton.parameters]
+        return compiled.native.slots[(owners[0], key)]
+    comp, name = key.split(".", 1)
+    index = [c.name for c in system.components].index(comp)
+    return compiled.native.slots[(index, name)]
+
+
+class Ensemble(Sequence[Run]):
+    """The runs of :func:`simulate_many`, in table order.
+
+    ``ensemble[i]`` is run ``i`` as a :class:`~hybrid.simulation.result.Run`
+    (built on access); ``causes``, ``t``, ``j`` and ``n_jumps`` summarise every
+    run as arrays; ``parameters`` and ``initial`` are the table's columns.
+    """
+
+    def __init__(self, model: Automaton | System, compiled: CompiledNative, settings: Settings,
+                 params: NDArray[np.float64], parameters: dict[str, NDArray[np.float64]],
+                 initial: dict[str, NDArray[np.float64]]) -> None:  # fmt: skip
+        self.model, self.compiled, self.settings = model, compiled, settings
+        self.params = params
+        self.parameters, self.initial = parameters, initial
+        self._chunks: list[b.RunArrays] = []
+        self._where: list[tuple[int, int]] = []
+        self._alone: dict[int, Run] = {}
+
+    def _add(self, chunk: b.RunArrays, rows: int) -> None:
+        index = len(self._chunks)
+        self._chunks.append(chunk)
+        self._where += [(index, r) for r in range(rows)]
+
+    def _summary(self, slot: int, floats: bool) -> NDArray[Any]:
+        values = []
+        for i, (c, r) in enumerate(self._where):
+            if i in self._alone:
+                run = self._alone[i]
+                term = run.termination
+                values.append(
+                    {b.F_T: term.t, b.I_J: term.j, b.I_JUMPS: len(run.jumps)}[slot]
+                    if slot != b.I_CAUSE
+                    else b.CAUSE_CODES.index(term.cause)
+                )
+            else:
+                values.append(self._chunks[c].of[r, slot] if floats else self._chunks[c].oi[r, slot])
+        return np.array(values, dtype=float if floats else np.int64)
+
+    @property
+    def causes(self) -> NDArray[np.str_]:
+        """The termination cause of each run."""
+        names: NDArray[np.str_] = np.array(b.CAUSE_CODES, dtype=np.str_)
+        causes: NDArray[np.str_] = names[self._summary(b.I_CAUSE, False)]
+        return causes
+
+    @property
+    def t(self) -> NDArray[np.float64]:
+        """The time each run ended."""
+        return self._summary(b.F_T, True)
+
+    @property
+    def j(self) -> NDArray[np.int64]:
+        """The hybrid time (jumps taken) at each run's end."""
+        return self._summary(b.I_J, False)
+
+    @property
+    def n_jumps(self) -> NDArray[np.int64]:
+        """The number of jumps of each run."""
+        return self._summary(b.I_JUMPS, False)
+
+    def __len__(self) -> int:
+        return len(self._where)
+
+    @overload
+    def __getitem__(self, i: int) -> Run: ...
+    @overload
+    def __getitem__(self, i: slice) -> list[Run]: ...
+    def __getitem__(self, i: int | slice) -> Run | list[Run]:
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        if i < 0:
+            i += len(self)
+        if i in self._alone:
+            return self._alone[i]
+        c, r = self._where[i]
+        arrays = self._chunks[c].row(r)
+        model = self.model
+        if int(arrays.oi[b.I_DETAIL]) in (b.D_EVAL, b.D_FLOW):
+            model = self.model_of(i)
+        compiled = self.compiled
+        return run_from(compiled.native, compiled.layout, model, self.settings, arrays)
+
+    def __iter__(self) -> Iterator[Run]:
+        return (self[k] for k in range(len(self)))
+
+    def model_of(self, i: int) -> Automaton | System:
+        """The model with run ``i``'s parameter values."""
+        names = self.compiled.native.slot_names
+        return self.model.with_parameters(dict(zip(names, self.params[i].tolist(), strict=True)))
+
+
+def simulate_many(
+    model: Automaton | System,
+    t_end: float,
+    *,
+    parameters: Table = None,
+    initial: Table = None,
+    max_jumps: int = 10_000,
+    rtol: float = 1e-6,
+    atol: float = 1e-9,
+    max_step: float | None = None,
+    t_start: float = 0.0,
+    dt: float | None = None,
+    zeno: bool = True,
+    max_jumps_per_instant: int = MAX_JUMPS_PER_INSTANT,
+    threads: int | None = None,
+    handle_sigint: bool = True,
+) -> Ensemble:
+    """Simulate ``model`` once per row of a table, compiled, on several threads.
+
+    Parameters
+    ----------
+    model : Automaton or System
+        From :func:`hybrid.load`.
+    t_end : float
+        End time of every run.
+    parameters : table, optional
+        One row per run: a mapping of columns (``{"e": [0.7, 0.8]}``), a list
+        of rows (``[{"e": 0.7}, {"e": 0.8}]``) or a data frame. Columns name
+        parameters (``comp.name`` in a system) or, as ``init.x``, initial values.
+    initial : table, optional
+        Initial values of state variables, one row per run (same forms).
+    max_jumps, rtol, atol, max_step, t_start, dt, zeno, max_jumps_per_instant
+        As for :func:`hybrid.simulate`, the same for every run.
+    threads : int, optional
+        Threads to use (default: numba's, all cores).
+    handle_sigint : bool
+        Turn Ctrl-C into a clean end (cause ``interrupted``) of every run.
+
+    Returns
+    -------
+    Ensemble
+        One :class:`~hybrid.simulation.result.Run` per row (``ensemble[i]``),
+        and per-run summaries (``causes``, ``t``, ``j``, ``n_jumps``).
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+    >>> runs = hybrid.simulate_many(ball, t_end=2.0, parameters={"init.h": [5.0, 10.0, 20.0]})
+    >>> runs.n_jumps.tolist(), [round(run.jumps[0].t, 6) for run in runs if run.jumps]
+    ([1, 1, 0], [1.009638, 1.427843])
+    """
+    settings = Settings(
+        t_end=t_end,
+        t_start=t_start,
+        max_jumps=max_jumps,
+        rtol=rtol,
+        atol=atol,
+        max_step=math.inf if max_step is None else max_step,
+        dt=dt,
+        zeno=zeno,
+        max_jumps_per_instant=max_jumps_per_instant,
+        backend="compiled",
+    )
+    table = _columns(parameters, "parameters")
+    starts = {k[5:]: v for k, v in table.items() if k.startswith("init.")}
+    params_table = {k: v for k, v in table.items() if not k.startswith("init.")}
+    starts.update(_columns(initial, "initial"))
+    sizes = {len(v) for v in (*params_table.values(), *starts.values())}
+    if len(sizes) > 1:
+        raise UsageError(f"parameters and initial have different numbers of rows {sorted(sizes)}")
+    n = sizes.pop() if sizes else 1
+    compiled = compiled_native(model)
+    native = compiled.native
+    params = np.tile(np.array(native.parameter_vector(model), dtype=float), (n, 1))
+    for key, column in params_table.items():
+        params[:, _slot(model, compiled, key)] = column
+    x0s = np.tile(np.array(model.initial_vector(), dtype=float), (n, 1))
+    for name, column in starts.items():
+        if name not in native.state_names:
+            raise UsageError(f"initial value for unknown state variable '{name}'")
+        x0s[:, native.state_names.index(name)] = column
+    ensemble = Ensemble(model, compiled, settings, params, params_table, starts)
+    if threads is not None:
+        import numba
+
+        most = int(getattr(numba.config, "NUMBA_NUM_THREADS", 1))
+        numba.set_num_threads(max(1, min(int(threads), most)))
+    cfg = config(settings)
+    m0 = compiled.initial_mode(model)
+    pilot = run_arrays(compiled, params[0], x0s[0], m0, settings, False)  # sizes the rows
+    points = 2 * int(pilot.oi[b.I_POINTS]) + 16
+    jumps = 2 * int(pilot.oi[b.I_JUMPS]) + 4
+    flag = np.zeros(1, dtype=np.int64)  # after a Ctrl-C, the remaining runs end at once
+    for lo in range(0, n, CHUNK):
+        hi = min(n, lo + CHUNK)
+        arrays = compiled.buffers(points, jumps, 1, runs=hi - lo)
+
+        def call(flag: NDArray[np.int64], arrays: b.RunArrays = arrays, lo: int = lo,
+                 hi: int = hi) -> None:  # fmt: skip
+            compiled.run_many(params[lo:hi], x0s[lo:hi], t_start, m0, cfg, arrays, flag)
+
+        run_in_worker(call, handle_sigint, flag)
+        ensemble._add(arrays, hi - lo)
+        overflowed = np.flatnonzero(arrays.oi[:, b.I_OVERFLOW])
+        for r in overflowed.tolist():
+            ensemble._alone[lo + r] = _alone(model, ensemble, settings, lo + r, x0s[lo + r])
+        if overflowed.size:  # give later chunks the room the longest run needed
+            longest = max(len(ensemble._alone[lo + r]) for r in overflowed.tolist())
+            most = max(len(ensemble._alone[lo + r].jumps) for r in overflowed.tolist())
+            points, jumps = max(points, 2 * longest), max(jumps, 2 * most + 4)
+    return ensemble
+
+
+def _alone(model: Automaton | System, ensemble: Ensemble, settings: Settings, i: int,
+           x0: NDArray[np.float64]) -> Run:  # fmt: skip
+    """Run ``i`` on its own (it outgrew its row in the chunk)."""
+    one = ensemble.model_of(i)
+    names = ensemble.compiled.native.state_names
+    start = dict(zip(names, x0.tolist(), strict=True))
+    if isinstance(one, Automaton):
+        one = one.with_initial(None, start)
+        return simulate_compiled(one, settings, handle_sigint=False)
+    return simulate_compiled(one, settings, initial=start, handle_sigint=False)

@@ -1,0 +1,152 @@
+"""Kernel source: recording points, jumps and steps, and the end of a run.
+
+The compiled counterpart of :class:`hybrid.simulation.recorder.Recorder`
+(``points``, ``jump``, ``stay``'s dense segments) and of building a
+:class:`~hybrid.simulation.result.Termination`: everything goes into the
+run's arrays (:class:`~hybrid.simulation.native.buffers.RunArrays`), which Python turns
+into a :class:`~hybrid.simulation.result.Run`. Signals are computed when a
+point is stored (a signal that fails ends the run there, as in the recorder).
+A full buffer sets ``I_OVERFLOW`` and the call returns False: Python then runs
+again with room for more.
+
+Copied into the kernel module (below the ``kernel`` marker).
+"""
+
+from __future__ import annotations
+
+from hybrid.simulation.native.buffers import (
+    F_FAIL_T,
+    F_SIGNALS,
+    F_T,
+    F_ZENO_TIME,
+    I_CAUSE,
+    I_DETAIL,
+    I_DETAIL_INDEX,
+    I_FAIL_INDEX,
+    I_FAIL_KIND,
+    I_FAIL_MODE,
+    I_J,
+    I_JUMPS,
+    I_MODE,
+    I_OVERFLOW,
+    I_POINTS,
+    I_STORED_STEPS,
+    J_J,
+    J_T,
+    J_TR,
+    J_X,
+    N_OUT_F,
+    OP_OUTPUTS,
+    P_J,
+    P_M,
+    P_T,
+    P_X,
+    Q_H,
+    Q_J,
+    Q_STAY,
+    Q_T0,
+    Q_TV,
+    Q_Y,
+    S_FAIL_T,
+    T_MODE_TR,
+    W_D,
+    W_ENABLED,
+    W_FAILI,
+    W_FAILX,
+    W_SCAL,
+)
+from hybrid.simulation.native.decide import note_failure
+from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints
+
+__all__ = ["finish", "record_jump", "record_point", "record_step"]
+
+# --- kernel ---
+
+
+def record_point(fns: Fns, pts: Array2, oi: Ints, t: float, j: int, m: int, x: Array, p: Array,
+                 wf: Array, wi: Ints) -> bool:  # fmt: skip
+    """Store the point ``(t, j, m, x)`` with its signals; False if the buffer is full."""
+    n = oi[I_POINTS]
+    if n >= pts.shape[0]:
+        oi[I_OVERFLOW] = 1
+        return False
+    row = pts[n]
+    row[P_T] = t
+    row[P_J] = j
+    row[P_M] = m
+    d = x.shape[0]
+    for i in range(d):
+        row[P_X + i] = x[i]
+    signals = row[P_X + d :]
+    fns(OP_OUTPUTS, m, t, x.ctypes, p.ctypes, signals.ctypes)
+    for c in range(signals.shape[0]):
+        if signals[c] != signals[c]:
+            note_failure(F_SIGNALS, m, m, t, x, wf, wi)
+            break
+    oi[I_POINTS] = n + 1
+    return True
+
+
+def record_jump(tab: Ints, jps: Array2, oi: Ints, t: float, j: int, m: int, tr: int,
+                before: Array, after: Array, wi: Ints) -> bool:  # fmt: skip
+    """Store a jump of global transition ``tr`` from mode ``m`` (enabled flags from ``wi``)."""
+    n = oi[I_JUMPS]
+    if n >= jps.shape[0]:
+        oi[I_OVERFLOW] = 1
+        return False
+    row = jps[n]
+    row[J_T] = t
+    row[J_J] = j
+    row[J_TR] = tr
+    d = before.shape[0]
+    for i in range(d):
+        row[J_X + i] = before[i]
+        row[J_X + d + i] = after[i]
+    count = tab[tab[T_MODE_TR] + m + 1] - tab[tab[T_MODE_TR] + m]
+    enabled = wi[W_ENABLED]
+    for k in range(row.shape[0] - J_X - 2 * d):
+        row[J_X + 2 * d + k] = 1.0 if (k < count and wi[enabled + k] != 0) else 0.0
+    oi[I_JUMPS] = n + 1
+    return True
+
+
+def record_step(sts: Array2, oi: Ints, t_old: float, h: float, t_valid: float, j: int,
+                stay: int, y_old: Array, q: Array2) -> bool:  # fmt: skip
+    """Store one step's interpolant (``dense=True``), valid on ``[t_old, t_valid]``."""
+    n = oi[I_STORED_STEPS]
+    if n >= sts.shape[0]:
+        oi[I_OVERFLOW] = 1
+        return False
+    row = sts[n]
+    row[Q_T0] = t_old
+    row[Q_H] = h
+    row[Q_TV] = t_valid
+    row[Q_J] = j
+    row[Q_STAY] = stay
+    d = y_old.shape[0]
+    for i in range(d):
+        row[Q_Y + i] = y_old[i]
+        for c in range(4):
+            row[Q_Y + d + 4 * i + c] = q[i, c]
+    oi[I_STORED_STEPS] = n + 1
+    return True
+
+
+def finish(oi: Ints, of: Array, cause: int, t: float, j: int, m: int, detail: int, index: int,
+           zeno_time: float, wf: Array, wi: Ints) -> None:  # fmt: skip
+    """End the run: its cause, where, why, and the evaluation failure if there was one."""
+    oi[I_CAUSE] = cause
+    oi[I_J] = j
+    oi[I_MODE] = m
+    oi[I_DETAIL] = detail
+    oi[I_DETAIL_INDEX] = index
+    of[F_T] = t
+    of[F_ZENO_TIME] = zeno_time
+    fi = wi[W_FAILI]
+    oi[I_FAIL_KIND] = wi[fi]
+    oi[I_FAIL_INDEX] = wi[fi + 1]
+    oi[I_FAIL_MODE] = wi[fi + 2]
+    of[F_FAIL_T] = wf[wi[W_SCAL] + S_FAIL_T]
+    fx = wi[W_FAILX]
+    for i in range(wi[W_D]):
+        of[N_OUT_F + i] = wf[fx + i]

@@ -1,0 +1,146 @@
+"""Choosing the backend: the CLI flag, refusals that name the construct, numba's absence, the cache."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate._ivp.rk import RK45
+from support import REPO, SPECS, assert_no_traceback, read_csv, read_json, run_cli
+
+import hybrid
+from hybrid.errors import UsageError
+from hybrid.simulation.native import buffers, integrator, stay
+from hybrid.simulation.native.cache import CACHE_ENV
+from hybrid.version import install_hint
+
+pytest.importorskip("numba")
+
+
+def test_cli_backend_compiled_writes_what_scipy_writes(tmp_path: Path) -> None:
+    outputs = {}
+    for backend in ("scipy", "compiled"):
+        out, events = tmp_path / f"{backend}.csv", tmp_path / f"{backend}.json"
+        done = run_cli("simulate", SPECS / "thermostat.yaml", "--t-end", "40", "--rtol", "1e-10",
+                       "--atol", "1e-12", "--backend", backend, "--out", out, "--events", events)  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        outputs[backend] = (read_csv(out), read_json(events))
+    (header_s, rows_s), events_s = outputs["scipy"]
+    (header_c, rows_c), events_c = outputs["compiled"]
+    assert header_c == header_s and len(rows_c) == len(rows_s)
+    assert [r["location"] for r in rows_c] == [r["location"] for r in rows_s]
+    np.testing.assert_allclose([float(r["T"]) for r in rows_c], [float(r["T"]) for r in rows_s], rtol=1e-9)
+    assert [j["edge"] for j in events_c["jumps"]] == [j["edge"] for j in events_s["jumps"]]
+    assert events_c["settings"]["backend"] == "compiled"
+    assert events_c["termination"]["cause"] == events_s["termination"]["cause"] == "t_end"
+
+
+def test_library_functions_without_a_compiled_form_are_refused() -> None:
+    model = hybrid.load(SPECS / "uvms_mission_2.yaml")
+    with pytest.raises(UsageError, match=r"library function '.*' has no compiled form"):
+        hybrid.simulate(model, t_end=1.0, backend="compiled")
+    done = run_cli("simulate", SPECS / "uvms_mission_2.yaml", "--t-end", "1", "--backend", "compiled")
+    assert done.returncode == 2 and "has no compiled form" in done.stderr
+    assert_no_traceback(done.stderr)
+
+
+def test_what_the_compiled_backend_cannot_do_is_refused(ball: hybrid.Automaton) -> None:
+    with pytest.raises(UsageError, match="method 'LSODA' needs backend='scipy'"):
+        hybrid.simulate(ball, t_end=1.0, method="LSODA", backend="compiled")
+    polarization = hybrid.load(SPECS / "polarization.yaml")
+    with pytest.raises(UsageError, match="external inputs"):
+        hybrid.simulate(polarization, t_end=1.0, inputs={"gamma": lambda t: 1.0}, backend="compiled")
+    with pytest.raises(UsageError, match="input 'gamma' of polarization needs a value"):
+        hybrid.simulate(polarization, t_end=1.0, backend="compiled")
+    with pytest.raises(UsageError, match="unknown backend 'gpu'"):
+        hybrid.simulate(ball, t_end=1.0, backend="gpu")
+
+
+BLOCK_NUMBA = "import sys; sys.modules['numba'] = None; from hybrid.cli import main; raise SystemExit(main(sys.argv[1:]))"
+
+
+def test_without_numba_the_compiled_backend_exits_2_with_the_install_hint() -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", BLOCK_NUMBA, "simulate", str(SPECS / "bouncing_ball.yaml"),
+         "--t-end", "1", "--backend", "compiled"],
+        capture_output=True, text=True, cwd=REPO, timeout=120, check=False,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert install_hint("fast") in done.stderr
+    assert_no_traceback(done.stderr)
+
+
+def test_the_default_path_never_imports_numba() -> None:
+    code = (
+        "import sys, hybrid\n"
+        "run = hybrid.simulate(hybrid.load('specs/bouncing_ball.yaml'), t_end=2.0)\n"
+        "from hybrid.cli import main\n"
+        "assert main(['simulate', 'specs/thermostat.yaml', '--t-end', '5']) == 0\n"
+        "print(sorted(m for m in sys.modules if m == 'numba' or m.startswith('numba.')))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO,
+                          timeout=120, check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip().splitlines()[-1] == "[]"
+
+
+def test_a_second_process_loads_the_compiled_code_from_the_cache(ball: hybrid.Automaton) -> None:
+    hybrid.simulate(ball, t_end=1.0, backend="compiled")  # compiled (or loaded) here
+    code = (
+        "import hybrid\n"
+        "from hybrid.simulation.native.engine import compiled_native, kernel\n"
+        "ball = hybrid.load('specs/bouncing_ball.yaml')\n"
+        "run = hybrid.simulate(ball, t_end=1.0, backend='compiled')\n"
+        "stats = kernel().run_one.stats\n"
+        "print(sum(stats.cache_hits.values()), sum(stats.cache_misses.values()))\n"
+    )
+    import os
+
+    env = {**os.environ}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO,
+                          timeout=300, check=False, env=env)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    hits, misses = map(int, done.stdout.split())
+    assert (hits, misses) == (1, 0)
+    assert CACHE_ENV == "HYBRID_NATIVE_CACHE"
+
+
+def test_the_integrator_is_scipys_rk45() -> None:
+    a, b, e, p = RK45.A, RK45.B, RK45.E, RK45.P
+    mine_a = [
+        [integrator.A21], [integrator.A31, integrator.A32],
+        [integrator.A41, integrator.A42, integrator.A43],
+        [integrator.A51, integrator.A52, integrator.A53, integrator.A54],
+        [integrator.A61, integrator.A62, integrator.A63, integrator.A64, integrator.A65],
+    ]  # fmt: skip
+    for row, values in enumerate(mine_a, start=1):
+        np.testing.assert_array_equal(a[row, :row], values)
+    np.testing.assert_array_equal(b, [integrator.B1, 0, integrator.B3, integrator.B4, integrator.B5, integrator.B6])
+    np.testing.assert_array_equal(e, [integrator.E1, 0, integrator.E3, integrator.E4, integrator.E5, integrator.E6, integrator.E7])
+    np.testing.assert_allclose(integrator.P_DENSE, p, rtol=1e-15)
+
+
+def test_cause_codes_follow_the_reference() -> None:
+    from hybrid.simulation.result import CAUSES
+
+    assert buffers.CAUSE_CODES == CAUSES
+    codes = (stay.C_T_END, stay.C_BLOCKED, stay.C_NONFINITE, stay.C_SOLVER_FAILURE, stay.C_INTERRUPTED)
+    assert [CAUSES[c] for c in codes] == ["t_end", "blocked", "nonfinite", "solver_failure", "interrupted"]
+
+
+def test_runs_are_built_like_the_reference(thermostat: hybrid.Automaton) -> None:
+    from dataclasses import fields
+
+    from hybrid.simulation.native.assemble import settings_record
+    from hybrid.simulation.settings import Settings
+
+    run = hybrid.simulate(thermostat, t_end=30.0, backend="compiled", handle_sigint=False)
+    reference = hybrid.simulate(thermostat, t_end=30.0, handle_sigint=False)
+    assert run.jumps[0] == hybrid.Jump(**{f.name: getattr(run.jumps[0], f.name) for f in fields(hybrid.Jump)})
+    assert run.jumps[0].as_dict().keys() == reference.jumps[0].as_dict().keys()
+    settings = Settings(t_end=3.0, dt=0.5, backend="compiled")
+    assert settings_record(settings) == settings.as_dict()
+    assert run.settings == {**reference.settings, "backend": "compiled"}

@@ -1,0 +1,58 @@
+"""``hybrid.simulate_many``: every run of an ensemble equals the same run made alone."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import hybrid
+from hybrid.errors import HybridError, UsageError
+
+pytest.importorskip("numba")
+
+TOL = {"rtol": 1e-10, "atol": 1e-12, "handle_sigint": False}
+
+
+def test_each_run_equals_the_scipy_run_of_its_row(thermostat: hybrid.Automaton) -> None:
+    table = {"init.T": [19.0, 20.0, 21.5, 18.5], "a": [0.1, 0.2, 0.05, 0.3]}
+    runs = hybrid.simulate_many(thermostat, t_end=60.0, parameters=table, **TOL)
+    assert len(runs) == 4
+    for i, run in enumerate(runs):
+        alone = hybrid.simulate(
+            thermostat, t_end=60.0, parameters={"a": table["a"][i]}, initial={"T": table["init.T"][i]},
+            **TOL,
+        )  # fmt: skip
+        assert [j.edge for j in run.jumps] == [j.edge for j in alone.jumps]
+        np.testing.assert_allclose(run.jump_times, alone.jump_times, rtol=1e-10, atol=1e-9)
+        assert run.termination.cause == alone.termination.cause
+        assert run["T"][0] == table["init.T"][i]
+    assert list(runs.causes) == ["t_end"] * 4
+    assert list(runs.n_jumps) == [len(r.jumps) for r in runs]
+    np.testing.assert_allclose(runs.t, 60.0)
+
+
+def test_rows_outgrowing_the_first_are_run_again_alone(thermostat: hybrid.Automaton) -> None:
+    # the first row switches rarely, the others often: their rows overflow and are rerun alone
+    rows = [{"a": 0.01}] + [{"a": 1.0}] * 3
+    runs = hybrid.simulate_many(thermostat, t_end=100.0, parameters=rows, **TOL)
+    fast = hybrid.simulate(thermostat, t_end=100.0, parameters={"a": 1.0}, backend="compiled", **TOL)
+    assert runs.n_jumps[0] < 5 and list(runs.n_jumps[1:]) == [len(fast.jumps)] * 3
+    np.testing.assert_allclose(runs[3].jump_times, fast.jump_times, rtol=1e-12)
+
+
+def test_ball_ensemble_zeno_and_initial_table(ball: hybrid.Automaton) -> None:
+    heights = np.array([1.0, 5.0, 10.0])
+    runs = hybrid.simulate_many(ball, t_end=30.0, initial={"h": heights}, **TOL)
+    g, e = 9.81, 0.8
+    t1 = np.sqrt(2 * heights / g)
+    np.testing.assert_allclose([r.termination.zeno_time for r in runs], t1 * (1 + e) / (1 - e), rtol=1e-9)
+    assert list(runs.causes) == ["zeno"] * 3
+
+
+def test_bad_tables_are_refused(ball: hybrid.Automaton) -> None:
+    with pytest.raises(HybridError, match="unknown parameter 'q'"):
+        hybrid.simulate_many(ball, t_end=1.0, parameters={"q": [1.0]})
+    with pytest.raises(UsageError, match="different"):
+        hybrid.simulate_many(ball, t_end=1.0, parameters={"e": [0.5, 0.6], "g": [9.0]})
+    with pytest.raises(UsageError, match="unknown state variable 'z'"):
+        hybrid.simulate_many(ball, t_end=1.0, initial={"z": [1.0]})
