@@ -24,6 +24,7 @@ import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from hybrid.analysis.components import component_facts
 from hybrid.analysis.static import AutomatonFacts
 from hybrid.compose import System
 
@@ -73,7 +74,7 @@ class ProductTables:
         facts = (
             list(facts)
             if facts is not None
-            else [AutomatonFacts(c.automaton) for c in system.components]
+            else [component_facts(system, i) for i in range(len(system.components))]
         )
         self.owners = system.shared_labels
         self.components: list[_Component] = []
@@ -112,6 +113,12 @@ class ProductTables:
         self.initial: Mode = tuple(
             comp.index[self.base[g]] for comp, g in zip(self.components, self.members, strict=True)
         )
+        starts = (
+            tuple(comp.index[m[g]] for comp, g in zip(self.components, self.members, strict=True))
+            for m in self.system.initial_modes
+        )
+        self.initials: list[Mode] = list(dict.fromkeys([self.initial, *starts]))
+        """Every initial mode (each component in one of its initial locations), ``initial`` first."""
         self._stuck: dict[tuple[int, int, int], bool] = {}
         self._conflict: dict[tuple[int, int, int], bool] = {}
 

@@ -24,18 +24,36 @@ __all__ = ["assumptions", "blocked_entries", "incomplete_analysis", "property_vi
 
 
 def assumptions(facts: AutomatonFacts) -> str:
-    """What a "never" finding of this automaton assumes: its declared bounds, unknown inputs."""
+    """What a "never" finding of this automaton assumes: its declared bounds, its inputs."""
+    states = set(facts.automaton.state_names)
     bounded = [
         f"{name} in [{_number(b.lo)}, {_number(b.hi)}]"
         for name, b in facts.bounds.items()
-        if math.isfinite(b.lo) or math.isfinite(b.hi)
+        if name in states and (math.isfinite(b.lo) or math.isfinite(b.hi))
     ]
     text = "proved for every run"
     if bounded:
         shown = ", ".join(bounded[:4]) + (", ..." if len(bounded) > 4 else "")
         text += f" that stays within the declared bounds ({shown})"
-    if facts.automaton.inputs:
+    inputs = facts.automaton.inputs
+    ranged = [
+        f"{n} in [{_number(facts.inputs[n].lo)}, {_number(facts.inputs[n].hi)}]"
+        for n in inputs
+        if n in facts.inputs
+    ]
+    if ranged:
+        shown = ", ".join(ranged[:4]) + (", ..." if len(ranged) > 4 else "")
+        text += f", with inputs within their ranges ({shown})"
+        if len(ranged) < len(inputs):
+            text += " and the other inputs anything"
+    elif inputs:
         text += ", whatever the inputs"
+    sets = [
+        f"{n} in {r.text()}" for n, r in facts.automaton.initial_set().items() if not r.is_point
+    ]
+    if sets:
+        shown = ", ".join(sets[:4]) + (", ..." if len(sets) > 4 else "")
+        text += f", from every point of the initial set ({shown})"
     return text
 
 
