@@ -112,7 +112,10 @@ def validation_problems(
             message = item["msg"]
             if kind == "string_pattern_mismatch":
                 message = "must be a name: an ASCII letter or _ then ASCII letters, digits or _"
-            elif isinstance(got, list) and kind in ("too_long", "too_short"):
+            elif (
+                kind in ("too_long", "too_short")
+                and item.get("ctx", {}).get("field_type") == "Tuple"
+            ):
                 message = "expected [low, high]: two numbers"
             elif kind in ("too_short", "string_too_short") and got == "":
                 message = "must not be empty"

@@ -177,9 +177,10 @@ else:
 class InitialSpec(_Strict):
     """Where a run starts."""
 
-    location: Locations = Field(
+    location: Locations | None = Field(
+        None,
         description="The initial location, or several (check explores all; simulate starts "
-        "in the first)."
+        "in the first). Default: the first location (in a system: the component's own).",
     )
     state: dict[Name, InitialValue] = Field(default_factory=dict)
 

@@ -114,16 +114,24 @@ def build_states(spec: AutomatonSpec, positions: PositionMap, problems: Problems
                 ("state", name, "bounds"), f"bounds of '{name}': low {lower} > high {upper}"
             )
             lower, upper = -math.inf, math.inf
-        initial: float | tuple[float, float] | InitialSetSpec = var.initial
-        if var.nominal is not None:
-            if isinstance(var.initial, tuple):
-                initial = InitialSetSpec(initial=var.initial, nominal=var.nominal)
-            else:
-                problems.at_key(
-                    ("state", name, "nominal"),
-                    f"'{name}' starts at one value: `nominal` goes with an initial set [low, high]",
+        found: float | Range | None
+        if var.nominal is not None and not isinstance(var.initial, tuple):
+            problems.at_key(
+                ("state", name, "nominal"),
+                f"'{name}' starts at one value: `nominal` goes with an initial set [low, high]",
+            )
+            found = None
+        elif isinstance(var.initial, tuple):
+            what = f"initial set of '{name}'"
+            nominal_path = ("state", name, "nominal")
+            found = _range(problems, path, what, var.initial, var.nominal, nominal_path)
+            if found is not None and not (lower <= found.lo and found.hi <= upper):
+                problems.at_value(
+                    path, f"{what} {found.text()} is not inside its bounds [{lower}, {upper}]"
                 )
-        found = start_value(problems, path, name, initial, lower, upper)
+                found = None
+        else:
+            found = start_value(problems, path, name, var.initial, lower, upper)
         start = found.nominal if isinstance(found, Range) else (found or 0.0)
         states.append(
             StateVar(
@@ -180,7 +188,10 @@ def build_initial(
     if spec.initial is None:
         return (next(iter(spec.locations)),), {}, {}
     chosen = initial_locations(
-        spec.initial.location, ("initial", "location"), list(spec.locations), problems
+        spec.initial.location or next(iter(spec.locations)),
+        ("initial", "location"),
+        list(spec.locations),
+        problems,
     )
     points: dict[str, float] = {}
     sets: dict[str, Range] = {}
@@ -280,11 +291,17 @@ def _forbidden(
         elif entry.location is not None:
             path = (*base, "location")
             if entry.location not in locations:
-                problems.at_value(
-                    path,
-                    f"forbidden: unknown location '{entry.location}'"
-                    f"{closest(entry.location, locations)}",
+                qualified = [
+                    f"{c}.{entry.location}"
+                    for c, names in (components or {}).items()
+                    if entry.location in names
+                ]
+                hint = (
+                    f"; in a system write it qualified: '{qualified[0]}'"
+                    if qualified
+                    else closest(entry.location, locations)
                 )
+                problems.at_value(path, f"forbidden: unknown location '{entry.location}'{hint}")
             elif components is None:
                 chosen[""] = entry.location
             else:

@@ -96,7 +96,10 @@ def _initial(
     before = len(problems.items)
     path = (*base, "initial")
     chosen = initial_locations(
-        comp.initial.location, (*path, "location"), list(model.locations), problems
+        comp.initial.location or list(model.initial_locations),
+        (*path, "location"),
+        list(model.locations),
+        problems,
     )
     state: dict[str, float | Range] = {}
     bounds = {s.name: s for s in model.states}
