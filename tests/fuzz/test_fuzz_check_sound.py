@@ -309,6 +309,26 @@ edges:
     assert_check_agrees_with_run(m)
 
 
+def test_regression_an_equality_with_a_strict_comparison_entering() -> None:
+    # found by the property test: the simulator snaps `t == 1` true on its level and takes
+    # `1 < t` by the slope rule (t rises): the edge fires at t = 1 (docs/semantics.md,
+    # equality guards); check dropped the entering boundary of a conjunction with an
+    # equality and called the edge dead
+    m = hybrid.load_text(
+        """
+automaton: level
+state: {x: {initial: 0}}
+locations: {a: {flow: {x: 1}}, b: {}}
+edges:
+  - {name: e, from: a, to: b, guard: "1 < t and t == 1"}
+"""
+    )
+    run = hybrid.simulate(m, t_end=3.0, handle_sigint=False)
+    assert [(j.edge, j.t) for j in run.jumps] == [("e", 1.0)]
+    assert_check_agrees_with_run(m)
+    assert not hybrid.check(m).findings
+
+
 @pytest.mark.xfail(
     strict=True,
     reason="simulator (issue 10): the slope test fires `x < x and x < x*y` when rho is a "
