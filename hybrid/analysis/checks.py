@@ -20,7 +20,6 @@ from collections.abc import Callable
 
 from hybrid.analysis.context import Analysis
 from hybrid.analysis.findings import Finding, WitnessStep
-from hybrid.analysis.forbidden import forbidden_states
 from hybrid.analysis.property_checks import (
     assumptions,
     blocked_entries,
@@ -36,7 +35,6 @@ from hybrid.model import Automaton, Edge
 __all__ = [
     "CHECKS",
     "dead_edges",
-    "forbidden_states",
     "incomplete_analysis",
     "nondeterminism",
     "property_violations",
@@ -330,7 +328,6 @@ CHECKS: tuple[Callable[[Analysis], list[Finding]], ...] = (
     zero_time_cycles,
     unused_declarations,
     property_violations,
-    forbidden_states,
     incomplete_analysis,
 )
 

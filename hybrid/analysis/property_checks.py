@@ -18,6 +18,7 @@ import math
 
 from hybrid.analysis.context import Analysis, path_text
 from hybrid.analysis.findings import Finding
+from hybrid.analysis.forbidden import forbidden_states
 from hybrid.analysis.static import AutomatonFacts
 
 __all__ = ["assumptions", "blocked_entries", "incomplete_analysis", "property_violations"]
@@ -77,7 +78,8 @@ def blocked_entries(analysis: Analysis, component: int, location: str) -> str:
 
 
 def property_violations(analysis: Analysis) -> list[Finding]:
-    """The declared properties refuted, each with a witness path where there is one."""
+    """The declared properties refuted, each with a witness path where there is one
+    (forbidden states: :func:`hybrid.analysis.forbidden.forbidden_states`)."""
     props = analysis.system.properties
     exploration = analysis.exploration
     tables = analysis.tables
@@ -161,6 +163,7 @@ def property_violations(analysis: Analysis) -> list[Finding]:
                 witness=witness,
             )
         )
+    found.extend(forbidden_states(analysis))
     return found
 
 

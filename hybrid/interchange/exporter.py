@@ -323,9 +323,8 @@ def export_spaceex(model: Automaton | System) -> ExportResult:
                 f"component '{p.comp.name}': urgent locations keep time from passing with the "
                 f"added clock '{p.clock}' (<= 0 there, reset on entry): SpaceEx has no urgency"
             )
-    if any(r.given for r in system.initial_set().values()) or any(
-        r.given for r in system.input_ranges().values()
-    ):
+    ranges = [*system.initial_set().values(), *system.input_ranges().values()]
+    if any(r.given and not r.is_point for r in ranges):
         notes.append(
             "nominal values have no SpaceEx counterpart: the .cfg gives the sets; an import "
             "starts simulations at their midpoints"
