@@ -224,3 +224,35 @@ def test_a_template_bound_twice_is_checked_per_instance(tmp_path: Path) -> None:
     assert _rules(report) == [("unreachable-location", "v2.open"), ("dead-edge", "v2.vent")]
     run = hybrid.simulate(m, t_end=6.0)
     assert [j.edge for j in run.jumps] == ["v1.vent"] and run.jumps[0].t == pytest.approx(5.0)
+
+
+def test_graphs_mark_every_initial_location_and_the_urgent_ones(tmp_path: Path) -> None:
+    from hybrid.analysis import system_graph
+    from hybrid.export.diagrams import to_dot, to_mermaid
+
+    m = hybrid.load_text(
+        "automaton: g\nlocations: {a: {}, b: {urgent: true}, c: {}}\n"
+        "initial: {location: [a, c]}\nedges: [{from: a, to: b}, {from: b, to: c}]\n"
+    )
+    graph = system_graph(m)
+    assert {n for n, d in graph.nodes(data=True) if d["initial"]} == {"a", "c"}
+    dot = to_dot(graph)
+    assert '"__start__" -> "a";' in dot and '"__start__" -> "c";' in dot
+    assert '"b" [label="b\\nurgent", peripheries=2];' in dot
+    mermaid = to_mermaid(graph)
+    assert "[*] --> s0" in mermaid and "[*] --> s2" in mermaid and "s1 : urgent" in mermaid
+    (tmp_path / "g.yaml").write_text(
+        "automaton: g\nlabels: [go]\nlocations: {a: {}, b: {urgent: true}}\n"
+        "initial: {location: [a, b]}\nedges: [{from: a, to: b, label: go}, {from: b, to: a, label: go}]\n"
+    )
+    (tmp_path / "s.yaml").write_text(
+        "system: s\ncomponents: [{spec: g.yaml, as: one}, {spec: g.yaml, as: two}]\n"
+    )
+    product = system_graph(hybrid.load(tmp_path / "s.yaml"))
+    assert {n for n, d in product.nodes(data=True) if d["initial"]} == {
+        "one.a|two.a",
+        "one.a|two.b",
+        "one.b|two.a",
+        "one.b|two.b",
+    }
+    assert product.nodes["one.a|two.b"]["urgent"] and not product.nodes["one.a|two.a"]["urgent"]

@@ -232,3 +232,16 @@ def test_closed_form_of_the_midpoint_is_exact() -> None:
     r = Range.of(0.1, 0.3)
     assert r.nominal == 0.1 + (0.3 - 0.1) / 2 and r.lo <= r.nominal <= r.hi
     assert math.isclose(r.nominal, 0.2)
+
+
+def test_the_command_line_drives_a_free_input_of_a_system(tmp_path: Path) -> None:
+    (tmp_path / "drift.yaml").write_text(INPUT.replace("NOMINAL", ""))
+    (tmp_path / "two.yaml").write_text(
+        "system: two\ncomponents:\n  - {spec: drift.yaml, as: a}\n"
+        "  - {spec: drift.yaml, as: b, rename: {x: z}}\n"
+    )
+    done = run_cli("simulate", tmp_path / "two.yaml", "--t-end", "10", "--input", "u=1.5")
+    assert done.returncode == 0, done.stderr
+    assert "t_end at t=10 j=2" in done.stdout and "note" not in done.stderr
+    wrong = run_cli("simulate", tmp_path / "two.yaml", "--t-end", "10", "--input", "x=1")
+    assert wrong.returncode == 2 and "'x' is not a free input of two (inputs: u)" in wrong.stderr
