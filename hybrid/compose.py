@@ -16,7 +16,6 @@ Examples
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -124,11 +123,6 @@ class System:
         return tuple(c.automaton.initial_location for c in self.components)
 
     @cached_property
-    def initial_modes(self) -> tuple[tuple[str, ...], ...]:
-        """Every initial mode: each component in one of its initial locations."""
-        return tuple(itertools.product(*(c.automaton.initial_locations for c in self.components)))
-
-    @cached_property
     def providers(self) -> Mapping[str, int]:
         """Signal and state variable names -> the index of the component that defines them."""
         found: dict[str, int] = {}
@@ -143,14 +137,24 @@ class System:
         names = (n for c in self.components for n in c.automaton.inputs)
         return tuple(dict.fromkeys(n for n in names if n not in self.providers))
 
-    def input_ranges(self) -> dict[str, Range]:
-        """The declared range of every bounded free input (see :meth:`Automaton.input_ranges`)."""
+    @cached_property
+    def state_vars(self) -> Mapping[str, StateVar]:
+        """Every state variable by name."""
+        return MappingProxyType({s.name: s for s in self.states})
+
+    @cached_property
+    def _input_ranges(self) -> Mapping[str, Range]:
         found: dict[str, Range] = {}
+        free = set(self.free_inputs)
         for c in self.components:
             for name, r in c.automaton.input_ranges().items():
-                if name in self.free_inputs:
+                if name in free:
                     found.setdefault(name, r)
-        return found
+        return MappingProxyType(found)
+
+    def input_ranges(self) -> dict[str, Range]:
+        """The declared range of every bounded free input (see :meth:`Automaton.input_ranges`)."""
+        return dict(self._input_ranges)
 
     def initial_set(self) -> dict[str, Range]:
         """The initial set of every state variable, in state order (see :meth:`Automaton.initial_set`)."""

@@ -34,8 +34,8 @@ def component_facts(system: System, index: int) -> AutomatonFacts:
     automaton = system.components[index].automaton
     if system.single:
         return AutomatonFacts(automaton)
-    ranges = system.input_ranges()
-    states = {s.name: s for c in system.components for s in c.automaton.states}
+    ranges = system._input_ranges
+    states = system.state_vars
     inputs: dict[str, Interval] = {}
     volatile: set[str] = set()
     for name in automaton.inputs:

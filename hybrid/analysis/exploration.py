@@ -200,6 +200,8 @@ def explore_reference(
         head += 1
         if progress is not None and head % 4096 == 0:
             progress(len(order), len(order) - head)
+    if not tables.initials_complete:  # more initial modes than explored from
+        result.complete = False
     result.states = len(order)
     result.seconds = time.perf_counter() - start
     result._parent = parents.__getitem__

@@ -183,6 +183,8 @@ def explore(
                 ids = offsets[-1] + lo + np.arange(part.shape[0], dtype=np.int64)
                 _record_reach(result, digits_of(part), ids)
 
+    if not tables.initials_complete:  # more initial modes than explored from
+        result.complete = False
     result.states = count
 
     def locate(index: int) -> tuple[int, int]:

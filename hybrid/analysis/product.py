@@ -28,9 +28,12 @@ from hybrid.analysis.components import component_facts
 from hybrid.analysis.static import AutomatonFacts
 from hybrid.compose import System
 
-__all__ = ["Mode", "ProductTables", "Transition"]
+__all__ = ["MAX_INITIAL_MODES", "Mode", "ProductTables", "Transition"]
 
 Mode = tuple[int, ...]
+
+MAX_INITIAL_MODES = 1_000_000
+"""Most initial modes explored from (each component in one of its initial locations)."""
 
 
 @dataclass(frozen=True)
@@ -113,12 +116,16 @@ class ProductTables:
         self.initial: Mode = tuple(
             comp.index[self.base[g]] for comp, g in zip(self.components, self.members, strict=True)
         )
-        starts = (
-            tuple(comp.index[m[g]] for comp, g in zip(self.components, self.members, strict=True))
-            for m in self.system.initial_modes
-        )
+        choices = [
+            [comp.index[n] for n in self.system.components[g].automaton.initial_locations]
+            for comp, g in zip(self.components, self.members, strict=True)
+        ]
+        starts = itertools.islice(itertools.product(*choices), MAX_INITIAL_MODES + 1)
         self.initials: list[Mode] = list(dict.fromkeys([self.initial, *starts]))
-        """Every initial mode (each component in one of its initial locations), ``initial`` first."""
+        """The initial modes (each component in one of its initial locations), ``initial``
+        first; at most :data:`MAX_INITIAL_MODES` (``initials_complete`` says if all)."""
+        self.initials_complete = len(self.initials) <= MAX_INITIAL_MODES
+        del self.initials[MAX_INITIAL_MODES:]
         self._stuck: dict[tuple[int, int, int], bool] = {}
         self._conflict: dict[tuple[int, int, int], bool] = {}
 
