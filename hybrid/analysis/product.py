@@ -32,7 +32,7 @@ __all__ = ["MAX_INITIAL_MODES", "Mode", "ProductTables", "Transition"]
 
 Mode = tuple[int, ...]
 
-MAX_INITIAL_MODES = 1_000_000
+MAX_INITIAL_MODES = 100_000
 """Most initial modes explored from (each component in one of its initial locations)."""
 
 

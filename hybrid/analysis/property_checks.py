@@ -19,6 +19,7 @@ import math
 from hybrid.analysis.context import Analysis, path_text
 from hybrid.analysis.findings import Finding
 from hybrid.analysis.forbidden import forbidden_states
+from hybrid.analysis.product import MAX_INITIAL_MODES
 from hybrid.analysis.static import AutomatonFacts
 
 __all__ = ["assumptions", "blocked_entries", "incomplete_analysis", "property_violations"]
@@ -172,15 +173,25 @@ def incomplete_analysis(analysis: Analysis) -> list[Finding]:
     exploration = analysis.exploration
     if exploration.complete:
         return []
+    if not all(tables.initials_complete for _, tables, _ in exploration.parts):
+        text = (
+            f"a group of interacting components has more than {MAX_INITIAL_MODES:,} initial modes "
+            "(each component in one of its initial locations): the exploration started from "
+            f"the first {MAX_INITIAL_MODES:,}; "
+        )
+    else:
+        text = (
+            f"exploration of the product stopped at its bound of {exploration.bound:,} modes "
+            f"(in a group of {exploration.largest_group} interacting component(s); the bound "
+            "keeps the explorer's memory under control); "
+        )
     return [
         Finding.at(
             "analysis-incomplete",
             analysis.system.position,
-            f"exploration of the product stopped at its bound of {exploration.bound:,} modes "
-            f"(in a group of {exploration.largest_group} interacting component(s); the bound "
-            "keeps the explorer's memory under control); unreachable-location, "
-            "never-synchronising edges and reachable properties are not reported, and "
-            "deadlock_free and deterministic hold only for the modes explored",
+            text + "unreachable-location, never-synchronising edges and reachable properties "
+            "are not reported, and deadlock_free and deterministic hold only for the modes "
+            "explored",
             where=analysis.system.name,
         )
     ]

@@ -256,3 +256,18 @@ def test_graphs_mark_every_initial_location_and_the_urgent_ones(tmp_path: Path) 
         "one.b|two.b",
     }
     assert product.nodes["one.a|two.b"]["urgent"] and not product.nodes["one.a|two.a"]["urgent"]
+
+
+def test_more_initial_modes_than_the_cap_make_an_incomplete_exploration() -> None:
+    from hybrid.analysis.product import MAX_INITIAL_MODES
+
+    comp = (
+        "automaton: c{i}\nlabels: [go]\nlocations: {{a: {{}}, b: {{}}}}\n"
+        "initial: {{location: [a, b]}}\nedges: [{{from: a, to: b, label: go}}]\n"
+    )
+    # 17 components sharing a label, each starting in a or b: 2**17 initial modes
+    parts = [hybrid.load_text(comp.format(i=i)) for i in range(17)]
+    assert MAX_INITIAL_MODES < 2**17
+    (note,) = check(hybrid.compose(*parts)).findings
+    assert note.rule == "analysis-incomplete" and note.severity == "note"
+    assert f"more than {MAX_INITIAL_MODES:,} initial modes" in note.message
