@@ -16,6 +16,8 @@ Examples
 
 from __future__ import annotations
 
+import math
+
 from hybrid.analysis.static import AutomatonFacts
 from hybrid.compose import System
 from hybrid.expr.interval import Interval
@@ -43,6 +45,7 @@ def component_facts(system: System, index: int) -> AutomatonFacts:
             inputs[name] = Interval(ranges[name].lo, ranges[name].hi)
         elif name in system.providers:
             volatile.add(name)
-            if name in states:
-                inputs[name] = Interval(states[name].lower, states[name].upper)
+            s = states.get(name)
+            if s is not None and (math.isfinite(s.lower) or math.isfinite(s.upper)):
+                inputs[name] = Interval(s.lower, s.upper)
     return AutomatonFacts(automaton, inputs, frozenset(volatile))
