@@ -128,11 +128,11 @@ def simulate(
     initial = _numbers("initial value of", initial)
     _check_inputs(inputs)
     model = model.with_parameters(parameters) if parameters else model
+    if isinstance(model, System) and initial_location:
+        raise UsageError("initial_location applies to an automaton; set it per component")
+    start = describe_start(model, inputs, initial, initial_location, t_start)
     if isinstance(model, Automaton) and (initial or initial_location):
         model = model.with_initial(initial_location, initial)
-    elif isinstance(model, System) and initial_location:
-        raise UsageError("initial_location applies to an automaton; set it per component")
-    start = describe_start(model, inputs, initial, initial_location)
     compiled = _compiled(model, inputs)
     x0 = np.array(_initial_vector(model, compiled, initial), dtype=float)
     tracker = None

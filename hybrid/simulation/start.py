@@ -72,12 +72,15 @@ def describe_start(
     inputs: Mapping[str, Callable[[float], float]] | None,
     initial: Mapping[str, float] | None,
     initial_location: str | None,
+    t_start: float = 0.0,
 ) -> dict[str, Any]:
     """Where a run of ``model`` starts and why: ``{location, state, inputs, notes}``.
 
     ``initial`` and ``initial_location`` are the caller's overrides (a value
-    given is not a choice to report); ``inputs`` the inputs given.
+    given is not a choice to report, but one outside the spec's set is: the
+    claims of ``hybrid check`` do not cover it); ``inputs`` the inputs given.
     """
+    original = model
     if isinstance(model, Automaton) and (initial or initial_location):
         model = model.with_initial(initial_location, initial)
     system = as_system(model)
@@ -90,11 +93,16 @@ def describe_start(
                 f"{who}starts in '{a.initial_location}', the first of its initial locations "
                 f"{', '.join(a.initial_locations)}"
             )
-    sets = system.initial_set()
+    sets = as_system(original).initial_set()
     state: dict[str, float] = {}
     for name, value in zip(system.state_names, system.initial_vector(), strict=True):
         if initial and name in initial:
             state[name] = float(initial[name])
+            if not sets[name].contains(state[name]):
+                notes.append(
+                    f"{name} starts at {state[name]:g}, outside its initial set "
+                    f"{sets[name].text()} (the claims of hybrid check do not cover this run)"
+                )
             continue
         state[name] = value
         r = sets[name]
@@ -103,6 +111,15 @@ def describe_start(
     held: dict[str, float] = {}
     for name, r in system.input_ranges().items():
         if inputs and name in inputs:
+            try:
+                first = float(inputs[name](t_start))
+            except Exception:  # the run itself reports an input that fails
+                continue
+            if not r.contains(first):
+                notes.append(
+                    f"input {name} starts at {first:g}, outside its range {r.text()} (the "
+                    "claims of hybrid check do not cover this run)"
+                )
             continue
         held[name] = r.nominal
         notes.append(

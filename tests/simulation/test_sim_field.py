@@ -56,10 +56,10 @@ def test_a_nominal_point_is_where_the_run_starts() -> None:
 
 def test_an_override_is_a_point_and_no_choice_to_report() -> None:
     m = hybrid.load_text(RAMP.replace("NOMINAL", ""))
-    run = hybrid.simulate(m, t_end=5.0, initial={"x": 2.75}, **TOL)
-    assert run.jumps[0].t == pytest.approx(0.25, abs=1e-12)
+    run = hybrid.simulate(m, t_end=5.0, initial={"x": 1.75}, **TOL)
+    assert run.jumps[0].t == pytest.approx(1.25, abs=1e-12)
     assert run.settings["start"]["notes"] == []
-    assert m.with_initial(state={"x": 2.75}).initial_set()["x"].is_point
+    assert m.with_initial(state={"x": 1.75}).initial_set()["x"].is_point
 
 
 def test_initial_sets_in_initial_state_and_in_a_component() -> None:
@@ -245,3 +245,16 @@ def test_the_command_line_drives_a_free_input_of_a_system(tmp_path: Path) -> Non
     assert "t_end at t=10 j=2" in done.stdout and "note" not in done.stderr
     wrong = run_cli("simulate", tmp_path / "two.yaml", "--t-end", "10", "--input", "x=1")
     assert wrong.returncode == 2 and "'x' is not a free input of two (inputs: u)" in wrong.stderr
+
+
+def test_a_start_outside_the_sets_is_said_to_be_outside_the_claims() -> None:
+    m = hybrid.load_text(INPUT.replace("NOMINAL", "").replace("initial: 0", "initial: [0, 1]"))
+    run = hybrid.simulate(m, t_end=1.0, initial={"x": 5.0}, inputs={"u": lambda t: 4.0})
+    assert run.settings["start"]["notes"] == [
+        "x starts at 5, outside its initial set [0, 1] (the claims of hybrid check do not "
+        "cover this run)",
+        "input u starts at 4, outside its range [1, 3] (the claims of hybrid check do not "
+        "cover this run)",
+    ]
+    inside = hybrid.simulate(m, t_end=1.0, initial={"x": 0.25}, inputs={"u": lambda t: 2.5})
+    assert inside.settings["start"]["notes"] == []
