@@ -271,3 +271,32 @@ def test_more_initial_modes_than_the_cap_make_an_incomplete_exploration() -> Non
     (note,) = check(hybrid.compose(*parts)).findings
     assert note.rule == "analysis-incomplete" and note.severity == "note"
     assert f"more than {MAX_INITIAL_MODES:,} initial modes" in note.message
+
+
+def test_a_cycle_through_urgent_locations_takes_no_time() -> None:
+    m = hybrid.load_text(
+        """
+automaton: ping
+state: {x: {initial: 0, bounds: [0, 10]}}
+locations:
+  wait: {flow: {x: 1}, invariant: x <= 1}
+  ping: {urgent: true}
+  pong: {urgent: true}
+edges:
+  - {name: go, from: wait, to: ping, guard: x >= 1}
+  - {name: there, from: ping, to: pong}
+  - {name: back, from: pong, to: ping, guard: x >= 0.5}
+"""
+    )
+    (cycle,) = check(m).by_rule("zero-time-cycle")
+    assert cycle.where == "there" and [t for t, _ in cycle.witness[1:]] == ["there", "back"]
+    run = hybrid.simulate(m, t_end=5.0, max_jumps_per_instant=50)
+    assert run.termination.cause == "zeno" and run.termination.zeno_time == pytest.approx(1.0)
+    calm = hybrid.load_text(
+        "automaton: ping\nstate: {x: {initial: 0, bounds: [0, 10]}}\nlocations:\n"
+        "  wait: {flow: {x: 1}, invariant: x <= 1}\n  ping: {urgent: true}\n"
+        "edges:\n  - {name: go, from: wait, to: ping, guard: x >= 1}\n"
+        "  - {name: reset, from: ping, to: wait, reset: {x: 0}}\n"
+    )
+    assert not check(calm).findings  # the reset lets time pass again before `go`
+    assert len(hybrid.simulate(calm, t_end=3.5).jumps) == 6  # at t = 1, 1, 2, 2, 3, 3
