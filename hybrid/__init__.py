@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 from hybrid.compose import System, compose
 from hybrid.errors import HybridError, Position, SimulationError, SpecError, UsageError
 from hybrid.lazy import lazy_attributes
-from hybrid.model import Automaton
+from hybrid.model import Automaton, Range
 from hybrid.reader.loader import load, load_text
 from hybrid.version import __version__
 
@@ -36,6 +36,7 @@ __all__ = [
     "HybridError",
     "Jump",
     "Position",
+    "Range",
     "Report",
     "Run",
     "SimulationError",

@@ -21,11 +21,12 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 from types import MappingProxyType
 
+from hybrid.binding import input_problems
 from hybrid.errors import Position, SpecError, did_you_mean
 from hybrid.expr import ir
 from hybrid.expr.dependencies import find_dependency_cycle
 from hybrid.expr.functions import Function
-from hybrid.model import Automaton, Properties, StateVar
+from hybrid.model import Automaton, Properties, Range, StateVar
 
 __all__ = [
     "Component",
@@ -118,8 +119,46 @@ class System:
 
     @cached_property
     def initial_mode(self) -> tuple[str, ...]:
-        """The initial location of each component."""
+        """The initial location of each component (where a run starts)."""
         return tuple(c.automaton.initial_location for c in self.components)
+
+    @cached_property
+    def providers(self) -> Mapping[str, int]:
+        """Signal and state variable names -> the index of the component that defines them."""
+        found: dict[str, int] = {}
+        for i, c in enumerate(self.components):
+            for name in (*c.automaton.signal_names, *c.automaton.state_names):
+                found.setdefault(name, i)
+        return MappingProxyType(found)
+
+    @cached_property
+    def free_inputs(self) -> tuple[str, ...]:
+        """Inputs no component provides (the system's own inputs), in order of declaration."""
+        names = (n for c in self.components for n in c.automaton.inputs)
+        return tuple(dict.fromkeys(n for n in names if n not in self.providers))
+
+    @cached_property
+    def state_vars(self) -> Mapping[str, StateVar]:
+        """Every state variable by name."""
+        return MappingProxyType({s.name: s for s in self.states})
+
+    @cached_property
+    def _input_ranges(self) -> Mapping[str, Range]:
+        found: dict[str, Range] = {}
+        free = set(self.free_inputs)
+        for c in self.components:
+            for name, r in c.automaton.input_ranges().items():
+                if name in free:
+                    found.setdefault(name, r)
+        return MappingProxyType(found)
+
+    def input_ranges(self) -> dict[str, Range]:
+        """The declared range of every bounded free input (see :meth:`Automaton.input_ranges`)."""
+        return dict(self._input_ranges)
+
+    def initial_set(self) -> dict[str, Range]:
+        """The initial set of every state variable, in state order (see :meth:`Automaton.initial_set`)."""
+        return {k: r for c in self.components for k, r in c.automaton.initial_set().items()}
 
     def qualified(self, component: int, name: str) -> str:
         """A location, edge or parameter name as a user writes it: ``comp.name`` in a system.
@@ -284,27 +323,7 @@ def check_system(system: System) -> None:
             else:
                 owner[name] = (c.name, kind, pos)
     _check_signal_cycles(system, problems)
-    for c in system.components:
-        a = c.automaton
-        for name in a.inputs:
-            pos = a.input_positions.get(name, a.position)
-            providers = [
-                d.name for d in system.components if d is not c and name in d.automaton.signal_names
-            ]
-            if not providers:
-                problems.append(
-                    (
-                        pos,
-                        f"input '{name}' of component '{c.name}' is not a signal of any other component",
-                    )
-                )
-            elif len(providers) > 1:
-                problems.append(
-                    (
-                        pos,
-                        f"input '{name}' of component '{c.name}' is defined by several components: {', '.join(providers)}",
-                    )
-                )
+    problems.extend(input_problems([(c.name, c.automaton) for c in system.components]))
     if problems:
         raise SpecError.many(problems)
 

@@ -9,7 +9,7 @@ overriding a parameter is cheap (:meth:`Automaton.with_parameters`).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
@@ -17,7 +17,7 @@ from hybrid.errors import Position, SpecError, did_you_mean
 from hybrid.expr import ir
 from hybrid.expr.functions import Function
 
-__all__ = ["Automaton", "Edge", "Location", "Properties", "StateVar"]
+__all__ = ["Automaton", "Edge", "Forbidden", "Location", "Properties", "Range", "StateVar"]
 
 
 def _frozen(mapping: Mapping[str, object] | None = None) -> Mapping[str, object]:
@@ -25,8 +25,57 @@ def _frozen(mapping: Mapping[str, object] | None = None) -> Mapping[str, object]
 
 
 @dataclass(frozen=True)
+class Range:
+    """A closed interval ``[lo, hi]`` and the point of it one run uses (``nominal``).
+
+    An initial set of a state variable, or the range of a free input. ``given``
+    says whether the spec wrote the nominal point (else it is the midpoint).
+
+    Examples
+    --------
+    >>> r = Range.of(0.0, 2.0)
+    >>> r.nominal, r.given, r.is_point, r.contains(2.0)
+    (1.0, False, False, True)
+    >>> Range.point(3.0)
+    Range(lo=3.0, hi=3.0, nominal=3.0, given=True)
+    """
+
+    lo: float
+    hi: float
+    nominal: float
+    given: bool = False
+
+    @classmethod
+    def of(cls, lo: float, hi: float, nominal: float | None = None) -> Range:
+        """``[lo, hi]`` with ``nominal`` (default: the midpoint)."""
+        if nominal is None:
+            return cls(float(lo), float(hi), float(lo) + (float(hi) - float(lo)) / 2, False)
+        return cls(float(lo), float(hi), float(nominal), True)
+
+    @classmethod
+    def point(cls, value: float) -> Range:
+        """The one-point range ``[value, value]``."""
+        return cls(float(value), float(value), float(value), True)
+
+    @property
+    def is_point(self) -> bool:
+        return self.lo == self.hi
+
+    def contains(self, value: float) -> bool:
+        return self.lo <= value <= self.hi
+
+    def text(self) -> str:
+        """``[lo, hi]`` as a message writes it."""
+        return f"[{self.lo:g}, {self.hi:g}]"
+
+
+@dataclass(frozen=True)
 class StateVar:
-    """A continuous state variable with its initial value and declared bounds."""
+    """A continuous state variable with its initial value and declared bounds.
+
+    ``initial`` is where a run starts; ``initial_range`` the initial set it is a
+    point of (``None``: the single value ``initial``).
+    """
 
     name: str
     initial: float
@@ -34,6 +83,7 @@ class StateVar:
     upper: float = math.inf
     unit: str | None = None
     position: Position = field(default_factory=lambda: Position("<spec>"))
+    initial_range: Range | None = None
 
 
 @dataclass(frozen=True)
@@ -48,6 +98,8 @@ class Location:
     invariant_source: str = "true"
     position: Position = field(default_factory=lambda: Position("<spec>"))
     invariant_position: Position = field(default_factory=lambda: Position("<spec>"))
+    urgent: bool = False
+    """No time may pass here: an edge must fire at once on entry, else the run is blocked."""
 
 
 @dataclass(frozen=True)
@@ -68,6 +120,28 @@ class Edge:
 
 
 @dataclass(frozen=True)
+class Forbidden:
+    """A forbidden set of states: locations (per component) and a condition on the state.
+
+    ``locations`` maps a component name to its location (``""`` stands for the
+    automaton itself); components not named may be anywhere. ``when`` is the
+    condition (``None``: any state there).
+    """
+
+    locations: Mapping[str, str]
+    when: ir.Expr | None = None
+    when_source: str = ""
+    position: Position = field(default_factory=lambda: Position("<spec>"))
+
+    def text(self) -> str:
+        """The entry as a message names it: ``plant.overflow, ctrl.idle with x >= 5``."""
+        where = ", ".join(f"{c}.{loc}" if c else loc for c, loc in self.locations.items())
+        if self.when is None:
+            return where or "any state"
+        return f"{where} with {self.when_source}" if where else self.when_source
+
+
+@dataclass(frozen=True)
 class Properties:
     """What `hybrid check` must prove about the automaton or system."""
 
@@ -78,6 +152,8 @@ class Properties:
     positions: Mapping[str, Position] = field(default_factory=dict)
     ignore: tuple[str, ...] = ()
     """Rules `hybrid check` does not report for this file (its ``checks: {ignore: [...]}``)."""
+    forbidden: tuple[Forbidden, ...] = ()
+    """States no run may reach (`properties.forbidden`)."""
 
 
 @dataclass(frozen=True)
@@ -112,7 +188,9 @@ class Automaton:
     locations: Mapping[str, Location]
     edges: tuple[Edge, ...]
     initial_location: str
+    """Where a run starts (the first of :attr:`initial_locations`)."""
     initial_state: Mapping[str, float]
+    """Start values that override the variables' own (``initial.state``)."""
     properties: Properties = field(default_factory=Properties)
     functions: Mapping[str, Function] = field(default_factory=dict)
     description: str = ""
@@ -122,6 +200,17 @@ class Automaton:
     signal_positions: Mapping[str, Position] = field(default_factory=dict)
     input_positions: Mapping[str, Position] = field(default_factory=dict)
     label_positions: Mapping[str, Position] = field(default_factory=dict)
+    initial_locations: tuple[str, ...] = ()
+    """Every initial location, :attr:`initial_location` first (filled in when left empty)."""
+    initial_ranges: Mapping[str, Range] = field(default_factory=dict)
+    """Initial sets that override the variables' own (``initial.state: {x: [lo, hi]}``)."""
+    ranges: Mapping[str, Range] = field(default_factory=dict)
+    """The declared range of each bounded input (``inputs: {u: {range: [lo, hi]}}``)."""
+
+    def __post_init__(self) -> None:
+        if not self.initial_locations or self.initial_locations[0] != self.initial_location:
+            rest = tuple(n for n in self.initial_locations if n != self.initial_location)
+            object.__setattr__(self, "initial_locations", (self.initial_location, *rest))
 
     @property
     def state_names(self) -> tuple[str, ...]:
@@ -132,8 +221,53 @@ class Automaton:
         return tuple(e for e in self.edges if e.source == location)
 
     def initial_vector(self) -> list[float]:
-        """The initial state, in state order."""
+        """The initial state where a run starts (nominal points of sets), in state order."""
         return [float(self.initial_state.get(s.name, s.initial)) for s in self.states]
+
+    def initial_set(self) -> dict[str, Range]:
+        """The initial set: a :class:`Range` per state variable, in state order.
+
+        A variable with a single initial value has a one-point range. ``nominal``
+        is where :func:`hybrid.simulate` starts.
+
+        Examples
+        --------
+        >>> import hybrid
+        >>> m = hybrid.load_text('''
+        ... automaton: a
+        ... state: {x: {initial: [0, 2]}, y: {initial: 1}}
+        ... locations: {l: {}}
+        ... ''')
+        >>> {k: (r.lo, r.hi, r.nominal) for k, r in m.initial_set().items()}
+        {'x': (0.0, 2.0, 1.0), 'y': (1.0, 1.0, 1.0)}
+        """
+        result: dict[str, Range] = {}
+        for s in self.states:
+            if s.name in self.initial_ranges:
+                result[s.name] = self.initial_ranges[s.name]
+            elif s.name in self.initial_state:
+                result[s.name] = Range.point(self.initial_state[s.name])
+            elif s.initial_range is not None:
+                result[s.name] = s.initial_range
+            else:
+                result[s.name] = Range.point(s.initial)
+        return result
+
+    def input_ranges(self) -> dict[str, Range]:
+        """The declared range of every bounded input, in declaration order.
+
+        Examples
+        --------
+        >>> import hybrid
+        >>> m = hybrid.load_text('''
+        ... automaton: a
+        ... inputs: {u: {range: [-1, 1]}, w: {}}
+        ... locations: {l: {}}
+        ... ''')
+        >>> m.input_ranges()
+        {'u': Range(lo=-1.0, hi=1.0, nominal=0.0, given=False)}
+        """
+        return {name: self.ranges[name] for name in self.inputs if name in self.ranges}
 
     def with_parameters(self, overrides: Mapping[str, float] | None) -> Automaton:
         """A copy with some parameters replaced; unknown names are a :class:`SpecError`."""
@@ -153,28 +287,49 @@ class Automaton:
         return replace(self, parameters=_frozen(merged))  # type: ignore[arg-type]
 
     def with_initial(
-        self, location: str | None = None, state: Mapping[str, float] | None = None
+        self,
+        location: str | Sequence[str] | None = None,
+        state: Mapping[str, float | Range] | None = None,
     ) -> Automaton:
-        """A copy starting elsewhere: another location and/or some initial values."""
+        """A copy starting elsewhere: other initial location(s) and/or initial values or sets.
+
+        A number is a single start value; a :class:`Range` an initial set (runs
+        start at its nominal point).
+        """
         result = self
         if location is not None:
-            if location not in self.locations:
-                raise SpecError(
-                    f"unknown initial location '{location}'{did_you_mean(location, self.locations, 0.5)}",
-                    self.position,
-                )
-            result = replace(result, initial_location=location)
+            chosen = (location,) if isinstance(location, str) else tuple(location)
+            for name in chosen:
+                if name not in self.locations:
+                    raise SpecError(
+                        f"unknown initial location '{name}'"
+                        f"{did_you_mean(name, self.locations, 0.5)}",
+                        self.position,
+                    )
+            if not chosen:
+                raise SpecError("at least one initial location is needed", self.position)
+            result = replace(result, initial_location=chosen[0], initial_locations=chosen)
         if state:
             names = set(self.state_names)
-            merged = dict(result.initial_state)
+            points = dict(result.initial_state)
+            sets = dict(result.initial_ranges)
             for key, value in state.items():
                 if key not in names:
                     raise SpecError(
                         f"unknown state variable '{key}'{did_you_mean(key, names, 0.5)}",
                         self.position,
                     )
-                merged[key] = _as_float(key, value, self.position)
-            result = replace(result, initial_state=_frozen(merged))  # type: ignore[arg-type]
+                if isinstance(value, Range):
+                    points[key] = value.nominal
+                    sets[key] = value
+                else:
+                    points[key] = _as_float(key, value, self.position)
+                    sets.pop(key, None)
+            result = replace(
+                result,
+                initial_state=_frozen(points),  # type: ignore[arg-type]
+                initial_ranges=_frozen(sets),  # type: ignore[arg-type]
+            )
         return result
 
 

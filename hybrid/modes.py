@@ -60,6 +60,8 @@ class ModeView:
     """Every signal's definition in force (vector ones are calls of multi-output functions)."""
     invariants: tuple[tuple[str, ir.Expr], ...]
     transitions: tuple[TransitionView, ...]
+    urgent: tuple[str, ...] = ()
+    """The urgent locations of the mode (qualified): while there is one, no time passes."""
 
 
 class Binder:
@@ -175,13 +177,14 @@ def mode_of(system: System, key: Mode, *, binder: Binder | None = None) -> ModeV
     flow: dict[str, ir.Expr] = {}
     signals: dict[str, ir.Expr] = {}
     invariants: list[tuple[str, ir.Expr]] = []
+    urgent: list[str] = []
     for i, (c, loc_name) in enumerate(zip(system.components, key, strict=True)):
         a = c.automaton
         loc = a.locations[loc_name]
+        if loc.urgent:
+            urgent.append(system.qualified(i, loc_name))
         for name in a.signal_names:
-            signals[name] = _bound(
-                system, i, loc.signals.get(name, a.signals[name]), True, binder
-            )
+            signals[name] = _bound(system, i, loc.signals.get(name, a.signals[name]), True, binder)
         for var, expr in loc.flow.items():
             flow[var] = _bound(system, i, expr, True, binder)
         if not (isinstance(loc.invariant, ir.BoolConst) and loc.invariant.value):
@@ -195,4 +198,5 @@ def mode_of(system: System, key: Mode, *, binder: Binder | None = None) -> ModeV
         signals=MappingProxyType(signals),
         invariants=tuple(invariants),
         transitions=transitions_of(system, key, binder=binder),
+        urgent=tuple(urgent),
     )

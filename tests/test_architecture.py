@@ -22,6 +22,7 @@ LAYERS: tuple[frozenset[str], ...] = (
     frozenset({"errors", "version", "lazy", "allocation", "progress"}),
     frozenset({"expr"}),
     frozenset({"model"}),
+    frozenset({"binding"}),
     frozenset({"compose"}),
     frozenset({"modes", "reader"}),
     frozenset({"simulation", "analysis"}),

@@ -65,7 +65,9 @@ def unreachable_locations(analysis: Analysis) -> list[Finding]:
             qualified = analysis.qualified(i, name)
             if analysis.reached(i, name) or qualified in declared:
                 continue
-            initial = analysis.qualified(i, comp.automaton.initial_location)
+            initial = "', '".join(
+                analysis.qualified(i, n) for n in comp.automaton.initial_locations
+            )
             found.append(
                 Finding.at(
                     "unreachable-location",
@@ -96,6 +98,22 @@ def sink_locations(analysis: Analysis) -> list[Finding]:
             if any(f.live for f in facts.outgoing(name)):
                 continue
             qualified = analysis.qualified(i, name)
+            if loc.urgent:
+                found.append(
+                    Finding.at(
+                        "sink-location",
+                        loc.position,
+                        f"urgent location '{qualified}' is a sink: no time may pass there and "
+                        + (
+                            "none of its edges can ever fire"
+                            if facts.outgoing(name)
+                            else "it has no edge out"
+                        )
+                        + f"; a run that gets there ends blocked at once ({assumptions(facts)})",
+                        where=qualified,
+                    )
+                )
+                continue
             if not facts.outgoing(name):
                 found.append(
                     Finding.at(

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import networkx as nx
 
+from hybrid.analysis.components import component_facts
 from hybrid.analysis.explore import DEFAULT_MAX_BYTES, DEFAULT_MAX_STATES, Progress
 from hybrid.analysis.findings import WitnessStep
 from hybrid.analysis.graph import location_graph
@@ -102,7 +103,7 @@ def analyse(
         Called as ``progress(modes, frontier)`` while exploring (for a progress display).
     """
     system = as_system(model)
-    facts = [AutomatonFacts(c.automaton) for c in system.components]
+    facts = [component_facts(system, i) for i in range(len(system.components))]
     graphs = [location_graph(c.automaton, f) for c, f in zip(system.components, facts, strict=True)]
     tables = ProductTables(system, facts)
     exploration = explore_system(tables, max_states, max_bytes=max_bytes, progress=progress)

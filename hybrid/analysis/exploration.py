@@ -23,6 +23,7 @@ __all__ = [
     "Exploration",
     "Progress",
     "explore_reference",
+    "first_in_levels",
     "state_bound",
     "words",
 ]
@@ -82,18 +83,36 @@ class Exploration:
     """The most modes this exploration could keep (``max_states`` or the memory bound)."""
     _parent: Callable[[int], int | None] | None = None
     _mode: Callable[[int], Mode] | None = None
+    _matching: Callable[[dict[int, int]], int | None] | None = None
 
     def mode(self, index: int) -> Mode:
-        """The mode visited ``index``-th (0 is the initial mode)."""
+        """The mode visited ``index``-th (the initial modes come first)."""
         assert self._mode is not None
         return self._mode(index)
+
+    def origin(self, index: int) -> Mode:
+        """The initial mode a shortest path to the ``index``-th mode starts from."""
+        while self._parent is not None and (parent := self._parent(index)) is not None:
+            index = parent
+        return self.mode(index)
+
+    def first_matching(self, wanted: dict[int, int]) -> int | None:
+        """The first mode visited (breadth-first: nearest) with component ``i`` in
+        location ``wanted[i]`` for each ``i``; ``None`` if none was."""
+        if self._matching is not None:
+            return self._matching(wanted)
+        for k, mode in enumerate(self.modes()):
+            if all(mode[i] == loc for i, loc in wanted.items()):
+                return k
+        return None
 
     def modes(self) -> Iterator[Mode]:
         """The modes visited, in breadth-first order."""
         return (self.mode(k) for k in range(self.states))
 
     def path_to(self, index: int) -> list[tuple[Transition, Mode]]:
-        """A shortest path of transitions from the initial mode to the ``index``-th mode."""
+        """A shortest path of transitions from an initial mode (:meth:`origin`) to the
+        ``index``-th mode."""
         if self._parent is None:
             return []
         chain = [index]
@@ -113,6 +132,23 @@ class Exploration:
         return steps
 
 
+def first_in_levels(
+    levels: list[tuple[np.ndarray, np.ndarray]],
+    offsets: list[int],
+    digits_of: Callable[[np.ndarray], np.ndarray],
+    wanted: dict[int, int],
+) -> int | None:
+    """The index of the first mode of ``levels`` (code rows) with ``wanted`` locations."""
+    for level, (rows, _) in enumerate(levels):
+        digits = digits_of(rows)
+        hit = np.ones(rows.shape[0], dtype=bool)
+        for i, loc in wanted.items():
+            hit &= digits[:, i] == loc
+        if hit.any():
+            return offsets[level] + int(np.argmax(hit))
+    return None
+
+
 def explore_reference(
     tables: ProductTables,
     max_states: int = DEFAULT_MAX_STATES,
@@ -123,9 +159,9 @@ def explore_reference(
     start = time.perf_counter()
     result = Exploration(tables, bound=max_states)
     result.reached = [np.zeros(n, dtype=bool) for n in tables.radices]
-    index: dict[Mode, int] = {tables.initial: 0}
-    order: list[Mode] = [tables.initial]
-    parents: list[int | None] = [None]
+    index: dict[Mode, int] = {m: k for k, m in enumerate(tables.initials)}
+    order: list[Mode] = list(tables.initials)
+    parents: list[int | None] = [None] * len(order)
     head = 0
     while head < len(order):
         mode = order[head]
@@ -164,6 +200,8 @@ def explore_reference(
         head += 1
         if progress is not None and head % 4096 == 0:
             progress(len(order), len(order) - head)
+    if not tables.initials_complete:  # more initial modes than explored from
+        result.complete = False
     result.states = len(order)
     result.seconds = time.perf_counter() - start
     result._parent = parents.__getitem__

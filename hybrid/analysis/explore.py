@@ -18,6 +18,9 @@ for every mode. A mode is named by its index in breadth-first order.
 :func:`explore_reference` is a plain-Python BFS with the same results, kept
 as a cross-check.
 
+Exploration starts from every initial mode at once (level 0), so each mode
+is reached by a shortest path from one of them.
+
 The explorer is bounded: it stops (``complete`` false) after ``max_states``
 modes, or earlier when the modes it keeps would take more than ``max_bytes``
 of memory (:func:`state_bound`), so a product too large to explore ends
@@ -57,6 +60,7 @@ from hybrid.analysis.exploration import (
     Exploration,
     Progress,
     explore_reference,
+    first_in_levels,
     state_bound,
     words,
 )
@@ -116,14 +120,17 @@ def explore(
         return (rows[:, col] // weight) % radices
 
     visited = _Visited(width, tables.size)
-    init = np.zeros((1, width), dtype=np.int64)
-    for i, loc in enumerate(tables.initial):
-        init[0, col[i]] += loc * weight[i]
-    levels: list[tuple[np.ndarray, np.ndarray]] = [(init, np.array([-1], dtype=np.int64))]
+    init = np.zeros((len(tables.initials), width), dtype=np.int64)
+    for k, start_mode in enumerate(tables.initials):
+        for i, loc in enumerate(start_mode):
+            init[k, col[i]] += loc * weight[i]
+    levels: list[tuple[np.ndarray, np.ndarray]] = [
+        (init, np.full(init.shape[0], -1, dtype=np.int64))
+    ]
     offsets = [0]
     visited.add(init)
     frontier = init
-    count = 1
+    count = init.shape[0]
 
     while frontier.size and result.complete:
         base = offsets[-1]
@@ -176,6 +183,8 @@ def explore(
                 ids = offsets[-1] + lo + np.arange(part.shape[0], dtype=np.int64)
                 _record_reach(result, digits_of(part), ids)
 
+    if not tables.initials_complete:  # more initial modes than explored from
+        result.complete = False
     result.states = count
 
     def locate(index: int) -> tuple[int, int]:
@@ -194,6 +203,7 @@ def explore(
 
     result._parent = parent
     result._mode = mode
+    result._matching = lambda wanted: first_in_levels(levels, offsets, digits_of, wanted)
     result.seconds = time.perf_counter() - start
     return result
 

@@ -240,8 +240,9 @@ def enabled_region(
         for atom in term:
             op = atom.ops[0]
             lhs, rhs = atom.operands
-            if op == "==":
-                break  # |a - b| never falls below 0: only the level itself
+            if op == "==":  # |a - b| never falls below 0: only on the level itself,
+                entering.append(atom)  # where the simulator snaps it true (the rest by slope)
+                continue
             small, large = (lhs, rhs) if op in ("<", "<=") else (rhs, lhs)
             inside = ir.Cmp(("<",), (small, large), atom.col)
             rate = _folded(derivative(_sub(small, large), flow, signals, opaque))

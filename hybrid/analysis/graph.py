@@ -41,14 +41,18 @@ def location_graph(automaton: Automaton, facts: AutomatonFacts | None = None) ->
     """
     facts = facts or AutomatonFacts(automaton)
     graph = nx.MultiDiGraph(
-        name=automaton.name, initial=automaton.initial_location, file=automaton.file
+        name=automaton.name,
+        initial=automaton.initial_location,
+        initials=automaton.initial_locations,
+        file=automaton.file,
     )
     for name, loc in automaton.locations.items():
         graph.add_node(
             name,
             invariant=loc.invariant_source,
             position=loc.position,
-            initial=name == automaton.initial_location,
+            initial=name in automaton.initial_locations,
+            urgent=loc.urgent,
         )
     for edge, ef in zip(automaton.edges, facts.edges, strict=True):
         graph.add_edge(
@@ -65,7 +69,9 @@ def location_graph(automaton: Automaton, facts: AutomatonFacts | None = None) ->
             live=ef.live,
         )
     live = live_subgraph(graph)
-    reachable = nx.descendants(live, automaton.initial_location) | {automaton.initial_location}
+    reachable = set(automaton.initial_locations).union(
+        *(nx.descendants(live, start) for start in automaton.initial_locations)
+    )
     nx.set_node_attributes(graph, {n: n in reachable for n in graph.nodes}, "reachable")
     return graph
 
@@ -88,7 +94,11 @@ def product_graph(tables: ProductTables, max_states: int = 10_000) -> nx.MultiDi
     graph = nx.MultiDiGraph(name=tables.system.name, complete=exploration.complete)
     modes = list(exploration.modes())
     for mode in modes:
-        graph.add_node(tables.name(mode), initial=mode == tables.initial)
+        urgent = any(
+            c.facts.automaton.locations[c.locations[k]].urgent
+            for c, k in zip(tables.components, mode, strict=True)
+        )
+        graph.add_node(tables.name(mode), initial=mode in tables.initials, urgent=urgent)
     for mode in modes:
         src = tables.name(mode)
         for tr in tables.successors(mode):

@@ -24,12 +24,16 @@ import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from hybrid.analysis.components import component_facts
 from hybrid.analysis.static import AutomatonFacts
 from hybrid.compose import System
 
-__all__ = ["Mode", "ProductTables", "Transition"]
+__all__ = ["MAX_INITIAL_MODES", "Mode", "ProductTables", "Transition"]
 
 Mode = tuple[int, ...]
+
+MAX_INITIAL_MODES = 100_000
+"""Most initial modes explored from (each component in one of its initial locations)."""
 
 
 @dataclass(frozen=True)
@@ -73,7 +77,7 @@ class ProductTables:
         facts = (
             list(facts)
             if facts is not None
-            else [AutomatonFacts(c.automaton) for c in system.components]
+            else [component_facts(system, i) for i in range(len(system.components))]
         )
         self.owners = system.shared_labels
         self.components: list[_Component] = []
@@ -112,6 +116,16 @@ class ProductTables:
         self.initial: Mode = tuple(
             comp.index[self.base[g]] for comp, g in zip(self.components, self.members, strict=True)
         )
+        choices = [
+            [comp.index[n] for n in self.system.components[g].automaton.initial_locations]
+            for comp, g in zip(self.components, self.members, strict=True)
+        ]
+        starts = itertools.islice(itertools.product(*choices), MAX_INITIAL_MODES + 1)
+        self.initials: list[Mode] = list(dict.fromkeys([self.initial, *starts]))
+        """The initial modes (each component in one of its initial locations), ``initial``
+        first; at most :data:`MAX_INITIAL_MODES` (``initials_complete`` says if all)."""
+        self.initials_complete = len(self.initials) <= MAX_INITIAL_MODES
+        del self.initials[MAX_INITIAL_MODES:]
         self._stuck: dict[tuple[int, int, int], bool] = {}
         self._conflict: dict[tuple[int, int, int], bool] = {}
 

@@ -18,24 +18,44 @@ import math
 
 from hybrid.analysis.context import Analysis, path_text
 from hybrid.analysis.findings import Finding
+from hybrid.analysis.forbidden import forbidden_states
+from hybrid.analysis.product import MAX_INITIAL_MODES
 from hybrid.analysis.static import AutomatonFacts
 
 __all__ = ["assumptions", "blocked_entries", "incomplete_analysis", "property_violations"]
 
 
 def assumptions(facts: AutomatonFacts) -> str:
-    """What a "never" finding of this automaton assumes: its declared bounds, unknown inputs."""
+    """What a "never" finding of this automaton assumes: its declared bounds, its inputs."""
+    states = set(facts.automaton.state_names)
     bounded = [
         f"{name} in [{_number(b.lo)}, {_number(b.hi)}]"
         for name, b in facts.bounds.items()
-        if math.isfinite(b.lo) or math.isfinite(b.hi)
+        if name in states and (math.isfinite(b.lo) or math.isfinite(b.hi))
     ]
     text = "proved for every run"
     if bounded:
         shown = ", ".join(bounded[:4]) + (", ..." if len(bounded) > 4 else "")
         text += f" that stays within the declared bounds ({shown})"
-    if facts.automaton.inputs:
+    inputs = facts.automaton.inputs
+    ranged = [
+        f"{n} in [{_number(facts.inputs[n].lo)}, {_number(facts.inputs[n].hi)}]"
+        for n in inputs
+        if n in facts.inputs
+    ]
+    if ranged:
+        shown = ", ".join(ranged[:4]) + (", ..." if len(ranged) > 4 else "")
+        text += f", with inputs within their ranges ({shown})"
+        if len(ranged) < len(inputs):
+            text += " and the other inputs anything"
+    elif inputs:
         text += ", whatever the inputs"
+    sets = [
+        f"{n} in {r.text()}" for n, r in facts.automaton.initial_set().items() if not r.is_point
+    ]
+    if sets:
+        shown = ", ".join(sets[:4]) + (", ..." if len(sets) > 4 else "")
+        text += f", from every point of the initial set ({shown})"
     return text
 
 
@@ -59,7 +79,8 @@ def blocked_entries(analysis: Analysis, component: int, location: str) -> str:
 
 
 def property_violations(analysis: Analysis) -> list[Finding]:
-    """The declared properties refuted, each with a witness path where there is one."""
+    """The declared properties refuted, each with a witness path where there is one
+    (forbidden states: :func:`hybrid.analysis.forbidden.forbidden_states`)."""
     props = analysis.system.properties
     exploration = analysis.exploration
     tables = analysis.tables
@@ -143,6 +164,7 @@ def property_violations(analysis: Analysis) -> list[Finding]:
                 witness=witness,
             )
         )
+    found.extend(forbidden_states(analysis))
     return found
 
 
@@ -151,15 +173,25 @@ def incomplete_analysis(analysis: Analysis) -> list[Finding]:
     exploration = analysis.exploration
     if exploration.complete:
         return []
+    if not all(tables.initials_complete for _, tables, _ in exploration.parts):
+        text = (
+            f"a group of interacting components has more than {MAX_INITIAL_MODES:,} initial modes "
+            "(each component in one of its initial locations): the exploration started from "
+            f"the first {MAX_INITIAL_MODES:,}; "
+        )
+    else:
+        text = (
+            f"exploration of the product stopped at its bound of {exploration.bound:,} modes "
+            f"(in a group of {exploration.largest_group} interacting component(s); the bound "
+            "keeps the explorer's memory under control); "
+        )
     return [
         Finding.at(
             "analysis-incomplete",
             analysis.system.position,
-            f"exploration of the product stopped at its bound of {exploration.bound:,} modes "
-            f"(in a group of {exploration.largest_group} interacting component(s); the bound "
-            "keeps the explorer's memory under control); unreachable-location, "
-            "never-synchronising edges and reachable properties are not reported, and "
-            "deadlock_free and deterministic hold only for the modes explored",
+            text + "unreachable-location, never-synchronising edges and reachable properties "
+            "are not reported, and deadlock_free and deterministic hold only for the modes "
+            "explored",
             where=analysis.system.name,
         )
     ]

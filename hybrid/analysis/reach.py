@@ -121,9 +121,9 @@ class Reachability:
         return math.prod(states) - math.prod(n - c for n, c in zip(states, counts, strict=True))
 
     def witness(self, ref: Ref) -> tuple[WitnessStep, ...]:
-        """A shortest path (inside one group) from the initial mode to ``ref``."""
+        """A shortest path (inside one group) from an initial mode to ``ref``."""
         _, tables, exploration = self.parts[ref[0]]
-        steps: list[WitnessStep] = [(None, tables.name(tables.initial))]
+        steps: list[WitnessStep] = [(None, tables.name(exploration.origin(ref[1])))]
         for transition, mode in exploration.path_to(ref[1]):
             steps.append((tables.transition_name(transition), tables.name(mode)))
         return tuple(steps)

@@ -9,7 +9,9 @@ time passing are :mod:`hybrid.analysis.zerotime`'s.
 Semantics (see docs/check.md, "What is proved"):
 
 - the state ranges over the box of declared ``bounds`` (unbounded if none);
-  ``t`` over ``[0, inf)``; inputs and vector signals are unknown;
+  ``t`` over ``[0, inf)``; an input over its declared ``range`` (in a system:
+  a free input's range, the bounds of the state variable it reads, else
+  unknown); vector signals are unknown;
 - parameters are bound to the automaton's values and signals replaced by the
   definitions in force in the location (location overrides first);
 - an edge may fire at a point of its source location where its guard may be
@@ -19,9 +21,11 @@ Semantics (see docs/check.md, "What is proved"):
   or an *entry* point: the initial state, or a state right after an edge into
   the location fired, whether or not the invariant holds there;
 - entry points are over-approximated by a box per location, the least
-  fixpoint of "initial state, and the reset of every box where an edge into
-  the location may fire", widened to the declared bounds if it does not
-  settle within :data:`ENTRY_ROUNDS` rounds.
+  fixpoint of "the initial set (in every initial location), and the reset of
+  every box where an edge into the location may fire", widened to the
+  declared bounds if it does not settle within :data:`ENTRY_ROUNDS` rounds;
+- in an *urgent* location no time passes: a run is there only at entry
+  points, so its edges fire only from there.
 
 Examples
 --------
@@ -43,6 +47,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 
 from hybrid.analysis.flows import enabled_region, exit_conditions
+from hybrid.analysis.inline import inline_signals
 from hybrid.analysis.linear import structural_key
 from hybrid.analysis.solve import Box, Env, closure, conjoin, contract, negate, satisfiable
 from hybrid.expr import ir
@@ -61,7 +66,6 @@ __all__ = [
 ]
 
 ENTRY_ROUNDS = 32
-INLINE_BUDGET = 400
 _TIME = Interval(0.0, math.inf)
 
 
@@ -97,9 +101,8 @@ class LocationFacts:
 
 
 def initial_box(automaton: Automaton) -> dict[str, Interval]:
-    """The box of initial states (today a point: the initial state; ``t = 0``)."""
-    values = automaton.initial_vector()
-    box = {s.name: Interval.point(v) for s, v in zip(automaton.states, values, strict=True)}
+    """The box of initial states: the initial set of every state variable; ``t = 0``."""
+    box = {name: Interval(r.lo, r.hi) for name, r in automaton.initial_set().items()}
     box["t"] = Interval.point(0.0)
     return box
 
@@ -125,14 +128,28 @@ class AutomatonFacts:
     ----------
     automaton
         The automaton, with the parameter values to analyse.
+    inputs
+        The interval of each input known to stay in one (default: the declared ranges).
+    volatile
+        Inputs another component's jump may change at once: after a jump, unknown again.
     """
 
-    def __init__(self, automaton: Automaton) -> None:
+    def __init__(
+        self,
+        automaton: Automaton,
+        inputs: Mapping[str, Interval] | None = None,
+        volatile: frozenset[str] = frozenset(),
+    ) -> None:
         self.automaton = automaton
         params = automaton.parameters
+        if inputs is None:
+            inputs = {k: Interval(r.lo, r.hi) for k, r in automaton.input_ranges().items()}
+        self.inputs = dict(inputs)
+        self.volatile = volatile
         self.bounds: dict[str, Interval] = {
             s.name: Interval(s.lower, s.upper) for s in automaton.states
         }
+        self.bounds.update(self.inputs)
         opaque = frozenset(n for n, f in automaton.functions.items() if not f.builtin)
         self.opaque = opaque
         vectors = automaton.vector_sizes  # their values are a library's: unknown here
@@ -156,6 +173,8 @@ class AutomatonFacts:
             can_be_left = region is not None and any(
                 satisfiable(x, env, self.bounds) for x in exits
             )
+            if loc.urgent:  # never flowing: left at once on entry, or blocked
+                region, exits, can_be_left = None, (), True
             self.locations[name] = LocationFacts(
                 name, env, invariant, closed, MappingProxyType(flow), region, exits, can_be_left
             )
@@ -216,7 +235,8 @@ class AutomatonFacts:
     ) -> dict[str, dict[str, Interval] | None]:
         """Per location, a box holding every state a run may enter it with (``None``: none)."""
         entries: dict[str, dict[str, Interval] | None] = {name: None for name in self.locations}
-        entries[automaton.initial_location] = initial_box(automaton)
+        for name in automaton.initial_locations:
+            entries[name] = {**initial_box(automaton), **self.inputs}
         rounds = 0
         while True:
             changed = False
@@ -240,13 +260,16 @@ class AutomatonFacts:
                         entries[name] = hull(box, self.bounds)
 
     def reset_box(
-        self, location: str, reset: Mapping[str, ir.Expr], box: Box
+        self, location: str, reset: Mapping[str, ir.Expr], box: Box, *, keep: bool = False
     ) -> dict[str, Interval] | None:
-        """The box of states right after a reset applied in ``box``, within the bounds."""
+        """The box of states right after a reset applied in ``box``, within the bounds
+        (``keep``: volatile inputs keep their values, as when no other component jumps)."""
         ev = self.locations[location].env.evaluator(box)
         after = dict(box)
         for var, expr in reset.items():
             after[var] = ev.number(expr)
+        for var in () if keep else self.volatile:  # another component's jump may change it
+            after.pop(var, None)
         for var, bound in self.bounds.items():
             narrowed = after.get(var, ENTIRE).intersect(bound)
             if narrowed is None:
@@ -310,69 +333,17 @@ class AutomatonFacts:
             loc = self.locations[location]
             guards = [self.edges[i].guard for i in sorted(chosen)]
             negated = [negate(g) for g in guards]
-            stuck = loc.can_be_left and any(
-                satisfiable(conjoin(x, *negated), loc.env, self.bounds) for x in loc.exits
+            urgent = self.automaton.locations[location].urgent
+            stuck = (
+                not urgent
+                and loc.can_be_left
+                and any(satisfiable(conjoin(x, *negated), loc.env, self.bounds) for x in loc.exits)
             )
             entry = self.entries[location]
             if not stuck and entry is not None:
                 # on entry an edge is enabled at most where its guard's closure holds
                 idle = [closure(negate(g)) for g in guards]
-                stuck = any(
-                    satisfiable(conjoin(v, *idle), loc.env, entry)
-                    for v in (negate(loc.invariant), *loc.exits)
-                )
+                leaving = (ir.BoolConst(True),) if urgent else (negate(loc.invariant), *loc.exits)
+                stuck = any(satisfiable(conjoin(v, *idle), loc.env, entry) for v in leaving)
             self._covered[key] = not stuck
         return self._covered[key]
-
-
-def inline_signals(
-    node: ir.Expr, signals: Mapping[str, ir.Expr], budget: int = INLINE_BUDGET
-) -> ir.Expr | None:
-    """``node`` with every signal replaced by its definition, or ``None``.
-
-    ``None`` when the result would read inputs or vector signals (whose values
-    another component or a library decides) or exceed ``budget`` nodes.
-
-    Examples
-    --------
-    >>> from hybrid.expr.printer import to_source
-    >>> s = {"g": ir.Bin("*", ir.Num(2.0), ir.Var("x", "state"))}
-    >>> to_source(inline_signals(ir.Var("g", "signal"), s), {"x": "x"})
-    '2.0 * x'
-    """
-    count = 0
-
-    def go(n: ir.Expr) -> ir.Expr | None:
-        nonlocal count
-        count += 1
-        if count > budget:
-            return None
-        if isinstance(n, ir.Var):
-            if n.kind == ir.SIGNAL:
-                definition = signals.get(n.name)
-                return None if definition is None else go(definition)
-            return None if n.kind == ir.INPUT else n
-        if isinstance(n, ir.Index):
-            return None
-        kids = ir.children(n)
-        if not kids:
-            return n
-        new = [go(k) for k in kids]
-        if any(k is None for k in new):
-            return None
-        done = [k for k in new if k is not None]
-        if isinstance(n, ir.Call):
-            return ir.Call(n.func, tuple(done), n.col)
-        if isinstance(n, ir.Unary):
-            return ir.Unary(n.op, done[0], n.col)
-        if isinstance(n, ir.Bin):
-            return ir.Bin(n.op, done[0], done[1], n.col)
-        if isinstance(n, ir.Cmp):
-            return ir.Cmp(n.ops, tuple(done), n.col)
-        if isinstance(n, ir.BoolOp):
-            return ir.BoolOp(n.op, tuple(done), n.col)
-        if isinstance(n, ir.Not):
-            return ir.Not(done[0], n.col)
-        return n  # pragma: no cover - leaves are handled above
-
-    return go(node)

@@ -74,7 +74,9 @@ class ZeroTimeGraph:
         for ef in facts.edges:
             if not ef.live or ef.fires is None:
                 continue
-            after = facts.reset_box(ef.edge.source, ef.reset, ef.fires)
+            # inputs another component provides change only when it jumps too: a cycle
+            # forever at one instant ends with them fixed (or that component cycles too)
+            after = facts.reset_box(ef.edge.source, ef.reset, ef.fires, keep=True)
             if after is None:
                 continue
             dst = facts.locations[ef.edge.target]

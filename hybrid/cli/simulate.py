@@ -16,7 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_OK
-from hybrid.compose import System
+from hybrid.compose import System, as_system
 from hybrid.errors import UsageError, did_you_mean
 from hybrid.model import Automaton
 from hybrid.progress import TerminalLine, terminal_reporter
@@ -61,6 +61,8 @@ def run_simulate(args: argparse.Namespace) -> int:
             progress=line,
             backend=args.backend,
         )
+        for note in run.settings.get("start", {}).get("notes", ()):
+            print(f"{args.file}: note: {note}", file=sys.stderr)
         term = run.termination
         pending = [path for _, path in outputs if path is not None]
         if term.cause == "interrupted" and pending:
@@ -111,7 +113,9 @@ def _inputs(
     """The free inputs of ``model`` from ``--input NAME=EXPR`` and ``--input-csv FILE``."""
     from hybrid.simulation.inputs import ExpressionInput, read_series
 
-    declared = list(model.inputs) if isinstance(model, Automaton) else []
+    system = as_system(model)
+    declared = list(system.free_inputs)
+    ranged = system.input_ranges()
     given: dict[str, Callable[[float], float]] = {}
     origin: dict[str, str] = {}
 
@@ -133,7 +137,7 @@ def _inputs(
         for name, series in read_series(file).items():
             series.check_covers(0.0, args.t_end)
             add(name, series, file)
-    missing = [name for name in declared if name not in given]
+    missing = [name for name in declared if name not in given and name not in ranged]
     if missing:
         raise UsageError(
             f"input '{missing[0]}' needs a value: give --input {missing[0]}=EXPR (an expression "

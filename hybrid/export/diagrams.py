@@ -110,9 +110,14 @@ def to_dot(graph: nx.MultiDiGraph) -> str:
     for node, data in graph.nodes(data=True):
         attrs = []
         inv = data.get("invariant")
+        lines = [str(node)]
+        if data.get("urgent"):
+            lines.append("urgent")
+            attrs.append("peripheries=2")
         if inv and str(inv).strip() != "true":
-            label = _dot_string(f"{node}\ninv: {inv}")
-            attrs.append(f"label={label}")
+            lines.append(f"inv: {inv}")
+        if len(lines) > 1:
+            attrs.insert(0, f"label={_dot_string(chr(10).join(lines))}")
         if data.get("reachable") is False:
             attrs.append('style="rounded,dashed"')
             attrs.append("color=gray")
@@ -151,6 +156,8 @@ def to_mermaid(graph: nx.MultiDiGraph) -> str:
         sid = ids[node]
         out.append(f'    state "{mermaid_escape(str(node))}" as {sid}')
         notes = []
+        if data.get("urgent"):
+            notes.append("urgent")
         inv = data.get("invariant")
         if inv and str(inv).strip() != "true":
             notes.append(f"inv {inv}")

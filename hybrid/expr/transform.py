@@ -14,7 +14,7 @@ from dataclasses import replace
 
 from hybrid.expr import ir
 
-__all__ = ["bind_parameters"]
+__all__ = ["bind_parameters", "rename_names"]
 
 
 def bind_parameters(node: ir.Expr, values: Mapping[str, float]) -> ir.Expr:
@@ -35,4 +35,37 @@ def bind_parameters(node: ir.Expr, values: Mapping[str, float]) -> ir.Expr:
         return replace(node, operands=tuple(bind_parameters(a, values) for a in node.operands))
     if isinstance(node, ir.BoolOp):
         return replace(node, values=tuple(bind_parameters(a, values) for a in node.values))
+    return node
+
+
+_RENAMED_KINDS = (ir.STATE, ir.SIGNAL, ir.INPUT)
+
+
+def rename_names(node: ir.Expr, mapping: Mapping[str, str]) -> ir.Expr:
+    """Rename state variables, signals and inputs (all at once: a swap is a swap).
+
+    Examples
+    --------
+    >>> x, y = ir.Var("x", "state"), ir.Var("y", "input")
+    >>> rename_names(ir.Bin("-", x, y), {"x": "y", "y": "x"})
+    Bin(op='-', left=Var(name='y', kind='state', col=0), right=Var(name='x', kind='input', col=0), col=0)
+    """
+    if isinstance(node, ir.Var):
+        if node.kind in _RENAMED_KINDS and node.name in mapping:
+            return replace(node, name=mapping[node.name])
+        return node
+    if isinstance(node, ir.Index):
+        return replace(node, name=mapping.get(node.name, node.name))
+    if isinstance(node, ir.Call):
+        return replace(node, args=tuple(rename_names(a, mapping) for a in node.args))
+    if isinstance(node, ir.Unary | ir.Not):
+        return replace(node, operand=rename_names(node.operand, mapping))
+    if isinstance(node, ir.Bin):
+        return replace(
+            node, left=rename_names(node.left, mapping), right=rename_names(node.right, mapping)
+        )
+    if isinstance(node, ir.Cmp):
+        return replace(node, operands=tuple(rename_names(a, mapping) for a in node.operands))
+    if isinstance(node, ir.BoolOp):
+        return replace(node, values=tuple(rename_names(a, mapping) for a in node.values))
     return node

@@ -106,8 +106,9 @@ def automaton_text(
     if start is not None:
         data["initial"] = {"location": start["location"]}
         if isinstance(start["location"], list):
-            comments[("initial",)] = (
-                "every location whose invariant the initial set can meet (SpaceEx starts in all)"
+            comments[("initial",)] = start.get(
+                "locations_comment",
+                "every location whose invariant the initial set can meet (SpaceEx starts in all)",
             )
     edges = []
     for i, edge in enumerate(t.edges):

@@ -36,8 +36,10 @@ from hybrid.compose import System, as_system
 from hybrid.errors import Position, SpecError
 from hybrid.expr import ir
 from hybrid.expr.transform import bind_parameters
+from hybrid.interchange.cfgwrite import number_text as _number
+from hybrid.interchange.cfgwrite import spaceex_cfg
 from hybrid.interchange.sxprint import Unsupported, spaceex_text
-from hybrid.model import Automaton
+from hybrid.model import Automaton, Forbidden
 
 __all__ = ["ExportResult", "export_spaceex"]
 
@@ -127,6 +129,9 @@ class _Component:
         self.provided = _provided(system, index)
         self.uses_time = False
         self.read: set[str] = set()
+        taken = {*system.state_names, *system.signal_names, *system.free_inputs, "t"}
+        self.clock = _fresh("urgent_clock", taken) if _urgent(self.a) else None
+        """A clock that keeps time from passing in urgent locations (``clock <= 0`` there)."""
 
     def text(self, node: ir.Expr, location: str | None, where: Position) -> str:
         defs: dict[str, ir.Expr] = dict(self.a.signals)
@@ -146,18 +151,44 @@ class _Component:
                 f"cannot export to SpaceEx: {exc} has no SpaceEx counterpart", where
             ) from None
 
+    @property
+    def states(self) -> list[str]:
+        """The component's state variables, its urgent clock included."""
+        return [*self.a.state_names, *([self.clock] if self.clock else [])]
+
     def xml(self) -> list[str]:
         a = self.a
         lines: list[str] = []
         body: list[str] = []
         ids = {name: str(i + 1) for i, name in enumerate(a.locations)}
+        ranges = [
+            f"{_number(r.lo)} <= {u} & {u} <= {_number(r.hi)}"
+            for u, r in self.system.input_ranges().items()
+            if u in a.inputs
+        ]
+        if ranges:
+            self.read.update(u for u in self.system.input_ranges() if u in a.inputs)
         for name, loc in a.locations.items():
             flow = " & ".join(
                 f"{s}' == {self.text(loc.flow[s], name, loc.position) if s in loc.flow else '0'}"
                 for s in a.state_names
             )
+            if self.clock is not None:
+                flow += f"{' & ' if flow else ''}{self.clock}' == 1"
             body.append(f'    <location id="{ids[name]}" name={quoteattr(name)}>')
+            if loc.urgent:
+                body.append(
+                    "      "
+                    + _comment(
+                        f"urgent location: no time may pass here ({self.clock} <= 0; "
+                        f"{self.clock} := 0 on every transition into it)"
+                    )
+                )
             invariant = self.text(loc.invariant, name, loc.invariant_position)
+            extra = [*ranges, *([f"{self.clock} <= 0"] if loc.urgent else [])]
+            if extra:
+                parts = [] if invariant == "true" else [_grouped(invariant)]
+                invariant = " & ".join([*parts, *extra])
             if invariant != "true":
                 body.append(f"      <invariant>{escape(invariant)}</invariant>")
             if flow:
@@ -178,15 +209,16 @@ class _Component:
             guard = self.text(edge.guard, edge.source, edge.guard_position)
             if guard != "true":
                 body.append(f"      <guard>{escape(guard)}</guard>")
-            if edge.reset:
-                assignment = " & ".join(
-                    f"{k} := {self.text(v, edge.source, edge.position)}"
-                    for k, v in edge.reset.items()
-                )
-                body.append(f"      <assignment>{escape(assignment)}</assignment>")
+            assigned = [
+                f"{k} := {self.text(v, edge.source, edge.position)}" for k, v in edge.reset.items()
+            ]
+            if self.clock is not None and a.locations[edge.target].urgent:
+                assigned.append(f"{self.clock} := 0")
+            if assigned:
+                body.append(f"      <assignment>{escape(' & '.join(assigned))}</assignment>")
             body.append("    </transition>")
         lines.append(f"  <component id={quoteattr(self.comp.name)}>")
-        for s in a.state_names:
+        for s in self.states:
             lines.append(_param(s, "any", controlled=True))
         for name in sorted(self.read - set(a.state_names)):
             lines.append(_param(name, "any", controlled=False))
@@ -201,16 +233,29 @@ class _Component:
         return lines
 
 
+def _urgent(a: Automaton) -> bool:
+    return any(loc.urgent for loc in a.locations.values())
+
+
+def _fresh(stem: str, taken: set[str]) -> str:
+    name, k = stem, 1
+    while name in taken:
+        k += 1
+        name = f"{stem}{k}"
+    return name
+
+
+def _grouped(condition: str) -> str:
+    """A condition to conjoin: in parentheses when it has a disjunction."""
+    return f"({condition})" if "|" in condition else condition
+
+
 def _param(name: str, dynamics: str, controlled: bool | None) -> str:
     extra = "" if controlled is None else f' controlled="{str(controlled).lower()}"'
     return (
         f'    <param name={quoteattr(name)} type="real" local="false" d1="1" d2="1" '
         f'dynamics="{dynamics}"{extra} />'
     )
-
-
-def _number(value: float) -> str:
-    return repr(float(value)) if value != int(value) or abs(value) >= 1e15 else str(int(value))
 
 
 def export_spaceex(model: Automaton | System) -> ExportResult:
@@ -240,7 +285,7 @@ def export_spaceex(model: Automaton | System) -> ExportResult:
     lines = list(head)
     for body in bodies:
         lines.extend(body)
-    shared = sorted({v for p in parts for v in p.read} | set(system.state_names))
+    shared = sorted({v for p in parts for v in [*p.read, *p.states]})
     if clock:
         lines += [
             '  <component id="clock">',
@@ -258,7 +303,7 @@ def export_spaceex(model: Automaton | System) -> ExportResult:
         lines.append(f'    <param name={quoteattr(label)} type="label" local="false" />')
     for p in parts:
         lines.append(f"    <bind component={quoteattr(p.comp.name)} as={quoteattr(p.comp.name)}>")
-        for name in [*p.a.state_names, *sorted(p.read - set(p.a.state_names))]:
+        for name in [*p.states, *sorted(p.read - set(p.states))]:
             lines.append(f"      <map key={quoteattr(name)}>{escape(name)}</map>")
         if p.uses_time:
             lines.append('      <map key="t">t</map>')
@@ -272,33 +317,72 @@ def export_spaceex(model: Automaton | System) -> ExportResult:
         lines.append('      <map key="t">t</map>')
         lines.append("    </bind>")
     lines += ["  </component>", "</sspaceex>", ""]
-    return ExportResult("\n".join(lines), _cfg(system, network, clock), notes)
+    for p in parts:
+        if p.clock is not None:
+            notes.append(
+                f"component '{p.comp.name}': urgent locations keep time from passing with the "
+                f"added clock '{p.clock}' (<= 0 there, reset on entry): SpaceEx has no urgency"
+            )
+    ranges = [*system.initial_set().values(), *system.input_ranges().values()]
+    if any(r.given and not r.is_point for r in ranges):
+        notes.append(
+            "nominal values have no SpaceEx counterpart: the .cfg gives the sets; an import "
+            "starts simulations at their midpoints"
+        )
+    clocks = [p.clock for p in parts if p.clock is not None]
+    cfg = spaceex_cfg(system, network, clock, clocks, _forbidden(system))
+    return ExportResult("\n".join(lines), cfg, notes)
 
 
-def _cfg(system: System, network: str, clock: bool) -> str:
-    initially = [
-        f"loc({c.name})=={loc}"
-        for c, loc in zip(system.components, system.initial_mode, strict=True)
-    ]
-    initially += [
-        f"{name}=={_number(value)}"
-        for name, value in zip(system.state_names, system.initial_vector(), strict=True)
-    ]
-    if clock:
-        initially.append("t==0")
-    lines = [f'system = "{network}"', f'initially = "{" & ".join(initially)}"']
-    unreachable = []
+def _forbidden(system: System) -> list[str]:
+    """The ``.cfg``'s forbidden disjuncts: unreachable locations, then forbidden states."""
+    found = []
     for name in system.properties.unreachable:
         comp, _, loc = name.rpartition(".")
-        comp = comp or system.components[0].name
-        unreachable.append(f"loc({comp})=={loc}")
-    if unreachable:
-        lines.append(f'forbidden = "{" | ".join(unreachable)}"')
-    lines += [
-        'scenario = "supp"',
-        'directions = "box"',
-        "iter-max = 10",
-        'output-format = "GEN"',
-        "",
-    ]
-    return "\n".join(lines)
+        found.append(f"loc({comp or system.components[0].name})=={loc}")
+    for entry in system.properties.forbidden:
+        parts = [
+            f"loc({comp or system.components[0].name})=={loc}"
+            for comp, loc in entry.locations.items()
+        ]
+        if entry.when is not None:
+            parts.append(_grouped(_condition(system, entry)))
+        found.append(" & ".join(parts) or "true")
+    return found
+
+
+def _condition(system: System, entry: Forbidden) -> str:
+    """The ``when`` of a forbidden entry in SpaceEx syntax, signals and parameters inlined."""
+    assert entry.when is not None
+    defs: dict[str, ir.Expr] = {}
+    when = entry.when
+    for i, c in enumerate(system.components):
+        a = c.automaton
+        location = entry.locations.get("" if system.single else c.name)
+        signals = dict(a.signals)
+        if location is not None:
+            signals.update(a.locations[location].signals)
+        varying = {n for loc in a.locations.values() for n in loc.signals}
+        for name, definition in signals.items():
+            if location is None and name in varying:
+                definition = ir.Var(name, "varying")  # refused below if read
+            defs[name] = bind_parameters(definition, a.parameters)
+        defs.update(_provided(system, i))
+        if system.single:
+            when = bind_parameters(when, a.parameters)
+    try:
+        inlined = _inline(when, defs)
+        varying_read = [
+            n.name for n in ir.walk(inlined) if isinstance(n, ir.Var) and n.kind == "varying"
+        ]
+        if varying_read:
+            raise Unsupported(
+                f"signal '{varying_read[0]}', which differs by location, read without a location"
+            )
+        return spaceex_text(inlined)
+    except Unsupported as exc:
+        raise SpecError(
+            f"cannot export to SpaceEx: the forbidden state reads {exc}, which has no SpaceEx "
+            "counterpart",
+            entry.position,
+        ) from None

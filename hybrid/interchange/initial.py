@@ -24,6 +24,7 @@ else the one variable whose path ends with it (``y``).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -77,7 +78,9 @@ class InitialSet:
     exact: dict[str, str] = field(default_factory=dict)
     """Variable id -> the non-box constraint its interval comes from, as written."""
     locations: dict[int, str] = field(default_factory=dict)
-    """Leaf index -> the SpaceEx name of its initial location."""
+    """Leaf index -> the SpaceEx name of its initial location (the first, if several)."""
+    alternatives: dict[int, list[str]] = field(default_factory=dict)
+    """Leaf index -> every initial location, when a union (``|``) gives several."""
     location_positions: dict[int, Position] = field(default_factory=dict)
     constants: dict[str, float] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
@@ -161,7 +164,7 @@ def _squares(
 
 def _narrow(init: InitialSet, var: str, lo: float, hi: float, where: Position) -> None:
     old_lo, old_hi = init.bounds.get(var, (-math.inf, math.inf))
-    lo, hi = max(lo, old_lo), min(hi, old_hi)
+    lo, hi = max(lo, old_lo) + 0.0, min(hi, old_hi) + 0.0  # no -0.0
     if lo > hi:
         raise SpecError(f"the initial set is empty: no value of '{var}' fits", where)
     init.bounds[var] = (lo, hi)
@@ -221,14 +224,56 @@ def _ellipse(
 
 def initial_set(text: SourceText, resolver: Resolver, open_constants: set[str]) -> InitialSet:
     """Read ``initially`` (see the module docstring)."""
-    init = InitialSet()
     tree = sx.parse(text)
-    if isinstance(tree, sx.Or):
+    if not isinstance(tree, sx.Or):
+        return _conjunction(tree, text, resolver, open_constants)
+    parts = [_conjunction(item, text, resolver, open_constants) for item in tree.items]
+    return _union(parts, tree.items, tree.position)
+
+
+def _union(parts: list[InitialSet], items: tuple[sx.Node, ...], where: Position) -> InitialSet:
+    """A union of conjunctions that differ only in their locations: several initial locations.
+
+    The union must be the same box in every part, and its locations a product
+    of one set of locations per component (``loc(a)==p | loc(a)==n``), which is
+    exactly "each component starts in one of its initial locations".
+    """
+    first = parts[0]
+    for part, item in zip(parts, items, strict=True):
+        if (part.bounds, part.nominal, part.constants) != (
+            first.bounds,
+            first.nominal,
+            first.constants,
+        ) or set(part.locations) != set(first.locations):
+            raise SpecError(
+                "an initial set with '|' (a union) has a counterpart only when its parts are "
+                "one box in different locations (several initial locations); these parts differ "
+                "in their variables: keep one of them",
+                item.position,
+            )
+    leaves = sorted(first.locations)
+    choices = {i: list(dict.fromkeys(p.locations[i] for p in parts)) for i in leaves}
+    given = {tuple(p.locations[i] for i in leaves) for p in parts}
+    if given != set(itertools.product(*(choices[i] for i in leaves))):
         raise SpecError(
-            "an initial set with '|' (a union) has no counterpart: our initial set is one box "
-            "per variable (with one or several initial locations); keep one of the parts",
-            tree.position,
+            "the parts of this union start the components in combinations of locations, not in "
+            "every combination of each one's initial locations (our initial locations are per "
+            "component): write every combination, or keep one part",
+            where,
         )
+    first.alternatives = {i: c for i, c in choices.items() if len(c) > 1}
+    for part in parts[1:]:
+        first.location_positions.update(
+            {i: w for i, w in part.location_positions.items() if i not in first.location_positions}
+        )
+    return first
+
+
+def _conjunction(
+    tree: sx.Node, text: SourceText, resolver: Resolver, open_constants: set[str]
+) -> InitialSet:
+    """One conjunction of ``initially``."""
+    init = InitialSet()
 
     def resolve(name: str, where: Position) -> str:
         try:
@@ -237,6 +282,12 @@ def initial_set(text: SourceText, resolver: Resolver, open_constants: set[str]) 
             raise SpecError(str(exc.args[0]), where) from None
 
     for item in sx.conjuncts(tree):
+        if isinstance(item, sx.Or):
+            raise SpecError(
+                "a union ('|') inside a conjunction of the initial set: write the initial set "
+                "as a union of conjunctions (A & B | A & C)",
+                item.position,
+            )
         if isinstance(item, sx.Cmp) and item.ops == ("==",) and _location(item) is not None:
             comp, loc, where = _location(item)  # type: ignore[misc]
             index = resolver.leaf(comp, where)

@@ -84,11 +84,14 @@ def start_of(
     exact = sorted(
         {init.exact[leaf.variables[s]] for s in t.states if leaf.variables[s] in init.exact}
     )
-    return {
+    found: dict[str, Any] = {
         "location": chosen[0] if len(chosen) == 1 else chosen,
         "state": state,
         "exact": exact,
     }
+    if leaf.index in init.alternatives:
+        found["locations_comment"] = "the .cfg's initial set is a union over these locations"
+    return found
 
 
 def _initial_locations(
@@ -100,7 +103,9 @@ def _initial_locations(
     config: SpaceExConfig | None,
 ) -> list[str]:
     if leaf.index in init.locations:
-        return [location_name(t, init.locations[leaf.index], init.location_positions[leaf.index])]
+        where = init.location_positions[leaf.index]
+        names = init.alternatives.get(leaf.index, [init.locations[leaf.index]])
+        return [location_name(t, name, where) for name in names]
     if config is None or config.initially is None:
         return [t.locations[0].name]
     rename = {**t.names, **{k: repr(v) for k, v in leaf.constants.items() if v is not None}}

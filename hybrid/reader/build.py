@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import ast
 import keyword
-import math
 from collections.abc import Mapping
 from dataclasses import replace
 from types import MappingProxyType
@@ -26,51 +25,38 @@ from hybrid.expr.parse import (
     ExprError,
     Scope,
     _ast_parse,
-    parse_expression,
     vector_call,
 )
-from hybrid.model import Automaton, Edge, Location, Properties, StateVar
+from hybrid.model import Automaton, Edge, Location
 from hybrid.reader.characters import ascii_only
 from hybrid.reader.messages import closest
-from hybrid.reader.schema import AutomatonSpec, PropertiesSpec
+from hybrid.reader.problems import Problems
+from hybrid.reader.schema import AutomatonSpec
+from hybrid.reader.sets import (
+    build_initial,
+    build_properties,
+    build_states,
+    input_entries,
+    input_ranges,
+)
 from hybrid.reader.yamlpos import PositionMap
 
-__all__ = ["build_automaton", "build_properties"]
+__all__ = ["build_automaton", "build_properties"]  # build_properties: see sets.py
 
 RESERVED = {"t", "pi", "true", "false", *BUILTINS, *keyword.kwlist, *keyword.softkwlist}
 _KIND_TEXT = {"param": "parameter", "state": "state variable", "signal": "signal", "input": "input"}
 
 
-class _Problems:
-    def __init__(self, positions: PositionMap) -> None:
-        self.positions = positions
-        self.items: list[tuple[Position, str]] = []
-
-    def at_key(self, path: tuple[Any, ...], message: str) -> None:
-        self.items.append((self.positions.key(path), message))
-
-    def at_value(self, path: tuple[Any, ...], message: str) -> None:
-        self.items.append((self.positions.value(path), message))
-
-    def expression(self, path: tuple[Any, ...], source: str, scope: Scope, want: str) -> ir.Expr:
-        try:
-            ascii_only(source)
-            return parse_expression(source, scope, want=want)
-        except ExprError as exc:
-            self.items.append((self.positions.value(path).shifted(exc.col), exc.message))
-            return ir.BoolConst(True) if want == "bool" else ir.Num(0.0)
-
-
 def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
     """Check cross-references and expressions of ``spec``; raise one :class:`SpecError`."""
-    problems = _Problems(positions)
+    problems = Problems(positions)
     functions = _libraries(spec, problems)
     kinds = _declare_names(spec, problems, functions)
     sizes = _vector_sizes(spec, functions)
     scope = Scope(variables=kinds, functions=functions, vectors=sizes)
 
     signals = _signals(spec.signals, ("signals",), scope, problems, sizes)
-    states = _states(spec, positions, problems)
+    states = build_states(spec, positions, problems)
     state_names = [s.name for s in states]
 
     locations: dict[str, Location] = {}
@@ -103,6 +89,7 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
             invariant_source=loc.invariant,
             position=positions.key(base),
             invariant_position=positions.value((*base, "invariant")),
+            urgent=loc.urgent,
         )
         cycle = find_cycle({**signals, **loc_signals})
         if cycle and not find_cycle(signals):
@@ -119,10 +106,13 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
         )
 
     edges = _edges(spec, positions, problems, scope, state_names)
-    initial_location, initial_state = _initial(spec, problems, state_names)
-    properties = build_properties(spec.properties, positions, problems.items, list(spec.locations))
+    initial_locations, initial_state, initial_ranges = build_initial(spec, problems, states)
+    properties = build_properties(
+        spec.properties, positions, problems.items, list(spec.locations), scope=scope
+    )
     if spec.checks is not None:
         properties = replace(properties, ignore=tuple(spec.checks.ignore))
+    ranges = input_ranges(spec, problems)
 
     if problems.items:
         raise SpecError.many(problems.items)
@@ -133,12 +123,15 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
         signals=MappingProxyType(signals),
         vector_sizes=MappingProxyType(sizes),
         signal_names=tuple(spec.signals),
-        inputs=tuple(spec.inputs),
+        inputs=tuple(name for name, _, _ in input_entries(spec)),
         labels=tuple(spec.labels),
         locations=MappingProxyType(locations),
         edges=tuple(edges),
-        initial_location=initial_location,
+        initial_location=initial_locations[0],
         initial_state=MappingProxyType(initial_state),
+        initial_locations=initial_locations,
+        initial_ranges=MappingProxyType(initial_ranges),
+        ranges=MappingProxyType(ranges),
         properties=properties,
         functions=MappingProxyType(functions),
         description=spec.description,
@@ -146,12 +139,15 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
         position=positions.value(()),
         parameter_positions={k: positions.key(("parameters", k)) for k in spec.parameters},
         signal_positions={k: positions.key(("signals", k)) for k in spec.signals},
-        input_positions={k: positions.value(("inputs", i)) for i, k in enumerate(spec.inputs)},
+        input_positions={
+            k: positions.key(path) if at_key else positions.value(path)
+            for k, path, at_key in input_entries(spec)
+        },
         label_positions={k: positions.value(("labels", i)) for i, k in enumerate(spec.labels)},
     )
 
 
-def _libraries(spec: AutomatonSpec, problems: _Problems) -> dict[str, Function]:
+def _libraries(spec: AutomatonSpec, problems: Problems) -> dict[str, Function]:
     functions: dict[str, Function] = {}
     for i, lib in enumerate(spec.uses):
         try:
@@ -172,7 +168,7 @@ def _libraries(spec: AutomatonSpec, problems: _Problems) -> dict[str, Function]:
 
 
 def _declare_names(
-    spec: AutomatonSpec, problems: _Problems, functions: Mapping[str, Function]
+    spec: AutomatonSpec, problems: Problems, functions: Mapping[str, Function]
 ) -> dict[str, str]:
     kinds: dict[str, str] = {}
     first: dict[str, Position] = {}
@@ -180,7 +176,7 @@ def _declare_names(
         ("param", [(n, ("parameters", n)) for n in spec.parameters]),
         ("state", [(n, ("state", n)) for n in spec.state]),
         ("signal", [(n, ("signals", n)) for n in spec.signals]),
-        ("input", [(n, ("inputs", i)) for i, n in enumerate(spec.inputs)]),
+        ("input", [(n, path) for n, path, _ in input_entries(spec)]),
     ]
     for kind, names in groups:
         for name, path in names:
@@ -225,7 +221,7 @@ def _signals(
     sources: Mapping[str, str],
     base: tuple[Any, ...],
     scope: Scope,
-    problems: _Problems,
+    problems: Problems,
     sizes: Mapping[str, int],
 ) -> dict[str, ir.Expr]:
     """Parsed signal definitions; a vector signal's keeps the shape of its declaration."""
@@ -256,33 +252,10 @@ def _signals(
     return definitions
 
 
-def _states(spec: AutomatonSpec, positions: PositionMap, problems: _Problems) -> list[StateVar]:
-    states: list[StateVar] = []
-    for name, var in spec.state.items():
-        lower, upper = var.bounds if var.bounds is not None else (-math.inf, math.inf)
-        if var.bounds is not None and lower > upper:
-            problems.at_value(
-                ("state", name, "bounds"), f"bounds of '{name}': low {lower} > high {upper}"
-            )
-        elif not lower <= var.initial <= upper:
-            problems.at_value(
-                ("state", name, "initial"),
-                f"initial value {var.initial} of '{name}' is outside its bounds [{lower}, {upper}]",
-            )
-        if not math.isfinite(var.initial):
-            problems.at_value(
-                ("state", name, "initial"), f"initial value of '{name}' must be finite"
-            )
-        states.append(
-            StateVar(name, var.initial, lower, upper, var.unit, positions.key(("state", name)))
-        )
-    return states
-
-
 def _edges(
     spec: AutomatonSpec,
     positions: PositionMap,
-    problems: _Problems,
+    problems: Problems,
     scope: Scope,
     state_names: list[str],
 ) -> list[Edge]:
@@ -334,60 +307,3 @@ def _edges(
             )
         )
     return edges
-
-
-def _initial(
-    spec: AutomatonSpec, problems: _Problems, state_names: list[str]
-) -> tuple[str, dict[str, float]]:
-    if spec.initial is None:
-        return next(iter(spec.locations)), {}
-    location = spec.initial.location
-    if location not in spec.locations:
-        problems.at_value(
-            ("initial", "location"),
-            f"initial location '{location}' is not a location{closest(location, list(spec.locations))}",
-        )
-    state: dict[str, float] = {}
-    for var, value in spec.initial.state.items():
-        if var not in spec.state:
-            problems.at_key(
-                ("initial", "state", var),
-                f"initial value for '{var}': not a state variable{closest(var, state_names)}",
-            )
-        elif not math.isfinite(value):
-            problems.at_value(("initial", "state", var), f"initial value of '{var}' must be finite")
-        else:
-            state[var] = value
-    return location, state
-
-
-def build_properties(
-    spec: PropertiesSpec | None,
-    positions: PositionMap,
-    problems: list[tuple[Position, str]],
-    locations: list[str],
-) -> Properties:
-    """Check that properties name existing locations (qualified in a system)."""
-    if spec is None:
-        return Properties()
-    where: dict[str, Position] = {}
-    for key in ("reachable", "unreachable"):
-        for i, name in enumerate(getattr(spec, key)):
-            path = ("properties", key, i)
-            where[f"{key}:{name}"] = positions.value(path)
-            if name not in locations:
-                problems.append(
-                    (
-                        positions.value(path),
-                        f"{key}: unknown location '{name}'{closest(name, locations)}",
-                    )
-                )
-    for key in ("deadlock_free", "deterministic"):
-        where[key] = positions.key(("properties", key))
-    return Properties(
-        reachable=tuple(spec.reachable),
-        unreachable=tuple(spec.unreachable),
-        deadlock_free=spec.deadlock_free,
-        deterministic=spec.deterministic,
-        positions=MappingProxyType(where),
-    )

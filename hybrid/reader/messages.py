@@ -37,42 +37,37 @@ def _field_names(model: type[BaseModel]) -> list[str]:
     return [info.alias or name for name, info in model.model_fields.items()]
 
 
-def _unwrap(tp: Any) -> Any:
-    while True:
-        origin = get_origin(tp)
-        if origin is Annotated:
-            tp = get_args(tp)[0]
-        elif origin in (Union, types.UnionType):
-            options = [a for a in get_args(tp) if a is not type(None)]
-            tp = options[0] if len(options) == 1 else tp
-            if len(options) != 1:
-                return tp
-        else:
-            return tp
+def _options(tp: Any) -> list[Any]:
+    """The types ``tp`` may be: the members of a union, annotations removed."""
+    while get_origin(tp) is Annotated:
+        tp = get_args(tp)[0]
+    if get_origin(tp) in (Union, types.UnionType):
+        return [o for a in get_args(tp) if a is not type(None) for o in _options(a)]
+    return [tp]
 
 
-def _model_at(root: type[BaseModel], path: tuple[Any, ...]) -> type[BaseModel] | None:
-    current: Any = root
-    for part in path:
-        current = _unwrap(current)
+def _model_at(root: Any, path: tuple[Any, ...]) -> type[BaseModel] | None:
+    """The pydantic model of the mapping at ``path`` (trying every member of a union)."""
+    for current in _options(root):
+        if not path:
+            if isinstance(current, type) and issubclass(current, BaseModel):
+                return current
+            continue
+        part, rest = path[0], path[1:]
         if isinstance(current, type) and issubclass(current, BaseModel):
             by_alias = {info.alias or n: info for n, info in current.model_fields.items()}
             info = by_alias.get(part) or current.model_fields.get(str(part))
-            if info is None:
-                return None
-            current = info.annotation
-            continue
-        origin = get_origin(current)
-        args = get_args(current)
-        if origin is dict and args:
-            current = args[1]
-        elif origin in (list, tuple) and args:
-            current = args[0]
+            found = None if info is None else _model_at(info.annotation, rest)
         else:
-            return None
-    current = _unwrap(current)
-    if isinstance(current, type) and issubclass(current, BaseModel):
-        return current
+            origin, args = get_origin(current), get_args(current)
+            if origin is dict and args and not isinstance(part, int):
+                found = _model_at(args[1], rest)
+            elif origin in (list, tuple) and args and isinstance(part, int):
+                found = _model_at(args[0], rest)
+            else:
+                found = None
+        if found is not None:
+            return found
     return None
 
 
@@ -85,7 +80,10 @@ def validation_problems(
     """One ``(position, message)`` per pydantic error, each at the user's text."""
     problems: list[tuple[Position, str]] = []
     for item in error.errors(include_url=False):
-        loc = tuple(p for p in item["loc"] if isinstance(p, int | str))
+        # a union member's tag (``<list>``, see schema.py) is no place in the file
+        loc = tuple(
+            p for p in item["loc"] if isinstance(p, int) or (isinstance(p, str) and not _is_tag(p))
+        )
         kind = item["type"]
         if kind == "extra_forbidden":
             parent, key = loc[:-1], str(loc[-1])
@@ -96,6 +94,15 @@ def validation_problems(
                 hint = f"; valid keys here: {', '.join(valid)}"
             where = describe_path(parent)
             problems.append((positions.key(loc), f"unknown key '{key}' in {where}{hint}"))
+        elif kind == "missing" and loc and isinstance(loc[-1], int):  # a pair with one item
+            where = describe_path(loc[:-1])
+            got = _value_at(data, loc[:-1])
+            problems.append(
+                (
+                    positions.value(loc[:-1]),
+                    f"{where}: expected [low, high]: two numbers (got {_short(got)})",
+                )
+            )
         elif kind == "missing":
             where = describe_path(loc[:-1])
             problems.append((positions.value(loc[:-1]), f"missing key '{loc[-1]}' in {where}"))
@@ -105,6 +112,11 @@ def validation_problems(
             message = item["msg"]
             if kind == "string_pattern_mismatch":
                 message = "must be a name: an ASCII letter or _ then ASCII letters, digits or _"
+            elif (
+                kind in ("too_long", "too_short")
+                and item.get("ctx", {}).get("field_type") == "Tuple"
+            ):
+                message = "expected [low, high]: two numbers"
             elif kind in ("too_short", "string_too_short") and got == "":
                 message = "must not be empty"
             if loc and loc[-1] == "[key]":  # a mapping key: point at the key itself
@@ -118,6 +130,10 @@ def validation_problems(
 
 
 _MISSING = object()
+
+
+def _is_tag(part: str) -> bool:
+    return part.startswith("<") and part.endswith(">")
 
 
 def _value_at(data: Any, loc: tuple[Any, ...]) -> Any:

@@ -9,14 +9,16 @@ where an expression belongs are turned into their source text.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
 from pydantic import (
     BaseModel,
     BeforeValidator,
     ConfigDict,
+    Discriminator,
     Field,
     StringConstraints,
+    Tag,
     WithJsonSchema,
 )
 
@@ -25,7 +27,10 @@ __all__ = [
     "ChecksSpec",
     "ComponentSpec",
     "EdgeSpec",
+    "ForbiddenSpec",
+    "InitialSetSpec",
     "InitialSpec",
+    "InputSpec",
     "LocationSpec",
     "PropertiesSpec",
     "StateVarSpec",
@@ -61,6 +66,50 @@ Expression = Annotated[
     ),
 ]
 Number = Annotated[float, Field(strict=True)]
+Interval = Annotated[
+    tuple[Number, Number],
+    WithJsonSchema(
+        {
+            "type": "array",
+            "items": {"type": "number"},
+            "minItems": 2,
+            "maxItems": 2,
+            "description": "[low, high]: a closed interval.",
+        }
+    ),
+]
+
+
+def _shape(value: Any) -> str | None:
+    """The tag of a union member (``<...>``: left out of error paths, see messages.py)."""
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        return "<number>"
+    if isinstance(value, list | tuple):
+        return "<list>"
+    if isinstance(value, dict):
+        return "<mapping>"
+    if isinstance(value, str):
+        return "<name>"
+    return None
+
+
+def _union(message: str, *members: tuple[Any, str]) -> Any:
+    """A union decided by the shape of the value, one clear error when no shape fits."""
+    options = tuple(Annotated[tp, Tag(tag)] for tp, tag in members)
+    return Annotated[
+        Union[options],  # noqa: UP007 - a tuple of members needs the subscript form
+        Discriminator(_shape, custom_error_type="shape", custom_error_message=message),
+    ]
+
+
+if TYPE_CHECKING:  # the members, for mypy
+    StartValue = float | tuple[float, float]
+else:
+    StartValue = _union(
+        "Input should be a valid number or an interval [low, high]",
+        (Number, "<number>"),
+        (Interval, "<list>"),
+    )
 
 
 class _Strict(BaseModel):
@@ -70,7 +119,13 @@ class _Strict(BaseModel):
 class StateVarSpec(_Strict):
     """One continuous state variable."""
 
-    initial: Number = Field(0.0, description="Initial value (overridden by initial.state).")
+    initial: StartValue = Field(
+        0.0,
+        description="Initial value, or an initial set [low, high] (overridden by initial.state).",
+    )
+    nominal: Number | None = Field(
+        None, description="Where a run starts in the initial set (default: its midpoint)."
+    )
     bounds: tuple[Number, Number] | None = Field(
         None, description="[low, high] the variable stays within; used by static checks."
     )
@@ -89,14 +144,58 @@ class LocationSpec(_Strict):
         description="Location-specific signal definitions (override `signals`).",
     )
     invariant: Expression = Field("true", description="Condition that must hold while here.")
+    urgent: bool = Field(
+        False, description="No time may pass here: an edge must fire at once, else blocked."
+    )
     description: str = ""
+
+
+class InitialSetSpec(_Strict):
+    """An initial set with its nominal point, in `initial.state`."""
+
+    initial: Interval = Field(description="[low, high]: the initial set of the variable.")
+    nominal: Number | None = Field(None, description="Where a run starts (default: midpoint).")
+
+
+if TYPE_CHECKING:
+    InitialValue = float | tuple[float, float] | InitialSetSpec
+    Locations = str | list[str]
+else:
+    InitialValue = _union(
+        "expected a number, an interval [low, high] or {initial: [low, high], nominal: value}",
+        (Number, "<number>"),
+        (Interval, "<list>"),
+        (InitialSetSpec, "<mapping>"),
+    )
+    Locations = _union(
+        "expected a location name or a list of location names",
+        (Name, "<name>"),
+        (Annotated[list[Name], Field(min_length=1)], "<list>"),
+    )
 
 
 class InitialSpec(_Strict):
     """Where a run starts."""
 
-    location: Name
-    state: dict[Name, Number] = Field(default_factory=dict)
+    location: Locations | None = Field(
+        None,
+        description="The initial location, or several (check explores all; simulate starts "
+        "in the first). Default: the first location (in a system: the component's own).",
+    )
+    state: dict[Name, InitialValue] = Field(default_factory=dict)
+
+
+class InputSpec(_Strict):
+    """A free input, optionally bounded."""
+
+    range: Interval | None = Field(
+        None, description="[low, high] the input stays within; check reasons over it."
+    )
+    nominal: Number | None = Field(
+        None, description="Value a run holds the input at when none is given (default: midpoint)."
+    )
+    unit: str | None = None
+    description: str = ""
 
 
 class EdgeSpec(_Strict):
@@ -112,6 +211,29 @@ class EdgeSpec(_Strict):
     description: str = ""
 
 
+if TYPE_CHECKING:
+    Inputs = list[str] | dict[str, InputSpec]
+else:
+    Inputs = _union(
+        "expected a list of input names, or a mapping of names to {range: [low, high]}",
+        (list[Name], "<list>"),
+        (dict[Name, InputSpec], "<mapping>"),
+    )
+
+
+class ForbiddenSpec(_Strict):
+    """A set of bad states: a location (or locations per component) and a condition."""
+
+    location: QualifiedName | None = Field(
+        None, description="The location (comp.location in a system); none: any location."
+    )
+    locations: dict[Name, Name] | None = Field(
+        None, description="In a system: component -> location, all at once."
+    )
+    when: Expression | None = Field(None, description="Condition on the state (default: true).")
+    description: str = ""
+
+
 class PropertiesSpec(_Strict):
     """Properties `hybrid check` proves (or refutes with a witness)."""
 
@@ -119,6 +241,7 @@ class PropertiesSpec(_Strict):
     unreachable: list[QualifiedName] = Field(default_factory=list)
     deadlock_free: bool | None = None
     deterministic: bool | None = None
+    forbidden: list[ForbiddenSpec] = Field(default_factory=list)
 
 
 RULE_IDS = (
@@ -168,7 +291,7 @@ class AutomatonSpec(_Strict):
     parameters: dict[Name, Number] = Field(default_factory=dict)
     state: dict[Name, StateVarSpec] = Field(default_factory=dict)
     signals: dict[Name, Expression] = Field(default_factory=dict)
-    inputs: list[Name] = Field(default_factory=list)
+    inputs: Inputs = Field(default_factory=list)
     labels: list[Name] = Field(default_factory=list)
     locations: dict[Name, LocationSpec] = Field(min_length=1)
     initial: InitialSpec | None = None
@@ -183,6 +306,10 @@ class ComponentSpec(_Strict):
 
     spec: str = Field(description="Path of an automaton spec, relative to this file.")
     name: Name | None = Field(None, alias="as")
+    rename: dict[Name, Name] = Field(
+        default_factory=dict,
+        description="old: new names of the spec's state variables, signals, inputs and labels.",
+    )
     parameters: dict[Name, Number] = Field(default_factory=dict)
     initial: InitialSpec | None = None
 

@@ -53,7 +53,7 @@ GroupRunner = Callable[[System, np.ndarray, Settings], tuple[Run, CompiledModel]
 
 
 def independent_groups(system: System) -> list[tuple[int, ...]]:
-    """Components linked by a shared label or a signal read as an input, as sorted tuples."""
+    """Components linked by a shared label, or a signal or state variable read as an input."""
     parent = list(range(len(system.components)))
 
     def find(i: int) -> int:
@@ -70,10 +70,7 @@ def independent_groups(system: System) -> list[tuple[int, ...]]:
     for owners in system.shared_labels.values():
         for o in owners[1:]:
             join(owners[0], o)
-    providers: dict[str, int] = {}
-    for i, c in enumerate(system.components):
-        for name in c.automaton.signal_names:
-            providers.setdefault(name, i)
+    providers = system.providers  # signals and state variables an input may read
     for i, c in enumerate(system.components):
         for name in c.automaton.inputs:
             if name in providers:

@@ -114,6 +114,8 @@ class CompiledMode:
     outputs: Fn
     invariants: list[CompiledCondition]
     transitions: list[CompiledTransition]
+    urgent: tuple[str, ...] = ()
+    """Urgent locations of the mode: no time may pass while in one."""
 
 
 @dataclass(frozen=True)
@@ -180,9 +182,7 @@ class CompiledModel:
         self._reads: dict[int, tuple[ir.Expr, frozenset[str]]] = {}
 
     def _external_inputs(self) -> list[str]:
-        if not self.system.single:
-            return []
-        return list(self.system.components[0].automaton.inputs)
+        return list(self.system.free_inputs)
 
     def mode(self, key: Mode) -> CompiledMode:
         """The compiled mode ``key`` (compiled on first use, then cached)."""
@@ -330,7 +330,7 @@ class CompiledModel:
                     variant=variant if differences else None,
                 )
             )
-        return CompiledMode(view.key, view.name, rhs, outputs, invariants, transitions)
+        return CompiledMode(view.key, view.name, rhs, outputs, invariants, transitions, view.urgent)
 
 
 def _identifier(name: str) -> str:

@@ -27,6 +27,7 @@ from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.loop import EventLoop
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import MAX_JUMPS_PER_INSTANT, Settings, finite_number
+from hybrid.simulation.start import describe_start, held_inputs
 
 __all__ = ["simulate"]
 
@@ -73,8 +74,10 @@ def simulate(
     initial_location : str, optional
         Start location of an automaton.
     inputs : mapping, optional
-        External inputs of an automaton: name to a function of ``t`` returning a
-        number (see :mod:`hybrid.simulation.inputs` for expressions and time series).
+        Free inputs (of an automaton, or those of a system no component
+        provides): name to a function of ``t`` returning a number (see
+        :mod:`hybrid.simulation.inputs` for expressions and time series). A
+        free input with a ``range`` given none is held at its nominal value.
     t_start : float
         Start time.
     dt : float, optional
@@ -99,6 +102,10 @@ def simulate(
     -------
     Run
         The trajectory, jumps and termination (``run.termination.cause``).
+        ``run.settings["start"]`` says where the run started and why: the
+        initial location and state, the inputs held at their nominal values,
+        and ``notes`` when a point of a set was chosen (a nominal value, a
+        midpoint, the first of several initial locations).
 
     Examples
     --------
@@ -126,10 +133,11 @@ def simulate(
     initial = _numbers("initial value of", initial)
     _check_inputs(inputs)
     model = model.with_parameters(parameters) if parameters else model
+    if isinstance(model, System) and initial_location:
+        raise UsageError("initial_location applies to an automaton; set it per component")
+    start = describe_start(model, inputs, initial, initial_location, t_start)
     if isinstance(model, Automaton) and (initial or initial_location):
         model = model.with_initial(initial_location, initial)
-    elif isinstance(model, System) and initial_location:
-        raise UsageError("initial_location applies to an automaton; set it per component")
     if settings.backend == "compiled":
         from hybrid.simulation.native.engine import simulate_compiled
 
@@ -151,7 +159,8 @@ def simulate(
             def run_group(
                 sub: System, start: np.ndarray, how: Settings
             ) -> tuple[Run, CompiledModel]:
-                part = _compiled(sub, None)
+                mine = {k: v for k, v in (inputs or {}).items() if k in sub.free_inputs}
+                part = _compiled(sub, mine)
                 loop = EventLoop(part, how, interrupts, None)
                 return loop.recorder.run(sub.name, loop.run(how.t_start, start)), part
 
@@ -159,6 +168,7 @@ def simulate(
         else:
             loop = EventLoop(compiled, settings, interrupts, _updater(tracker))
             run = loop.recorder.run(model.name, loop.run(settings.t_start, x0))
+    run.settings["start"] = start
     termination = run.termination
     if tracker is not None:
         tracker.finish(termination.t, jumps=len(run.jumps), points=len(run))
@@ -209,11 +219,12 @@ def _compiled(
     """The compiled model of ``model``, reused across runs of the same model in a thread.
 
     Compiling a mode's functions costs far more than a jump; a parameter sweep or
-    a benchmark simulates one model many times. Models with external inputs are
-    compiled afresh (the inputs are bound into the code).
+    a benchmark simulates one model many times. Models given external inputs are
+    compiled afresh (the inputs are bound into the code); free inputs given none
+    are held at their nominal values (:func:`held_inputs`).
     """
     if inputs:
-        return CompiledModel(model, inputs)
+        return CompiledModel(model, {**held_inputs(model, inputs), **inputs})
     cache: dict[int, tuple[Automaton | System, CompiledModel]] = (
         getattr(_CACHE, "models", None) or {}
     )
@@ -221,7 +232,7 @@ def _compiled(
     hit = cache.get(id(model))
     if hit is not None and hit[0] is model:
         return hit[1]
-    compiled = CompiledModel(model)
+    compiled = CompiledModel(model, held_inputs(model, None))
     if len(cache) >= _CACHE_SIZE:
         cache.pop(next(iter(cache)))
     cache[id(model)] = (model, compiled)

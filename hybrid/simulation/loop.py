@@ -95,6 +95,15 @@ class EventLoop:
             chosen, enabled, armed = boundary.enabled_at_entry(mode, t, x)
             if self._failed() is not None:
                 return self._eval_failure(t, j, mode)
+            if chosen is None and mode.urgent:
+                return Termination(
+                    "blocked",
+                    t,
+                    j,
+                    f"urgent location {', '.join(mode.urgent)}: no time may pass there and no "
+                    "transition is enabled",
+                    location=mode.name,
+                )
             if chosen is None:
                 blocked = self._blocked(mode, t, x, j, "does not hold")
                 if blocked is not None:

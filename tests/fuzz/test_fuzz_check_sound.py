@@ -2,12 +2,17 @@
 
 Hypothesis builds random small automata and systems of two (guards strict and
 not, equalities, invariants that entries may violate, resets onto guard
-boundaries, shared labels); each is simulated with today's simulator and
-checked. Every edge the run fires must not be a ``dead-edge`` and every
-location it enters must not be an ``unreachable-location`` (nor a declared
-``reachable`` one reported as not reached). The claims of ``check`` are made
-for runs that stay within the declared bounds, so a run is compared only up
-to the first stored point outside them.
+boundaries, shared labels; initial sets, several initial locations, a free
+input with a range, urgent locations, forbidden states); each is simulated
+with today's simulator and checked. Every edge the run fires must not be a
+``dead-edge``, every location it enters must not be an ``unreachable-location``
+(nor a declared ``reachable`` one reported as not reached), and no state it
+visits may be in a forbidden set that check proved unreachable. The claims of
+``check`` are made for runs that stay within the declared bounds, from any point
+of the initial set, in any initial location, with inputs within their ranges:
+so the runs start at the nominal point and at random points of the set, in each
+initial location, with the input held at random constants within its range, and
+each is compared only up to the first stored point outside the bounds.
 
 The in-suite size is small; ``make fuzz`` (``HYBRID_FUZZ=1``) runs
 :data:`FULL_EXAMPLES`.
@@ -15,8 +20,11 @@ The in-suite size is small; ``make fuzz`` (``HYBRID_FUZZ=1``) runs
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pytest
@@ -24,6 +32,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import hybrid
+from hybrid.compose import as_system
+from hybrid.expr import ir
+from hybrid.expr.interval import Interval
+from hybrid.expr.ranges import IntervalEvaluator
 
 FULL_EXAMPLES = 5_000
 IN_SUITE_EXAMPLES = 40
@@ -47,9 +59,12 @@ OPS = ["<", "<=", ">", ">=", "=="]
 
 
 @st.composite
-def automaton_text(draw: st.DrawFn, name: str = "fuzz", suffix: str = "", labels=()) -> str:
+def automaton_text(
+    draw: st.DrawFn, name: str = "fuzz", suffix: str = "", labels=(), u_range: str | None = None
+) -> str:
     x, y = f"x{suffix}", f"y{suffix}"
-    terms = st.sampled_from(_terms(x, y))
+    term_list = _terms(x, y) + (["u", f"u*{x}"] if u_range else [])
+    terms = st.sampled_from(term_list)
     ops = st.sampled_from(OPS)
     # two different terms: `x < x` is identically false, and today's simulator may still
     # fire it (see test_simulator_fires_an_identically_false_guard below)
@@ -63,11 +78,14 @@ def automaton_text(draw: st.DrawFn, name: str = "fuzz", suffix: str = "", labels
     locs = [f"L{i}" for i in range(n)]
     bounded = draw(st.booleans()) and draw(st.booleans())
     bounds = ", bounds: [-50, 50]" if bounded else ""
+    x0 = draw(st.sampled_from(["0", "1", "-1", "0.5", "[0, 1]", "[-1, 0.5]"]))
+    y0 = draw(st.sampled_from(["0", "1", "2", "[0, 2]"]))
     lines = [
         f"automaton: {name}",
-        f"state: {{{x}: {{initial: {draw(st.sampled_from([0, 1, -1, 0.5]))}{bounds}}}, "
-        f"{y}: {{initial: {draw(st.sampled_from([0, 1, 2]))}}}}}",
+        f"state: {{{x}: {{initial: {x0}{bounds}}}, {y}: {{initial: {y0}}}}}",
     ]
+    if u_range:
+        lines.append(f"inputs: {{u: {{range: {u_range}}}}}")
     if labels:
         lines.append(f"labels: [{', '.join(labels)}]")
     lines.append("locations:")
@@ -82,7 +100,8 @@ def automaton_text(draw: st.DrawFn, name: str = "fuzz", suffix: str = "", labels
                 ]
             )
         )
-        lines.append(f"  {loc}: {{flow: {flow}, invariant: '{inv}'}}")
+        urgent = ", urgent: true" if draw(st.integers(0, 5)) == 0 else ""
+        lines.append(f"  {loc}: {{flow: {flow}, invariant: '{inv}'{urgent}}}")
     edges = []
     for _ in range(draw(st.integers(0, 4))):
         kind = draw(st.sampled_from(["true", "terms", "constant"]))
@@ -115,16 +134,32 @@ def automaton_text(draw: st.DrawFn, name: str = "fuzz", suffix: str = "", labels
     if edges:
         lines.append("edges:")
         lines.extend(edges)
+    if n > 1 and draw(st.booleans()):
+        lines.append(f"initial: {{location: [{locs[-1]}, {draw(st.sampled_from(locs[:-1]))}]}}")
+    if draw(st.booleans()):
+        where = draw(st.sampled_from([None, *locs]))
+        at = f"location: {where}, " if where else ""
+        lines.append(f"properties: {{forbidden: [{{{at}when: '{comparison()}'}}]}}")
     return "\n".join(lines) + "\n"
+
+
+U_RANGES = [None, "[0, 1]", "[-1, 1]", "[0.5, 2]"]
+
+
+def _load(text: str) -> hybrid.Automaton:
+    m = hybrid.load_text(text)
+    assert isinstance(m, hybrid.Automaton)
+    return m
 
 
 @st.composite
 def model(draw: st.DrawFn) -> hybrid.Automaton | hybrid.System:
+    u_range = draw(st.sampled_from(U_RANGES))
     if draw(st.booleans()):
-        return hybrid.load_text(draw(automaton_text()))
+        return _load(draw(automaton_text(u_range=u_range)))
     labels = draw(st.sampled_from([(), ("go",), ("go", "stop")]))
-    first = hybrid.load_text(draw(automaton_text("p", "0", labels)))
-    second = hybrid.load_text(draw(automaton_text("q", "1", labels)))
+    first = _load(draw(automaton_text("p", "0", labels, u_range)))
+    second = _load(draw(automaton_text("q", "1", labels, u_range)))
     return hybrid.compose(first, second)
 
 
@@ -139,26 +174,89 @@ def _bounded_prefix(m: hybrid.Automaton | hybrid.System, run: hybrid.Run) -> flo
     return first
 
 
-def assert_check_agrees_with_run(m: hybrid.Automaton | hybrid.System) -> None:
-    try:
-        run = hybrid.simulate(
-            m, t_end=3.0, max_jumps=40, max_jumps_per_instant=15, handle_sigint=False
-        )
-    except hybrid.SimulationError:
-        return
-    horizon = _bounded_prefix(m, run)
-    fired = {part for jump in run.jumps if jump.t < horizon for part in jump.edge.split("+")}
-    entered = {
-        part
-        for t, loc in zip(run.t.tolist(), run.location.tolist(), strict=True)
-        if t < horizon or t == 0.0
-        for part in str(loc).split("|")
+def _starts(
+    m: hybrid.Automaton | hybrid.System, draw: Callable[[st.SearchStrategy[Any]], Any] | None
+) -> list[tuple[hybrid.Automaton | hybrid.System, dict[str, float] | None, float | None]]:
+    """Runs to compare: each initial location (mode) from the nominal point, and one
+    random point of the initial set with the input at a random constant of its range."""
+    system = as_system(m)
+    parts = [c.automaton for c in system.components]
+    variants: list[hybrid.Automaton | hybrid.System] = []
+    for combo in itertools.product(*(a.initial_locations for a in parts)):
+        started = [a.with_initial(loc) for a, loc in zip(parts, combo, strict=True)]
+        if system.single:
+            variants.append(started[0])
+        else:
+            names = [c.name for c in system.components]
+            variants.append(hybrid.compose(*started, names=names, name=system.name))
+    runs: list[tuple[hybrid.Automaton | hybrid.System, dict[str, float] | None, float | None]]
+    runs = [(v, None, None) for v in variants]
+    if draw is not None:
+        point = {
+            name: draw(st.floats(r.lo, r.hi)) for name, r in system.initial_set().items()
+        }
+        ranges = system.input_ranges()
+        u = draw(st.floats(ranges["u"].lo, ranges["u"].hi)) if "u" in ranges else None
+        runs.append((variants[0], point, u))
+    return runs
+
+
+def _surely(cond: ir.Expr, t: float, values: dict[str, float], u: float) -> bool:
+    """``cond`` holds on a small box around the point (a margin for the solver's error)."""
+    box = {
+        k: Interval(v - 1e-6 * (1 + abs(v)), v + 1e-6 * (1 + abs(v))) for k, v in values.items()
     }
+    box["t"] = Interval(t - 1e-9, t + 1e-9)
+    box["u"] = Interval.point(u)
+    can_be_true, can_be_false = IntervalEvaluator(box).truth(cond)
+    return can_be_true and not can_be_false
+
+
+def assert_check_agrees_with_run(
+    m: hybrid.Automaton | hybrid.System,
+    draw: Callable[[st.SearchStrategy[Any]], Any] | None = None,
+) -> None:
     report = hybrid.check(m)
     dead = {f.where for f in report.findings if f.rule == "dead-edge"}
     unreachable = {f.where for f in report.findings if f.rule == "unreachable-location"}
-    assert not (fired & dead), f"fired but called dead: {fired & dead}"
-    assert not (entered & unreachable), f"entered but called unreachable: {entered & unreachable}"
+    reported = {f.where for f in report.findings if f.where.startswith("forbidden: ")}
+    proved = [e for e in m.properties.forbidden if f"forbidden: {e.text()}" not in reported]
+    ranges = as_system(m).input_ranges()
+    for start, initial, u in _starts(m, draw):
+        held = u if u is not None else (ranges["u"].nominal if "u" in ranges else 0.0)
+        try:
+            run = hybrid.simulate(
+                start,
+                t_end=3.0,
+                max_jumps=40,
+                max_jumps_per_instant=15,
+                handle_sigint=False,
+                initial=initial,
+                inputs={"u": lambda t, v=held: v} if "u" in ranges else None,
+            )
+        except hybrid.SimulationError:
+            continue
+        horizon = _bounded_prefix(m, run)
+        fired = {part for jump in run.jumps if jump.t < horizon for part in jump.edge.split("+")}
+        entered = {
+            part
+            for t, loc in zip(run.t.tolist(), run.location.tolist(), strict=True)
+            if t < horizon or t == 0.0
+            for part in str(loc).split("|")
+        }
+        assert not (fired & dead), f"fired but called dead: {fired & dead}"
+        assert not (entered & unreachable), (
+            f"entered but called unreachable: {entered & unreachable}"
+        )
+        for entry in proved:
+            where = {f"{c}.{loc}" if c else loc for c, loc in entry.locations.items()}
+            for k, (t, loc) in enumerate(zip(run.t.tolist(), run.location.tolist(), strict=True)):
+                if t >= horizon or not where <= set(str(loc).split("|")):
+                    continue
+                values = {n: float(run[n][k]) for n in run.state_names}
+                assert entry.when is None or not _surely(entry.when, t, values, held), (
+                    f"visits the forbidden state '{entry.text()}' proved unreachable, at t={t}"
+                )
 
 
 @settings(
@@ -167,9 +265,11 @@ def assert_check_agrees_with_run(m: hybrid.Automaton | hybrid.System) -> None:
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much],
     derandomize=os.environ.get("HYBRID_FUZZ", "0") in ("", "0"),
 )
-@given(model())
-def test_check_never_calls_dead_what_simulate_fires(m: hybrid.Automaton | hybrid.System) -> None:
-    assert_check_agrees_with_run(m)
+@given(model(), st.data())
+def test_check_never_calls_dead_what_simulate_fires(
+    m: hybrid.Automaton | hybrid.System, data: st.DataObject
+) -> None:
+    assert_check_agrees_with_run(m, data.draw)
 
 
 def test_regression_entry_outside_the_invariant_fires_at_once() -> None:
@@ -207,6 +307,26 @@ edges:
     run = hybrid.simulate(m, t_end=1.0, handle_sigint=False)
     assert [j.edge for j in run.jumps] == ["narrow"]
     assert_check_agrees_with_run(m)
+
+
+def test_regression_an_equality_with_a_strict_comparison_entering() -> None:
+    # found by the property test: the simulator snaps `t == 1` true on its level and takes
+    # `1 < t` by the slope rule (t rises): the edge fires at t = 1 (docs/semantics.md,
+    # equality guards); check dropped the entering boundary of a conjunction with an
+    # equality and called the edge dead
+    m = hybrid.load_text(
+        """
+automaton: level
+state: {x: {initial: 0}}
+locations: {a: {flow: {x: 1}}, b: {}}
+edges:
+  - {name: e, from: a, to: b, guard: "1 < t and t == 1"}
+"""
+    )
+    run = hybrid.simulate(m, t_end=3.0, handle_sigint=False)
+    assert [(j.edge, j.t) for j in run.jumps] == [("e", 1.0)]
+    assert_check_agrees_with_run(m)
+    assert not hybrid.check(m).findings
 
 
 @pytest.mark.xfail(

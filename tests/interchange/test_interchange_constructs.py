@@ -132,7 +132,7 @@ def test_the_cfg_forbidden_set_with_locations_and_a_union() -> None:
         (
             [TANK, PUMP, PLANT],
             'system = plant\ninitially = "h == 0 & q == 0 | h == 1"',
-            "m.cfg:2:14",
+            "m.cfg:2:32",  # the part that is another box, not only other locations
             "a union",
         ),
         (

@@ -1,0 +1,134 @@
+"""Where a run starts when the model gives sets: the point chosen, and saying so.
+
+A spec may give an initial *set* (``initial: [lo, hi]``), several initial
+locations, and free inputs with a *range*; one run takes one point of each:
+
+- a state variable starts at its ``nominal`` value, else at the midpoint of its set;
+- the run starts in the first initial location (of each component);
+- a free input given no value (``inputs=``, ``--input``) is held at its
+  ``nominal`` value, else at the midpoint of its range (:func:`held_inputs`).
+
+:func:`describe_start` records those choices for ``run.settings["start"]``,
+with a note for each, which ``hybrid simulate`` prints.
+
+Examples
+--------
+>>> import hybrid
+>>> m = hybrid.load_text('''
+... automaton: a
+... state: {x: {initial: [0, 2]}}
+... inputs: {u: {range: [-1, 3]}}
+... locations: {l: {flow: {x: u}}, k: {}}
+... initial: {location: [l, k]}
+... ''')
+>>> start = describe_start(m, None, None, None)
+>>> start["state"], start["inputs"]
+({'x': 1.0}, {'u': 1.0})
+>>> for note in start["notes"]:
+...     print(note)
+starts in 'l', the first of its initial locations l, k
+x starts at the midpoint 1 of its initial set [0, 2]
+input u is held at the midpoint 1 of its range [-1, 3] (give it a value with --input or inputs= for another)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from hybrid.compose import System, as_system
+from hybrid.model import Automaton, Range
+
+__all__ = ["Held", "describe_start", "held_inputs"]
+
+
+class Held:
+    """An input held at one value: ``Held(0.5)(t) == 0.5``."""
+
+    def __init__(self, value: float) -> None:
+        self.value = float(value)
+
+    def __call__(self, t: float) -> float:
+        return self.value
+
+    def __repr__(self) -> str:
+        return f"Held({self.value!r})"
+
+
+def held_inputs(
+    model: Automaton | System, given: Mapping[str, Callable[[float], float]] | None
+) -> dict[str, Callable[[float], float]]:
+    """The free inputs with a range that ``given`` leaves out, each held at its nominal value."""
+    ranges = as_system(model).input_ranges()
+    return {name: Held(r.nominal) for name, r in ranges.items() if name not in (given or {})}
+
+
+def _how(r: Range) -> str:
+    return "its nominal" if r.given else "the midpoint"
+
+
+def describe_start(
+    model: Automaton | System,
+    inputs: Mapping[str, Callable[[float], float]] | None,
+    initial: Mapping[str, float] | None,
+    initial_location: str | None,
+    t_start: float = 0.0,
+) -> dict[str, Any]:
+    """Where a run of ``model`` starts and why: ``{location, state, inputs, notes}``.
+
+    ``initial`` and ``initial_location`` are the caller's overrides (a value
+    given is not a choice to report, but one outside the spec's set is: the
+    claims of ``hybrid check`` do not cover it); ``inputs`` the inputs given.
+    """
+    original = model
+    if isinstance(model, Automaton) and (initial or initial_location):
+        model = model.with_initial(initial_location, initial)
+    system = as_system(model)
+    notes: list[str] = []
+    for comp in system.components:
+        a = comp.automaton
+        if len(a.initial_locations) > 1:
+            who = "" if system.single else f"component '{comp.name}' "
+            notes.append(
+                f"{who}starts in '{a.initial_location}', the first of its initial locations "
+                f"{', '.join(a.initial_locations)}"
+            )
+    sets = as_system(original).initial_set()
+    state: dict[str, float] = {}
+    for name, value in zip(system.state_names, system.initial_vector(), strict=True):
+        if initial and name in initial:
+            state[name] = float(initial[name])
+            if not sets[name].contains(state[name]):
+                notes.append(
+                    f"{name} starts at {state[name]:g}, outside its initial set "
+                    f"{sets[name].text()} (the claims of hybrid check do not cover this run)"
+                )
+            continue
+        state[name] = value
+        r = sets[name]
+        if not r.is_point:
+            notes.append(f"{name} starts at {_how(r)} {r.nominal:g} of its initial set {r.text()}")
+    held: dict[str, float] = {}
+    for name, r in system.input_ranges().items():
+        if inputs and name in inputs:
+            try:
+                first = float(inputs[name](t_start))
+            except Exception:  # the run itself reports an input that fails
+                continue
+            if not r.contains(first):
+                notes.append(
+                    f"input {name} starts at {first:g}, outside its range {r.text()} (the "
+                    "claims of hybrid check do not cover this run)"
+                )
+            continue
+        held[name] = r.nominal
+        notes.append(
+            f"input {name} is held at {_how(r)} {r.nominal:g} of its range {r.text()} "
+            "(give it a value with --input or inputs= for another)"
+        )
+    return {
+        "location": system.mode_name(system.initial_mode),
+        "state": state,
+        "inputs": held,
+        "notes": notes,
+    }
