@@ -17,7 +17,8 @@ never changes sign and a root finder cannot see it. :func:`levels` lists such
 equality atoms (their differences ``a - b``, in a fixed order);
 :func:`oriented_rho` writes the guard with atom ``i`` as the one-sided
 ``sign_i * (a - b) <= 0``, which becomes true when the level is reached from
-the side ``sign_i``; :func:`snapped` replaces atom ``i`` by a constant (true
+the side ``sign_i`` (``sign_i = 0``, a state exactly on the level: the atom
+itself); :func:`snapped` replaces atom ``i`` by a constant (true
 when the point is at the level). The simulator watches the oriented form and
 decides the snapped one (docs/semantics.md, "Equality guards").
 
@@ -160,9 +161,11 @@ def levels(node: ir.Expr) -> tuple[ir.Expr, ...]:
 
 
 def oriented_rho(node: ir.Expr, signs: Sequence[int]) -> ir.Expr:
-    """Rho of the guard with level atom ``i`` read as ``signs[i] * (a - b) <= 0``."""
+    """Rho of the guard with level atom ``i`` read as ``signs[i] * (a - b) <= 0`` (``a == b`` if 0)."""
 
     def one_sided(index: int, difference: ir.Expr, col: int) -> ir.Expr:
+        if signs[index] == 0:  # on the level: the atom itself, true while the state stays there
+            return ir.Cmp(("==",), (difference, ir.Num(0.0, col)), col)
         side = difference if signs[index] > 0 else _opposite(difference)
         return ir.Cmp(("<=",), (side, ir.Num(0.0, col)), col)
 

@@ -78,13 +78,16 @@ class CompiledTransition(CompiledCondition):
     _snapped: dict[tuple[bool, ...], tuple[Fn, Fn]] = field(default_factory=dict)
 
     def oriented(self, signs: tuple[int, ...]) -> Fn:
-        """Rho with level atom ``i`` read as ``signs[i] * (a - b) <= 0`` (the plain rho without levels)."""
+        """Rho with level atom ``i`` read as ``signs[i] * (a - b) <= 0`` (``a == b`` for a 0).
+
+        The plain rho for a guard without levels.
+        """
         if not self.levels:
             return self.rho
         fn = self._oriented.get(signs)
         if fn is None:
             assert self.variant is not None
-            tag = "".join("p" if s > 0 else "n" for s in signs)
+            tag = "".join("p" if s > 0 else "n" if s < 0 else "z" for s in signs)
             fn = self.variant(tag, oriented_rho(self.view.guard, signs), "rho")
             self._oriented[signs] = fn
         return fn

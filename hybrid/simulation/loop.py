@@ -62,7 +62,7 @@ class EventLoop:
         self.settings = settings
         self.interrupts = interrupts
         self.recorder = Recorder(compiled, settings)
-        self.watch_factories: dict[tuple[float, ...], Any] = {}
+        self.watch_factories: dict[tuple[tuple[float, bool], ...], Any] = {}
         self.progress = progress
         tick = None
         if progress is not None:
