@@ -6,9 +6,9 @@ its boundary. Within a band of the boundary (``rho`` within :func:`band` of
 0) the slope of ``rho`` along the flow decides: falling means the guard is
 starting to hold; rising means it is being left and the guard is *disarmed*
 until it has been strictly false (docs/semantics.md); flat means its boolean
-form decides. Where the point the slope test steps to has a rho of exactly 0
-(rho falls to 0 and stays there: a flat zero), the boolean form decides at
-that point. Among enabled transitions the highest priority fires, ties by
+form decides. Where rho is not 0 but the point the slope test steps to has a
+rho of exactly 0 (rho comes down to 0 and stays there: a flat zero), the
+boolean form decides at that point. Among enabled transitions the highest priority fires, ties by
 file order.
 
 At a point where the search stopped (:func:`enabled_at_event`), an armed
@@ -91,8 +91,8 @@ def holds_now(
         return False, False
     h, t1, x1 = ahead(mode, t, x)
     further = rho(t1, x1)
-    if further == 0.0:
-        # rho has come down to exactly 0 (a flat zero: `max(h, v, 0)`, `x < x and ...`):
+    if further == 0.0 and value != 0.0:
+        # rho comes down to exactly 0 (a flat zero: `max(h, v, 0)`, `x - x > 0 and ...`):
         # its slope says nothing about the guard; the boolean form where the flow goes does
         now = bool(holds(t1, x1))
         return now, now
