@@ -15,9 +15,11 @@ Semantics (see docs/check.md, "What is proved"):
 - an edge may fire at a point of its source location where its guard may be
   found enabled (:func:`~hybrid.analysis.flows.enabled_region`: where it
   holds, or on the boundary of a strict comparison the flow enters), that
-  point being either in the closure of the source invariant (while flowing)
-  or an *entry* point: the initial state, or a state right after an edge into
-  the location fired, whether or not the invariant holds there;
+  point being either in the closure of the source invariant (while flowing:
+  an equality level is reached from the side the invariant keeps) or an
+  *entry* point (the flow keeps the state on an equality level): the initial
+  state, or a state right after an edge into the location fired, whether or
+  not the invariant holds there;
 - entry points are over-approximated by a box per location, the least
   fixpoint of "initial state, and the reset of every box where an edge into
   the location may fire", widened to the declared bounds if it does not
@@ -42,7 +44,9 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 
-from hybrid.analysis.flows import enabled_region, exit_conditions
+from hybrid.analysis.enabled import enabled_region, invariant_side, surely_enabled_at_entry
+from hybrid.analysis.flows import exit_conditions
+from hybrid.analysis.inline import inline_signals
 from hybrid.analysis.linear import structural_key
 from hybrid.analysis.solve import Box, Env, closure, conjoin, contract, negate, satisfiable
 from hybrid.expr import ir
@@ -61,7 +65,6 @@ __all__ = [
 ]
 
 ENTRY_ROUNDS = 32
-INLINE_BUDGET = 400
 _TIME = Interval(0.0, math.inf)
 
 
@@ -69,15 +72,19 @@ _TIME = Interval(0.0, math.inf)
 class EdgeFacts:
     """An edge with parameters bound, where it may be enabled, and whether it can ever fire.
 
-    ``enabled`` is the guard as the simulator may find it enabled in the
-    source location (:func:`~hybrid.analysis.flows.enabled_region`); ``fires``
-    a box holding every state it may fire from (``None``: never).
+    ``enabled`` is the guard as the simulator may find it enabled while flowing
+    in the source location, ``entry_enabled`` at an entry point of it
+    (:func:`~hybrid.analysis.flows.enabled_region`); ``idle`` holds wherever the
+    guard may not be enabled at an entry point; ``fires`` a box holding every
+    state it may fire from (``None``: never).
     """
 
     edge: Edge
     guard: ir.Expr
     reset: Mapping[str, ir.Expr]
     enabled: ir.Expr
+    entry_enabled: ir.Expr
+    idle: ir.Expr
     live: bool
     fires: Box | None = None
 
@@ -169,23 +176,26 @@ class AutomatonFacts:
         self._overlap: dict[tuple[int, int], bool] = {}
 
     def _edge_facts(self, automaton: Automaton) -> list[EdgeFacts]:
-        """Every edge's enabled region, entry boxes of every location, then liveness."""
+        """Every edge's enabled regions, entry boxes of every location, then liveness."""
         params = automaton.parameters
-        guards, resets, enabled, flowing = [], [], [], []
+        guards, resets, enabled, at_entry, flowing = [], [], [], [], []
         for edge in automaton.edges:
             src = self.locations[edge.source]
             guard = bind_parameters(edge.guard, params)
-            region = enabled_region(guard, src.flow, src.env.signals, self.opaque)
+            signals = src.env.signals
+            side = invariant_side(src.closed, src.env, src.region)
+            region = enabled_region(guard, src.flow, signals, self.opaque, side=side)
             guards.append(guard)
             resets.append({k: bind_parameters(v, params) for k, v in edge.reset.items()})
             enabled.append(region)
+            at_entry.append(enabled_region(guard, src.flow, signals, self.opaque, entry=True))
             # while flowing the state is in the closure of the invariant, within the bounds
             flowing.append(
                 None
                 if src.region is None
                 else contract(conjoin(src.closed, region), src.env, src.region)
             )
-        self.entries = self._entries(automaton, resets, enabled, flowing)
+        self.entries = self._entries(automaton, resets, at_entry, flowing)
         result: list[EdgeFacts] = []
         for k, edge in enumerate(automaton.edges):
             src = self.locations[edge.source]
@@ -194,10 +204,20 @@ class AutomatonFacts:
             if flowing[k] is not None:
                 live = satisfiable(conjoin(src.closed, enabled[k]), src.env, src.region or {})
             if not live and entry is not None:
-                live = satisfiable(enabled[k], src.env, entry)
-            fires = hull(flowing[k], self._at_entry(k, enabled, entry)) if live else None
+                live = satisfiable(at_entry[k], src.env, entry)
+            fires = hull(flowing[k], self._at_entry(k, at_entry, entry)) if live else None
+            idle = negate(surely_enabled_at_entry(guards[k], src.flow, src.env.signals, self.opaque))
             result.append(
-                EdgeFacts(edge, guards[k], MappingProxyType(resets[k]), enabled[k], live, fires)
+                EdgeFacts(
+                    edge,
+                    guards[k],
+                    MappingProxyType(resets[k]),
+                    enabled[k],
+                    at_entry[k],
+                    idle,
+                    live,
+                    fires,
+                )
             )
         return result
 
@@ -282,7 +302,12 @@ class AutomatonFacts:
                         src.region is not None
                         and satisfiable(conjoin(src.closed, both), src.env, src.region)
                     )
-                    or (entry is not None and satisfiable(both, src.env, entry))
+                    or (
+                        entry is not None
+                        and satisfiable(
+                            conjoin(a.entry_enabled, b.entry_enabled), src.env, entry
+                        )
+                    )
                 )
             )
         return self._overlap[key]
@@ -315,64 +340,11 @@ class AutomatonFacts:
             )
             entry = self.entries[location]
             if not stuck and entry is not None:
-                # on entry an edge is enabled at most where its guard's closure holds
-                idle = [closure(negate(g)) for g in guards]
+                # on entry an edge may be idle wherever it is not surely enabled
+                idle = [self.edges[i].idle for i in sorted(chosen)]
                 stuck = any(
                     satisfiable(conjoin(v, *idle), loc.env, entry)
                     for v in (negate(loc.invariant), *loc.exits)
                 )
             self._covered[key] = not stuck
         return self._covered[key]
-
-
-def inline_signals(
-    node: ir.Expr, signals: Mapping[str, ir.Expr], budget: int = INLINE_BUDGET
-) -> ir.Expr | None:
-    """``node`` with every signal replaced by its definition, or ``None``.
-
-    ``None`` when the result would read inputs or vector signals (whose values
-    another component or a library decides) or exceed ``budget`` nodes.
-
-    Examples
-    --------
-    >>> from hybrid.expr.printer import to_source
-    >>> s = {"g": ir.Bin("*", ir.Num(2.0), ir.Var("x", "state"))}
-    >>> to_source(inline_signals(ir.Var("g", "signal"), s), {"x": "x"})
-    '2.0 * x'
-    """
-    count = 0
-
-    def go(n: ir.Expr) -> ir.Expr | None:
-        nonlocal count
-        count += 1
-        if count > budget:
-            return None
-        if isinstance(n, ir.Var):
-            if n.kind == ir.SIGNAL:
-                definition = signals.get(n.name)
-                return None if definition is None else go(definition)
-            return None if n.kind == ir.INPUT else n
-        if isinstance(n, ir.Index):
-            return None
-        kids = ir.children(n)
-        if not kids:
-            return n
-        new = [go(k) for k in kids]
-        if any(k is None for k in new):
-            return None
-        done = [k for k in new if k is not None]
-        if isinstance(n, ir.Call):
-            return ir.Call(n.func, tuple(done), n.col)
-        if isinstance(n, ir.Unary):
-            return ir.Unary(n.op, done[0], n.col)
-        if isinstance(n, ir.Bin):
-            return ir.Bin(n.op, done[0], done[1], n.col)
-        if isinstance(n, ir.Cmp):
-            return ir.Cmp(n.ops, tuple(done), n.col)
-        if isinstance(n, ir.BoolOp):
-            return ir.BoolOp(n.op, tuple(done), n.col)
-        if isinstance(n, ir.Not):
-            return ir.Not(done[0], n.col)
-        return n  # pragma: no cover - leaves are handled above
-
-    return go(node)
