@@ -44,8 +44,8 @@ from dataclasses import dataclass
 
 import networkx as nx
 
-from hybrid.analysis.solve import closure, conjoin, nnf, satisfiable
 from hybrid.analysis.inline import inline_signals
+from hybrid.analysis.solve import closure, conjoin, nnf, satisfiable
 from hybrid.analysis.static import AutomatonFacts
 from hybrid.expr import ir
 
