@@ -228,6 +228,8 @@ def surely_enabled_at_entry(
     flow: Mapping[str, ir.Expr],
     signals: Mapping[str, ir.Expr] | None = None,
     opaque: frozenset[str] = frozenset(),
+    *,
+    snapped: bool = False,
 ) -> ir.Expr:
     """A condition under which the simulator surely finds ``guard`` enabled at an entry point.
 
@@ -240,6 +242,10 @@ def surely_enabled_at_entry(
     derivative of ``x**2 - y`` may hide a state that leaves at once). Its
     negation holds wherever the guard may *not* be enabled on entry.
 
+    ``snapped``: at a point where the search stopped instead (an exit of the
+    invariant while flowing), where the equality atoms of an armed guard hold
+    on their level whatever the flow does there.
+
     Examples
     --------
     >>> from hybrid.expr.parse import Scope, parse_expression
@@ -247,8 +253,11 @@ def surely_enabled_at_entry(
     >>> scope = Scope({"x": "state", "y": "state"})
     >>> names = {"x": "x", "y": "y"}
     >>> circle = {"x": ir.Var("y", "state"), "y": ir.Unary("-", ir.Var("x", "state"))}
-    >>> to_source(surely_enabled_at_entry(parse_expression("x == 0", scope, want="bool"), circle), names)
+    >>> level = parse_expression("x == 0", scope, want="bool")
+    >>> to_source(surely_enabled_at_entry(level, circle), names)
     'x == 0.0 and y == 0.0'
+    >>> to_source(surely_enabled_at_entry(level, circle, snapped=True), names)
+    'x == 0.0'
     >>> to_source(surely_enabled_at_entry(parse_expression("y < 1", scope, want="bool"), circle), names)
     '(y < 1.0 or y == 1.0 and -x < 0.0) or y < 1.0'
     """
@@ -259,38 +268,63 @@ def surely_enabled_at_entry(
     parts: list[ir.Expr] = []
     for term in terms:
         levels, others = split_levels(term)
-        sitting: list[ir.Expr] = []
+        on_level: list[ir.Expr] = []
         for atom in levels:
+            on_level.append(atom)
+            if snapped:
+                continue
             difference, rate = _level_rate(atom, flow, signals, opaque)
             if rate is None or not _affine(difference):
                 break
-            sitting += [atom, ir.Cmp(("==",), (rate, _ZERO))]
+            on_level.append(ir.Cmp(("==",), (rate, _ZERO)))
         else:
-            entering: list[ir.Expr] = []
-            for atom in others:
-                op = atom.ops[0]
-                lhs, rhs = atom.operands
-                small, large = (lhs, rhs) if op in ("<", "<=") else (rhs, lhs)
-                difference = _sub(small, large)
-                inside = ir.Cmp(("<",), (small, large), atom.col)
-                face = ir.Cmp(("==",), (small, large), atom.col)
-                rate = _folded(derivative(difference, flow, signals, opaque))
-                falling = None if rate is None else ir.Cmp(("<",), (rate, _ZERO))
-                into = inside if falling is None else ir.BoolOp("or", (inside, conjoin(face, falling)))
-                entering.append(into)
-                if op in ("<", ">"):
-                    sitting.append(inside)
-                elif rate is not None and falling is not None and _affine(difference):
-                    still = ir.BoolOp("or", (falling, ir.Cmp(("==",), (rate, _ZERO))))
-                    sitting.append(ir.BoolOp("or", (inside, conjoin(face, still))))
-                else:
-                    sitting.append(into)
-            if not levels:
-                parts.append(conjoin(*entering))
-            parts.append(conjoin(*sitting))
+            regions = [_surely(atom, flow, signals, opaque) for atom in others]
+            entering = conjoin(*on_level, *(into for into, _ in regions))
+            sitting = conjoin(*on_level, *(still for _, still in regions))
+            # a level sitting still (rate 0) makes the slope 0: then only the boolean form
+            # decides, and a strict comparison on its boundary does not hold
+            if (snapped or not levels) and structural_key(entering) != structural_key(sitting):
+                parts.append(entering)
+            parts.append(sitting)
     if not parts:
         return ir.BoolConst(False)
     return parts[0] if len(parts) == 1 else ir.BoolOp("or", tuple(parts))
+
+
+def _surely(
+    atom: ir.Cmp,
+    flow: Mapping[str, ir.Expr],
+    signals: Mapping[str, ir.Expr],
+    opaque: frozenset[str],
+) -> tuple[ir.Expr, ir.Expr]:
+    """Where ``a < b`` / ``a <= b`` surely counts: ``(entering, sitting)``.
+
+    *entering*: it holds strictly, or sits on its boundary with ``d(a - b)/dt < 0``;
+    *sitting*: a strict one holds strictly, a non-strict one holds strictly or sits
+    on its boundary with ``d(a - b)/dt <= 0`` (a zero rate trusted only for an
+    affine ``a - b``). A rate that is a number is decided here.
+    """
+    op = atom.ops[0]
+    lhs, rhs = atom.operands
+    small, large = (lhs, rhs) if op in ("<", "<=") else (rhs, lhs)
+    difference = _sub(small, large)
+    inside = ir.Cmp(("<",), (small, large), atom.col)
+    at_most = ir.Cmp(("<=",), (small, large), atom.col)
+    strict = op in ("<", ">")
+    rate = _folded(derivative(difference, flow, signals, opaque))
+    if rate is None:
+        return inside, inside
+    if isinstance(rate, ir.Num):
+        into = at_most if rate.value < 0 else inside
+        keeps = rate.value < 0 or (rate.value == 0 and _affine(difference))
+        return into, inside if strict or not keeps else at_most
+    face = ir.Cmp(("==",), (small, large), atom.col)
+    entering: ir.Expr = ir.BoolOp("or", (inside, conjoin(face, ir.Cmp(("<",), (rate, _ZERO)))))
+    if strict:
+        return entering, inside
+    if not _affine(difference):
+        return entering, entering
+    return entering, ir.BoolOp("or", (inside, conjoin(face, ir.Cmp(("<=",), (rate, _ZERO)))))
 
 
 def _affine(node: ir.Expr) -> bool:

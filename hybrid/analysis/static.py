@@ -74,9 +74,10 @@ class EdgeFacts:
 
     ``enabled`` is the guard as the simulator may find it enabled while flowing
     in the source location, ``entry_enabled`` at an entry point of it
-    (:func:`~hybrid.analysis.flows.enabled_region`); ``idle`` holds wherever the
-    guard may not be enabled at an entry point; ``fires`` a box holding every
-    state it may fire from (``None``: never).
+    (:func:`~hybrid.analysis.enabled.enabled_region`); ``idle`` holds wherever the
+    guard may not be enabled at an entry point, ``idle_at_exit`` at a point where
+    the flow leaves the invariant; ``fires`` a box holding every state it may fire
+    from (``None``: never).
     """
 
     edge: Edge
@@ -85,6 +86,7 @@ class EdgeFacts:
     enabled: ir.Expr
     entry_enabled: ir.Expr
     idle: ir.Expr
+    idle_at_exit: ir.Expr
     live: bool
     fires: Box | None = None
 
@@ -206,7 +208,12 @@ class AutomatonFacts:
             if not live and entry is not None:
                 live = satisfiable(at_entry[k], src.env, entry)
             fires = hull(flowing[k], self._at_entry(k, at_entry, entry)) if live else None
-            idle = negate(surely_enabled_at_entry(guards[k], src.flow, src.env.signals, self.opaque))
+            surely = [
+                surely_enabled_at_entry(
+                    guards[k], src.flow, src.env.signals, self.opaque, snapped=snapped
+                )
+                for snapped in (False, True)
+            ]
             result.append(
                 EdgeFacts(
                     edge,
@@ -214,7 +221,8 @@ class AutomatonFacts:
                     MappingProxyType(resets[k]),
                     enabled[k],
                     at_entry[k],
-                    idle,
+                    negate(surely[0]),
+                    negate(surely[1]),
                     live,
                     fires,
                 )
@@ -333,8 +341,8 @@ class AutomatonFacts:
         key = (location, chosen)
         if key not in self._covered:
             loc = self.locations[location]
-            guards = [self.edges[i].guard for i in sorted(chosen)]
-            negated = [negate(g) for g in guards]
+            # at an exit of the invariant an edge may be idle wherever it is not surely enabled
+            negated = [self.edges[i].idle_at_exit for i in sorted(chosen)]
             stuck = loc.can_be_left and any(
                 satisfiable(conjoin(x, *negated), loc.env, self.bounds) for x in loc.exits
             )

@@ -157,3 +157,25 @@ def test_the_navigation_grid_has_no_error_and_its_warnings_are_right(equality: b
     )
     assert at_rest.termination.cause == "zeno" and at_rest.termination.t == 0.0
     assert {j.edge for j in at_rest.jumps} == {"c00_c10", "c10_c00"}
+
+
+def test_an_exit_where_the_guard_is_being_left_is_a_deadlock() -> None:
+    # x = t, y = 1 - t: at t = 1 the flow leaves x <= 1 while `go` (y >= 0 and x >= 1)
+    # sits on the boundary of y >= 0 moving out of it: the slope test does not fire it
+    # and the run ends blocked. check used to prove deadlock freedom (y >= 0 holds there)
+    text = """
+automaton: leaving
+state: {x: {initial: 0}, y: {initial: 1, bounds: [0, .inf]}}
+locations:
+  a: {flow: {x: 1, y: -1}, invariant: x <= 1}
+  b: {}
+edges:
+  - {name: go, from: a, to: b, guard: y >= 0 and x >= 1}
+properties: {deadlock_free: true}
+"""
+    model = hybrid.load_text(text)
+    run = hybrid.simulate(model, t_end=2.0, **TOL)
+    assert run.termination.cause == "blocked"
+    assert run.termination.t == pytest.approx(1.0, abs=1e-12)
+    (violation,) = check(model).by_rule("property-violated")
+    assert "deadlock_free" in violation.message and "'a'" in violation.message
