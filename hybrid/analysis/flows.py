@@ -1,5 +1,8 @@
 """Where the flow can leave a location: time derivatives and exit conditions.
 
+Where a guard may be (or surely is) found enabled is
+:mod:`hybrid.analysis.enabled`'s.
+
 The invariant of a location is a closed set (up to strictness); a continuous
 flow leaves it only through its boundary, and only where it points outward.
 For an invariant in disjunctive normal form, every comparison ``a <= b`` of
@@ -25,7 +28,7 @@ from collections.abc import Callable, Mapping
 from hybrid.analysis.solve import closure, conjoin, dnf
 from hybrid.expr import ir
 
-__all__ = ["derivative", "enabled_region", "exit_conditions"]
+__all__ = ["derivative", "exit_conditions"]
 
 _ZERO = ir.Num(0.0)
 _ONE = ir.Num(1.0)
@@ -195,67 +198,3 @@ def exit_conditions(
                 outward = ir.BoolConst(True)
             result.append(conjoin(*rest, face, outward))
     return result
-
-
-def enabled_region(
-    guard: ir.Expr,
-    flow: Mapping[str, ir.Expr],
-    signals: Mapping[str, ir.Expr] | None = None,
-    opaque: frozenset[str] = frozenset(),
-) -> ir.Expr:
-    """A condition holding at every point where the simulator may find ``guard`` enabled.
-
-    The simulator (docs/semantics.md, the slope test) finds a guard enabled
-    where it holds, and also on its boundary when the flow enters it: for a
-    conjunction that is where every comparison holds strictly or sits on its
-    boundary with the flow going inward (the first instant of ``x > 5`` is
-    ``x == 5`` with ``x' > 0``). So each conjunction of the guard's normal
-    form gives itself, or ``a < b or (a == b and d(a - b)/dt < 0)`` for each of
-    its comparisons ``a <= b`` or ``a < b`` (``a <= b`` where the derivative
-    cannot be formed; an equality only holds on its level). Strictness is kept
-    everywhere else. Beyond the normal-form cap the closure of the guard is
-    returned.
-
-    Examples
-    --------
-    >>> from hybrid.expr.parse import Scope, parse_expression
-    >>> from hybrid.expr.printer import to_source
-    >>> g = parse_expression("x > 5", Scope({"x": "state"}), want="bool")
-    >>> names = {"x": "x"}
-    >>> to_source(enabled_region(g, {"x": ir.Num(1.0)}), names)
-    'x > 5.0 or (5.0 < x or x == 5.0)'
-    >>> to_source(enabled_region(g, {"x": ir.Num(-1.0)}), names)
-    'x > 5.0 or 5.0 < x'
-    """
-    signals = signals or {}
-    terms = dnf(guard)
-    if terms is None:
-        return closure(guard)
-    parts: list[ir.Expr] = []
-    for term in terms:
-        if not term:
-            return ir.BoolConst(True)
-        parts.append(conjoin(*term))
-        entering: list[ir.Expr] = []
-        for atom in term:
-            op = atom.ops[0]
-            lhs, rhs = atom.operands
-            if op == "==":  # |a - b| never falls below 0: only on the level itself,
-                entering.append(atom)  # where the simulator snaps it true (the rest by slope)
-                continue
-            small, large = (lhs, rhs) if op in ("<", "<=") else (rhs, lhs)
-            inside = ir.Cmp(("<",), (small, large), atom.col)
-            rate = _folded(derivative(_sub(small, large), flow, signals, opaque))
-            face = ir.Cmp(("==",), (lhs, rhs), atom.col)
-            if rate is None:
-                entering.append(ir.Cmp(("<=",), (small, large), atom.col))
-            elif isinstance(rate, ir.Num):
-                entering.append(ir.BoolOp("or", (inside, face)) if rate.value < 0 else inside)
-            else:
-                falling = ir.Cmp(("<",), (rate, _ZERO))
-                entering.append(ir.BoolOp("or", (inside, conjoin(face, falling))))
-        else:
-            parts.append(conjoin(*entering))
-    if not parts:
-        return ir.BoolConst(False)
-    return parts[0] if len(parts) == 1 else ir.BoolOp("or", tuple(parts))

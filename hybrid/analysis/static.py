@@ -15,11 +15,13 @@ Semantics (see docs/check.md, "What is proved"):
 - parameters are bound to the automaton's values and signals replaced by the
   definitions in force in the location (location overrides first);
 - an edge may fire at a point of its source location where its guard may be
-  found enabled (:func:`~hybrid.analysis.flows.enabled_region`: where it
+  found enabled (:func:`~hybrid.analysis.enabled.enabled_region`: where it
   holds, or on the boundary of a strict comparison the flow enters), that
-  point being either in the closure of the source invariant (while flowing)
-  or an *entry* point: the initial state, or a state right after an edge into
-  the location fired, whether or not the invariant holds there;
+  point being either in the closure of the source invariant (while flowing:
+  an equality level is reached from the side the invariant keeps) or an
+  *entry* point (the flow keeps the state on an equality level): the initial
+  state, or a state right after an edge into the location fired, whether or
+  not the invariant holds there;
 - entry points are over-approximated by a box per location, the least
   fixpoint of "the initial set (in every initial location), and the reset of
   every box where an edge into the location may fire", widened to the
@@ -46,7 +48,8 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 
-from hybrid.analysis.flows import enabled_region, exit_conditions
+from hybrid.analysis.enabled import enabled_region, invariant_side, surely_enabled_at_entry
+from hybrid.analysis.flows import exit_conditions
 from hybrid.analysis.inline import inline_signals
 from hybrid.analysis.linear import structural_key
 from hybrid.analysis.solve import Box, Env, closure, conjoin, contract, negate, satisfiable
@@ -73,15 +76,21 @@ _TIME = Interval(0.0, math.inf)
 class EdgeFacts:
     """An edge with parameters bound, where it may be enabled, and whether it can ever fire.
 
-    ``enabled`` is the guard as the simulator may find it enabled in the
-    source location (:func:`~hybrid.analysis.flows.enabled_region`); ``fires``
-    a box holding every state it may fire from (``None``: never).
+    ``enabled`` is the guard as the simulator may find it enabled while flowing
+    in the source location, ``entry_enabled`` at an entry point of it
+    (:func:`~hybrid.analysis.enabled.enabled_region`); ``idle`` holds wherever the
+    guard may not be enabled at an entry point, ``idle_at_exit`` at a point where
+    the flow leaves the invariant; ``fires`` a box holding every state it may fire
+    from (``None``: never).
     """
 
     edge: Edge
     guard: ir.Expr
     reset: Mapping[str, ir.Expr]
     enabled: ir.Expr
+    entry_enabled: ir.Expr
+    idle: ir.Expr
+    idle_at_exit: ir.Expr
     live: bool
     fires: Box | None = None
 
@@ -188,23 +197,26 @@ class AutomatonFacts:
         self._overlap: dict[tuple[int, int], bool] = {}
 
     def _edge_facts(self, automaton: Automaton) -> list[EdgeFacts]:
-        """Every edge's enabled region, entry boxes of every location, then liveness."""
+        """Every edge's enabled regions, entry boxes of every location, then liveness."""
         params = automaton.parameters
-        guards, resets, enabled, flowing = [], [], [], []
+        guards, resets, enabled, at_entry, flowing = [], [], [], [], []
         for edge in automaton.edges:
             src = self.locations[edge.source]
             guard = bind_parameters(edge.guard, params)
-            region = enabled_region(guard, src.flow, src.env.signals, self.opaque)
+            signals = src.env.signals
+            side = invariant_side(src.closed, src.env, src.region)
+            region = enabled_region(guard, src.flow, signals, self.opaque, side=side)
             guards.append(guard)
             resets.append({k: bind_parameters(v, params) for k, v in edge.reset.items()})
             enabled.append(region)
+            at_entry.append(enabled_region(guard, src.flow, signals, self.opaque, entry=True))
             # while flowing the state is in the closure of the invariant, within the bounds
             flowing.append(
                 None
                 if src.region is None
                 else contract(conjoin(src.closed, region), src.env, src.region)
             )
-        self.entries = self._entries(automaton, resets, enabled, flowing)
+        self.entries = self._entries(automaton, resets, at_entry, flowing)
         result: list[EdgeFacts] = []
         for k, edge in enumerate(automaton.edges):
             src = self.locations[edge.source]
@@ -213,10 +225,26 @@ class AutomatonFacts:
             if flowing[k] is not None:
                 live = satisfiable(conjoin(src.closed, enabled[k]), src.env, src.region or {})
             if not live and entry is not None:
-                live = satisfiable(enabled[k], src.env, entry)
-            fires = hull(flowing[k], self._at_entry(k, enabled, entry)) if live else None
+                live = satisfiable(at_entry[k], src.env, entry)
+            fires = hull(flowing[k], self._at_entry(k, at_entry, entry)) if live else None
+            surely = [
+                surely_enabled_at_entry(
+                    guards[k], src.flow, src.env.signals, self.opaque, snapped=snapped
+                )
+                for snapped in (False, True)
+            ]
             result.append(
-                EdgeFacts(edge, guards[k], MappingProxyType(resets[k]), enabled[k], live, fires)
+                EdgeFacts(
+                    edge,
+                    guards[k],
+                    MappingProxyType(resets[k]),
+                    enabled[k],
+                    at_entry[k],
+                    negate(surely[0]),
+                    negate(surely[1]),
+                    live,
+                    fires,
+                )
             )
         return result
 
@@ -305,7 +333,12 @@ class AutomatonFacts:
                         src.region is not None
                         and satisfiable(conjoin(src.closed, both), src.env, src.region)
                     )
-                    or (entry is not None and satisfiable(both, src.env, entry))
+                    or (
+                        entry is not None
+                        and satisfiable(
+                            conjoin(a.entry_enabled, b.entry_enabled), src.env, entry
+                        )
+                    )
                 )
             )
         return self._overlap[key]
@@ -331,8 +364,8 @@ class AutomatonFacts:
         key = (location, chosen)
         if key not in self._covered:
             loc = self.locations[location]
-            guards = [self.edges[i].guard for i in sorted(chosen)]
-            negated = [negate(g) for g in guards]
+            # at an exit of the invariant an edge may be idle wherever it is not surely enabled
+            negated = [self.edges[i].idle_at_exit for i in sorted(chosen)]
             urgent = self.automaton.locations[location].urgent
             stuck = (
                 not urgent
@@ -341,8 +374,9 @@ class AutomatonFacts:
             )
             entry = self.entries[location]
             if not stuck and entry is not None:
-                # on entry an edge is enabled at most where its guard's closure holds
-                idle = [closure(negate(g)) for g in guards]
+                # on entry an edge may be idle wherever it is not surely enabled; an urgent
+                # location must be left at once wherever it is entered
+                idle = [self.edges[i].idle for i in sorted(chosen)]
                 leaving = (ir.BoolConst(True),) if urgent else (negate(loc.invariant), *loc.exits)
                 stuck = any(satisfiable(conjoin(v, *idle), loc.env, entry) for v in leaving)
             self._covered[key] = not stuck

@@ -44,8 +44,9 @@ from dataclasses import dataclass
 
 import networkx as nx
 
+from hybrid.analysis.inline import inline_signals
 from hybrid.analysis.solve import closure, conjoin, nnf, satisfiable
-from hybrid.analysis.static import AutomatonFacts, inline_signals
+from hybrid.analysis.static import AutomatonFacts
 from hybrid.expr import ir
 
 __all__ = ["ZeroTimeComponent", "ZeroTimeGraph", "system_components"]
@@ -82,7 +83,7 @@ class ZeroTimeGraph:
             dst = facts.locations[ef.edge.target]
             kept = _kept_conditions(ef.guard, ef.reset, facts.locations[ef.edge.source].env.signals)
             for nxt in facts.outgoing(ef.edge.target):
-                if nxt.live and satisfiable(conjoin(nxt.enabled, *kept), dst.env, after):
+                if nxt.live and satisfiable(conjoin(nxt.entry_enabled, *kept), dst.env, after):
                     self.graph.add_edge(ef.edge.index, nxt.edge.index)
 
     def components(self, allowed: Callable[[int], bool] | None = None) -> list[ZeroTimeComponent]:

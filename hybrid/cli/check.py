@@ -9,7 +9,9 @@ structured formats, also appear as ``invalid-spec`` findings; the other files
 are still checked and reported. Each finding is reported once, however many
 of the files checked include the file it is placed in. The repository's
 defaults come from ``[tool.hybrid.check]`` in the nearest pyproject.toml
-(:mod:`hybrid.reader.project`).
+(:mod:`hybrid.reader.project`). While a large product is explored, one line of
+progress (modes explored, frontier, modes per second) is drawn on ``err`` when
+it is a terminal, unless ``quiet``; it is erased before the report.
 
 Examples
 --------
@@ -25,7 +27,7 @@ from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TextIO
 
 from hybrid.analysis import check, system_graph
@@ -37,10 +39,11 @@ from hybrid.errors import SpecError, UsageError
 from hybrid.export.atomic import atomic_write
 from hybrid.export.diagrams import DIAGRAM_FORMATS
 from hybrid.export.pictures import RENDERED_FORMATS, render
+from hybrid.progress import Reporter, Tracker, terminal_reporter
 from hybrid.reader.loader import load
 from hybrid.reader.project import CheckConfig, read_check_config
 
-__all__ = ["once", "run_check", "run_graph"]
+__all__ = ["exploration_progress", "once", "run_check", "run_graph"]
 
 
 def run_check(
@@ -52,6 +55,7 @@ def run_check(
     out: TextIO | None = None,
     err: TextIO | None = None,
     config: CheckConfig | None = None,
+    quiet: bool = False,
 ) -> int:
     """Check ``files`` and print the report; returns the exit code (0, 1 or 2).
 
@@ -69,6 +73,8 @@ def run_check(
         Streams for the report and for spec errors (default: stdout, stderr).
     config
         The repository's defaults (default: read from the nearest pyproject.toml).
+    quiet
+        No progress line on ``err`` (it is drawn only when ``err`` is a terminal).
     """
     if fmt not in FORMATS:
         raise ValueError(f"unknown format '{fmt}'; choose from {', '.join(FORMATS)}")
@@ -91,7 +97,15 @@ def run_check(
             )
             reports.append(Report(findings, "", file))
             continue
-        report = check(model, ignore=rules)
+        line = terminal_reporter(quiet, err)
+        tracker, progress = exploration_progress(f"check {file}", line)
+        try:
+            report = check(model, ignore=rules, progress=progress)
+        finally:
+            if line is not None:
+                line.clear()
+        if tracker is not None:
+            tracker.finish()
         reports.append(Report(report.findings, report.name, file))
     text = write(fmt, once(reports), strict=strict)
     if text:
@@ -101,6 +115,37 @@ def run_check(
     if any(r.failed(strict=strict) for r in reports):
         return EXIT_FINDINGS
     return EXIT_OK
+
+
+def exploration_progress(
+    task: str, line: Reporter | None, interval: float = 0.2
+) -> tuple[Tracker | None, Callable[[int, int], None] | None]:
+    """A tracker reporting to ``line`` and the ``progress(modes, frontier)`` callback feeding it.
+
+    The explorer reports the modes of one group of interacting components at a
+    time; the count shown adds up the groups. Nothing is reported for a product
+    explored within ``interval`` seconds: only a large one shows.
+
+    Examples
+    --------
+    >>> seen = []
+    >>> tracker, progress = exploration_progress("check s.yaml", seen.append, interval=0.0)
+    >>> progress(100, 40); progress(250, 10); progress(30, 5)   # a second group starts
+    >>> seen[-1].text().split(", ")[:2]
+    ['check s.yaml: 280 modes', '5 frontier']
+    """
+    if line is None:
+        return None, None
+    tracker = Tracker(task, unit="modes", report=line, interval=interval)
+    counted = [0, 0]  # modes of the groups finished, modes of the current group
+
+    def progress(modes: int, frontier: int) -> None:
+        if modes < counted[1]:  # the next group of components
+            counted[0] += counted[1]
+        counted[1] = modes
+        tracker.update(counted[0] + modes, frontier=frontier)
+
+    return tracker, progress
 
 
 def once(reports: Sequence[Report]) -> list[Report]:

@@ -98,6 +98,9 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="RULE",
         help="do not report this rule (repeatable)",
     )
+    p.add_argument(
+        "--quiet", action="store_true", help="no progress on stderr (shown only on a terminal)"
+    )
 
     p = sub.add_parser("simulate", help="simulate a spec")
     p.add_argument("file", metavar="FILE", help="spec or system file")
@@ -182,7 +185,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             from hybrid.cli.check import run_check
 
             return run_check(
-                args.files, fmt=args.format, strict=args.strict, ignore=args.ignore
+                args.files,
+                fmt=args.format,
+                strict=args.strict,
+                ignore=args.ignore,
+                quiet=args.quiet,
             )
         if args.command == "graph":
             from hybrid.cli.check import run_graph

@@ -3,7 +3,9 @@
 The rewrite (DESIGN.md): ``a <= b`` and ``a < b`` become ``a - b``;
 ``a >= b`` and ``a > b`` become ``b - a``; ``a == b`` becomes ``|a - b|``;
 ``a != b`` becomes ``-|a - b|``; ``and`` is ``max``, ``or`` is ``min``, ``not``
-negates; ``true`` is -1 and ``false`` is +1. Away from ``rho = 0`` the sign of
+negates; ``true`` is -1 and ``false`` is +1, and so is a comparison that cannot
+change (two numbers, ``0 >= 0``, or one expression on both sides, ``x < x``),
+whose ``a - b`` would otherwise sit at 0. Away from ``rho = 0`` the sign of
 rho decides the guard. On ``rho = 0`` the boolean form decides: a non-strict
 comparison (``<=``, ``>=``, ``==``) holds on its boundary, a strict one
 (``<``, ``>``, ``!=``) does not. The simulator uses rho for root finding and
@@ -15,7 +17,8 @@ never changes sign and a root finder cannot see it. :func:`levels` lists such
 equality atoms (their differences ``a - b``, in a fixed order);
 :func:`oriented_rho` writes the guard with atom ``i`` as the one-sided
 ``sign_i * (a - b) <= 0``, which becomes true when the level is reached from
-the side ``sign_i``; :func:`snapped` replaces atom ``i`` by a constant (true
+the side ``sign_i`` (``sign_i = 0``, a state exactly on the level: the atom
+itself); :func:`snapped` replaces atom ``i`` by a constant (true
 when the point is at the level). The simulator watches the oriented form and
 decides the snapped one (docs/semantics.md, "Equality guards").
 
@@ -65,7 +68,29 @@ def is_strict(node: ir.Expr) -> bool:
     return isinstance(node, ir.Cmp) and len(node.ops) == 1 and node.ops[0] in ("<", ">", "!=")
 
 
+_HOLDS = {
+    "<": lambda a, b: a < b,
+    "<=": lambda a, b: a <= b,
+    ">": lambda a, b: a > b,
+    ">=": lambda a, b: a >= b,
+    "==": lambda a, b: a == b,
+    "!=": lambda a, b: a != b,
+}
+
+
+def _constant(op: str, a: ir.Expr, b: ir.Expr) -> bool | None:
+    """The value of ``a op b`` if it cannot change (two numbers, or one expression twice)."""
+    if isinstance(a, ir.Num) and isinstance(b, ir.Num):
+        return bool(_HOLDS[op](a.value, b.value))
+    if structural_key(a) == structural_key(b):
+        return op in ("<=", ">=", "==")
+    return None
+
+
 def _comparison(op: str, a: ir.Expr, b: ir.Expr, col: int) -> ir.Expr:
+    fixed = _constant(op, a, b)
+    if fixed is not None:  # no boundary to reach: the rho of `true` / `false`
+        return ir.Num(-1.0 if fixed else 1.0, col)
     if op in ("<", "<="):
         return _sub(a, b, col)
     if op in (">", ">="):
@@ -136,9 +161,11 @@ def levels(node: ir.Expr) -> tuple[ir.Expr, ...]:
 
 
 def oriented_rho(node: ir.Expr, signs: Sequence[int]) -> ir.Expr:
-    """Rho of the guard with level atom ``i`` read as ``signs[i] * (a - b) <= 0``."""
+    """Rho of the guard with level atom ``i`` read as ``signs[i] * (a - b) <= 0`` (``a == b`` if 0)."""
 
     def one_sided(index: int, difference: ir.Expr, col: int) -> ir.Expr:
+        if signs[index] == 0:  # on the level: the atom itself, true while the state stays there
+            return ir.Cmp(("==",), (difference, ir.Num(0.0, col)), col)
         side = difference if signs[index] > 0 else _opposite(difference)
         return ir.Cmp(("<=",), (side, ir.Num(0.0, col)), col)
 

@@ -150,7 +150,10 @@ class _Part:
                 break
             mask = todo & (lj == j) & (times >= t0) & (times <= t1)
             if mask.any():
-                values = np.asarray(sol(times[mask]), dtype=float).reshape(len(xs), -1).T
+                if len(xs):
+                    values = np.asarray(sol(times[mask]), dtype=float).reshape(len(xs), -1).T
+                else:  # a group without state variables (a controller of locations only)
+                    values = np.empty((int(mask.sum()), 0))
                 states[np.ix_(mask, xs)] = values
                 if ss.size:
                     mode = self.modes[self.location_at[j]]

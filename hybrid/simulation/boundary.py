@@ -6,7 +6,9 @@ its boundary. Within a band of the boundary (``rho`` within :func:`band` of
 0) the slope of ``rho`` along the flow decides: falling means the guard is
 starting to hold; rising means it is being left and the guard is *disarmed*
 until it has been strictly false (docs/semantics.md); flat means its boolean
-form decides. Among enabled transitions the highest priority fires, ties by
+form decides. Where rho is not 0 but the point the slope test steps to has a
+rho of exactly 0 (rho comes down to 0 and stays there: a flat zero), the
+boolean form decides at that point. Among enabled transitions the highest priority fires, ties by
 file order.
 
 At a point where the search stopped (:func:`enabled_at_event`), an armed
@@ -40,6 +42,7 @@ from hybrid.simulation.compiled import CompiledMode, CompiledTransition
 Fn = Callable[[float, Any], Any]
 
 __all__ = [
+    "ahead",
     "band",
     "choose",
     "chosen_by",
@@ -56,11 +59,17 @@ def band(x: np.ndarray) -> float:
     return 1e-10 * (1.0 + max(map(abs, x.tolist()), default=0.0))
 
 
+def ahead(mode: CompiledMode, t: float, x: np.ndarray) -> tuple[float, float, np.ndarray]:
+    """The step ``h`` of the slope test and the point ``(t + h, x + h x')`` it looks at."""
+    h = 1e-7 * max(1.0, abs(t))
+    moved = [xi + h * di for xi, di in zip(x.tolist(), mode.rhs(t, x), strict=True)]
+    return h, t + h, np.array(moved)
+
+
 def slope(fn: Callable[[float, Any], float], mode: CompiledMode, t: float, x: np.ndarray) -> float:
     """d/dt of ``fn`` along the flow, by a small forward difference."""
-    h = 1e-7 * max(1.0, abs(t))
-    ahead = [xi + h * di for xi, di in zip(x.tolist(), mode.rhs(t, x), strict=True)]
-    return float((fn(t + h, np.array(ahead)) - fn(t, x)) / h)
+    h, t1, x1 = ahead(mode, t, x)
+    return float((fn(t1, x1) - fn(t, x)) / h)
 
 
 def holds_now(
@@ -80,7 +89,14 @@ def holds_now(
         return False, True
     if not armed:
         return False, False
-    rate = slope(rho, mode, t, x)
+    h, t1, x1 = ahead(mode, t, x)
+    further = rho(t1, x1)
+    if further == 0.0 and value != 0.0:
+        # rho comes down to exactly 0 (a flat zero: `max(h, v, 0)`, `x - x > 0 and ...`):
+        # its slope says nothing about the guard; the boolean form where the flow goes does
+        now = bool(holds(t1, x1))
+        return now, now
+    rate = float((further - value) / h)
     if rate < -width:
         return True, True
     if rate > width:

@@ -10,6 +10,12 @@ the difference ``a - b`` of each atom (``levels``) and, compiled on first use,
 its *oriented* rho (the atoms read one-sided) and its *snapped* forms (the
 atoms replaced by constants).
 
+A product of many components meets the same expressions in many modes: each
+function is compiled once, keyed by its expressions and by the definitions of
+the signals and inputs it reads, and reused in every mode where those are the
+same. What a function computes is kept per mode (:meth:`CompiledModel.source`),
+so a failure is described with the mode where it happened.
+
 Evaluation errors (a math domain error, an overflow, a division by zero) never
 raise: the compiled function records them and returns NaN. The right-hand side
 records into :attr:`CompiledModel.flow_failure`, everything else into
@@ -78,13 +84,16 @@ class CompiledTransition(CompiledCondition):
     _snapped: dict[tuple[bool, ...], tuple[Fn, Fn]] = field(default_factory=dict)
 
     def oriented(self, signs: tuple[int, ...]) -> Fn:
-        """Rho with level atom ``i`` read as ``signs[i] * (a - b) <= 0`` (the plain rho without levels)."""
+        """Rho with level atom ``i`` read as ``signs[i] * (a - b) <= 0`` (``a == b`` for a 0).
+
+        The plain rho for a guard without levels.
+        """
         if not self.levels:
             return self.rho
         fn = self._oriented.get(signs)
         if fn is None:
             assert self.variant is not None
-            tag = "".join("p" if s > 0 else "n" for s in signs)
+            tag = "".join("p" if s > 0 else "n" if s < 0 else "z" for s in signs)
             fn = self.variant(tag, oriented_rho(self.view.guard, signs), "rho")
             self._oriented[signs] = fn
         return fn
@@ -171,15 +180,20 @@ class CompiledModel:
         self.state_names = self.system.state_names
         self.columns = self.system.signal_columns
         self.initial_key = self.system.initial_mode
+        # what each compiled function computes: by the name it records failures under
+        # (that of the mode it was first compiled for), and per mode it is used in
         self.sources: dict[str, Source] = {}
+        self._mode_sources: dict[tuple[Mode, str], Source] = {}
         self._modes: dict[Mode, CompiledMode] = {}
         # a product of many components meets the same guard, invariant and reset in many
         # modes: bind and compile each once (keyed by the expressions and the definitions
         # of the signals they read), not once per mode
         self._binder = Binder(self.system)
-        self._functions: dict[tuple[object, ...], tuple[object, Fn]] = {}
+        # key -> ((what keeps the key's ids valid, the name it was compiled as), function)
+        self._functions: dict[tuple[object, ...], tuple[tuple[object, str], Fn]] = {}
         self._rhos: dict[int, tuple[ir.Expr, ir.Expr]] = {}
         self._reads: dict[int, tuple[ir.Expr, frozenset[str]]] = {}
+        self._zero = ir.Num(0.0)  # the flow of a state variable a location leaves alone
 
     def _external_inputs(self) -> list[str]:
         return list(self.system.free_inputs)
@@ -200,26 +214,48 @@ class CompiledModel:
             self._rhos[id(cond)] = found
         return found[1]
 
+    def source(self, where: str, mode: Mode | None = None) -> Source | None:
+        """What the function that recorded a failure as ``where`` computes, in ``mode``.
+
+        A function reused across modes records failures under the name it was
+        first compiled with; ``mode`` (the mode where the failure happened) picks
+        the description of that mode.
+        """
+        found = self._mode_sources.get((mode, where)) if mode is not None else None
+        return found if found is not None else self.sources.get(where)
+
     def _function(
-        self, name: str, what: str, exprs: list[ir.Expr], ctx: CodeContext, **kwargs: Any
+        self,
+        name: str,
+        role: str,
+        what: str,
+        exprs: list[ir.Expr],
+        ctx: CodeContext,
+        mode: Mode,
+        **kwargs: Any,
     ) -> Fn:
+        """``exprs`` compiled as ``name`` (or reused); ``role`` and the expressions key the reuse."""
         signals = self._signals_read(exprs, ctx.signals)
         key = (
-            what,
+            role,
             kwargs.get("shape"),
             ctx.failure is self.flow_failure,
             tuple(id(e) for e in exprs),
             tuple((s, id(ctx.signals[s])) for s in signals),
         )
         found = self._functions.get(key)
+        source = Source(what, tuple(exprs), ctx)
         if found is None:
-            self.sources[name] = Source(what, tuple(exprs), ctx)
+            self.sources[name] = source
             keep = (exprs, [ctx.signals[s] for s in signals])  # the ids in the key stay valid
-            found = (keep, compile_function(name, exprs, ctx, **kwargs))
+            found = ((keep, name), compile_function(name, exprs, ctx, **kwargs))
             self._functions[key] = found
+        self._mode_sources[(mode, found[0][1])] = source
         return found[1]
 
-    def _reset(self, name: str, tr: TransitionView, ctx: CodeContext) -> Fn:
+    def _reset(
+        self, name: str, tr: TransitionView, ctx: CodeContext, what: str, mode: Mode
+    ) -> Fn:
         """The reset of ``tr``, compiled when it first fires (most transitions never do)."""
         exprs = list(tr.reset.values())
         signals = self._signals_read(exprs, ctx.signals)
@@ -231,18 +267,18 @@ class CompiledModel:
         )
         found = self._functions.get(key)
         if found is None:
-            what = f"the reset of {tr.name}"
             compiled: list[Fn] = []
 
             def reset(t: float, x: Any) -> Any:
                 if not compiled:
                     reset_of = [tr.reset.get(s) for s in self.state_names]
-                    self.sources[name] = Source(what, tuple(exprs), ctx)
                     compiled.append(compile_function(name, exprs, ctx, reset_of=reset_of))
                 return compiled[0](t, x)
 
-            found = ((exprs, [ctx.signals[s] for s in signals]), reset)
+            self.sources[name] = Source(what, tuple(exprs), ctx)
+            found = (((exprs, [ctx.signals[s] for s in signals]), name), reset)
             self._functions[key] = found
+        self._mode_sources[(mode, found[0][1])] = Source(what, tuple(exprs), ctx)
         return found[1]
 
     def _signals_read(self, exprs: list[ir.Expr], signals: Mapping[str, ir.Expr]) -> list[str]:
@@ -274,12 +310,17 @@ class CompiledModel:
             failure=self.failure,
         )
         tag = _identifier(view.name)
-        flows = [view.flow.get(s, ir.Num(0.0)) for s in self.state_names]
+        key = view.key
+        # in a system, what a guard, invariant or reset computes is said with its mode
+        within = "" if self.system.single else f" in {view.name}"
+        flows = [view.flow.get(s, self._zero) for s in self.state_names]
         rhs = self._function(
             f"rhs_{tag}",
+            "flow",
             f"the flow of {view.name}",
             flows,
             replace(ctx, failure=self.flow_failure),
+            key,
             shape="list",
         )
         outputs_ir: list[ir.Expr] = []
@@ -291,40 +332,54 @@ class CompiledModel:
                 else:
                     outputs_ir.append(ir.Var(name, ir.SIGNAL))
         outputs = self._function(
-            f"out_{tag}", f"the signals of {view.name}", outputs_ir, ctx, shape="tuple"
+            f"out_{tag}", "signals", f"the signals of {view.name}", outputs_ir, ctx, key, shape="tuple"
         )
         invariants = []
         for i, (name, expr) in enumerate(view.invariants):
-            what = f"the invariant of {name}"
+            what = f"the invariant of {name}{within}"
+            role = f"invariant {name}"
             invariants.append(
                 CompiledCondition(
                     name,
-                    self._function(f"inv_{tag}_{i}", what, [self._rho(expr)], ctx, shape="scalar"),
-                    self._function(f"invb_{tag}_{i}", what, [expr], ctx, shape="scalar"),
+                    self._function(
+                        f"inv_{tag}_{i}", role, what, [self._rho(expr)], ctx, key, shape="scalar"
+                    ),
+                    self._function(
+                        f"invb_{tag}_{i}", role, what, [expr], ctx, key, shape="scalar"
+                    ),
                 )
             )
         transitions = []
         for i, tr in enumerate(view.transitions):
-            what = f"the guard of {tr.name}"
+            what = f"the guard of {tr.name}{within}"
+            role = f"guard {tr.name}"
             differences = levels(tr.guard)
 
-            def variant(suffix: str, expr: ir.Expr, role: str, i: int = i, what: str = what) -> Fn:
-                kind = "g" if role == "rho" else "gb"
+            def variant(
+                suffix: str, expr: ir.Expr, kind: str, i: int = i, what: str = what, role: str = role
+            ) -> Fn:
+                prefix = "g" if kind == "rho" else "gb"
                 return self._function(
-                    f"{kind}_{tag}_{i}_{suffix}", what, [expr], ctx, shape="scalar"
+                    f"{prefix}_{tag}_{i}_{suffix}", role, what, [expr], ctx, key, shape="scalar"
                 )
 
             transitions.append(
                 CompiledTransition(
                     name=tr.name,
                     rho=self._function(
-                        f"g_{tag}_{i}", what, [self._rho(tr.guard)], ctx, shape="scalar"
+                        f"g_{tag}_{i}", role, what, [self._rho(tr.guard)], ctx, key, shape="scalar"
                     ),
-                    holds=self._function(f"gb_{tag}_{i}", what, [tr.guard], ctx, shape="scalar"),
+                    holds=self._function(
+                        f"gb_{tag}_{i}", role, what, [tr.guard], ctx, key, shape="scalar"
+                    ),
                     view=tr,
-                    reset=self._reset(f"r_{tag}_{i}", tr, ctx),
+                    reset=self._reset(
+                        f"r_{tag}_{i}", tr, ctx, f"the reset of {tr.name}{within}", key
+                    ),
                     levels=tuple(
-                        self._function(f"lvl_{tag}_{i}_{k}", what, [d], ctx, shape="scalar")
+                        self._function(
+                            f"lvl_{tag}_{i}_{k}", role, what, [d], ctx, key, shape="scalar"
+                        )
                         for k, d in enumerate(differences)
                     ),
                     variant=variant if differences else None,

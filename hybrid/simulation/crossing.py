@@ -12,17 +12,19 @@ backend implements the same and is tested against this one):
    part, disarmed terms that are beyond the band on their safe side are armed
    (:meth:`~hybrid.simulation.events.Watch.arm`).
 3. **Crossing.** The first sample whose watch value is ``<= 0`` ends the search:
-   the zero is located between it and the sample before by Brent's method on
-   the interpolant (``brentq``, tolerances ``4 eps`` absolute and relative, as
-   scipy's events), with the two known end values, so the bracket is exact.
+   the first instant at or below 0 is located between it and the sample before
+   by Brent's method on the interpolant (``brentq``, tolerances ``4 eps``
+   absolute and relative, as scipy's events), with the two known end values, so
+   the bracket is exact; a value of exactly 0 counts as below, so a watch that
+   comes down to 0 and stays there is located where it arrives.
 4. **Dip.** Before that, each sample that is a local minimum of the sampled
    values (no higher than both neighbours, lower than one) is examined when the
    parabola through it and its neighbours dips at least half way from it to
    0: the watch is minimised between the neighbours (bounded Brent). A minimum
    ``< 0`` gives a crossing, located between the left neighbour and the
-   minimum; a minimum from 0 to the band is a *touch*: an event at the
-   minimum. A dip before the first crossing holds the earliest event of the
-   step.
+   minimum; a minimum of exactly 0 a *touch* located the same way; a minimum
+   above 0 within the band a *touch* at the minimum. A dip before the first
+   crossing holds the earliest event of the step.
 
 What it cannot see: a window in which the watch is below 0 that lies between
 two samples and leaves no dip in the sampled values (a kink, as of ``x >= 5
@@ -65,6 +67,8 @@ HORIZON_SAMPLES = 1000
 
 _EPS = float(np.finfo(float).eps)
 _TOL = 4 * _EPS
+_BELOW = -5e-324
+"""What a watch value of exactly 0 counts as while the first instant at or below 0 is bracketed."""
 
 
 class WatchLike(Protocol):
@@ -202,11 +206,23 @@ def _phi(fn: Any, curve: StepCurve, a: float, wa: float, b: float, wb: float) ->
 
 
 def _locate(fn: Any, curve: StepCurve, a: float, wa: float, b: float, wb: float) -> float:
-    """The zero of the watch in ``[a, b]`` (``wa > 0 >= wb``)."""
-    if wb == 0.0 or not (wa > 0.0 and math.isfinite(wa) and math.isfinite(wb)):
+    """The first instant in ``[a, b]`` where the watch is at or below 0 (``wa > 0 >= wb``).
+
+    The root is bracketed on that predicate: a value of exactly 0 counts as
+    below (:data:`_BELOW`), so a watch that falls to 0 and stays there (rho
+    ``max(h, v, 0)``, a flat zero) is located where it arrives at 0, not at the
+    sample that first saw it.
+    """
+    if not (wa > 0.0 and math.isfinite(wa) and math.isfinite(wb)):
         return b
+    phi = _phi(fn, curve, a, wa, b, wb)
+
+    def at_or_below(t: float) -> float:
+        value = phi(t)
+        return _BELOW if value == 0.0 else value
+
     try:
-        root: float = brentq(_phi(fn, curve, a, wa, b, wb), a, b, xtol=_TOL, rtol=_TOL)
+        root: float = brentq(at_or_below, a, b, xtol=_TOL, rtol=_TOL)
     except (ValueError, RuntimeError):  # a non-finite value inside: keep the safe end
         return b
     return root
@@ -246,6 +262,9 @@ def _dip(
     if w_min < 0.0:
         root = _locate(fn, curve, ta, wa, t_min, w_min)
         return Found(root, curve.at(root), "crossing")
+    if w_min == 0.0:  # a touch of exactly 0, or a flat zero: where the watch arrives at 0
+        root = _locate(fn, curve, ta, wa, t_min, w_min)
+        return Found(root, curve.at(root), "touch")
     x_min = curve.at(t_min)
     if w_min <= band(x_min):
         return Found(t_min, x_min, "touch")

@@ -1,4 +1,4 @@
-"""The watch of a stay in a mode: one value for every armed guard and invariant.
+"""The watch of a stay in a mode: one value for every guard and invariant.
 
 During a stay the simulator watches one function of ``(t, x)``, the *watch*:
 the smallest of every armed guard's rho (the guard starts to hold when it falls
@@ -8,18 +8,23 @@ invariant causes it, so one search per step finds it
 (:mod:`~hybrid.simulation.crossing`).
 
 **Arming** (docs/semantics.md, "Re-arming"). A guard or invariant on its
-boundary at the start of a stay and moving away is *disarmed*: it is left out
-of the watch until it is strictly on its safe side (its value beyond the band
-of :func:`~hybrid.simulation.boundary.band`) at a point the search looks at.
+boundary at the start of a stay (moving away, or sitting still) is *disarmed*:
+it is armed again once it is strictly on its safe side (its value beyond the
+band ``b0`` of :func:`~hybrid.simulation.boundary.band` at the start of the
+stay) at a point the search looks at. Until then it is watched from the far
+edge of the band: a disarmed guard as ``rho + b0``, a disarmed invariant as
+``-rho + b0``, so a state that leaves the boundary on the other side (the
+guard starts to hold, the invariant stops holding) is an event too.
 
 **Orientation** (docs/semantics.md, "Equality guards"). A guard with equality
 atoms is watched in its oriented form: atom ``a == b`` reads
 ``s * (a - b) <= 0`` with ``s`` the sign of ``a - b`` when the guard is armed,
-so the term falls through 0 when the level is reached. While some ``a - b`` is
-exactly 0 the guard stays disarmed.
+so the term falls through 0 when the level is reached; an atom exactly at its
+level then (``s = 0``) reads ``a == b`` itself, which holds while the state
+stays on the level.
 
 The watch function is generated from a template (:func:`watch_factory`) per
-pattern of signs, cached by the caller, and never contains user text.
+pattern of terms, cached by the caller, and never contains user text.
 
 Examples
 --------
@@ -32,6 +37,9 @@ Examples
 10.0
 >>> watch.pending
 False
+>>> rest = Watch(mode, [False], 0.0, np.array([0.0, 0.0]), 1e-9, {})   # at rest on the floor
+>>> rest.pending, float(rest.value(0.0, np.array([-1e-9, -1e-3])))       # both terms at the band's far edge
+(True, 0.0)
 """
 
 from __future__ import annotations
@@ -46,22 +54,25 @@ from hybrid.simulation.compiled import CompiledMode, CompiledTransition
 __all__ = ["Watch", "orientation", "watch_factory"]
 
 Fn = Callable[[float, Any], Any]
-Factory = Callable[[Sequence[Fn]], Fn]
+Factory = Callable[[Sequence[Fn], float], Fn]
+Term = tuple[float, bool]
+"""A term of the watch: its sign (``+1`` a guard, ``-1`` an invariant) and whether it is shifted."""
 
 
-def watch_factory(signs: tuple[float, ...]) -> Factory:
-    """Source-built ``make(fns)`` giving ``watch(t, x) = min_i signs[i] * fns[i](t, x)``.
+def watch_factory(terms: tuple[Term, ...]) -> Factory:
+    """Source-built ``make(fns, b0)`` giving ``watch(t, x) = min_i sign_i * fns[i](t, x) (+ b0)``.
 
-    A term that cannot be evaluated (NaN) is left out (the failure is recorded
-    where it happened and ends the run); with no finite term the watch is
-    ``inf``.
+    ``terms[i]`` is ``(sign, shifted)``: a shifted term (a disarmed one) has
+    ``b0`` added. A term that cannot be evaluated (NaN) is left out (the failure
+    is recorded where it happened and ends the run); with no finite term the
+    watch is ``inf``.
     """
-    lines = ["def make(_fns):"]
-    lines += [f"    _f{i} = _fns[{i}]" for i in range(len(signs))]
+    lines = ["def make(_fns, _b0):"]
+    lines += [f"    _f{i} = _fns[{i}]" for i in range(len(terms))]
     lines += ["    def watch(t, x):", "        v = _inf"]
-    for i, sign in enumerate(signs):
+    for i, (sign, shifted) in enumerate(terms):
         lines += [
-            f"        w = {'-' if sign < 0 else ''}_f{i}(t, x)",
+            f"        w = {'-' if sign < 0 else ''}_f{i}(t, x){' + _b0' if shifted else ''}",
             "        if w < v:",
             "            v = w",
         ]
@@ -70,29 +81,36 @@ def watch_factory(signs: tuple[float, ...]) -> Factory:
     return factory
 
 
-def orientation(tr: CompiledTransition, t: float, x: Any) -> tuple[int, ...] | None:
-    """The side of each level of ``tr`` at ``(t, x)``; None while one is exactly at its level."""
+def orientation(tr: CompiledTransition, t: float, x: Any) -> tuple[int, ...]:
+    """The side of each level of ``tr`` at ``(t, x)``: ``1``, ``-1``, or ``0`` exactly on it."""
     signs = []
     for difference in tr.levels:
         value = difference(t, x)
-        if value > 0.0:
-            signs.append(1)
-        elif value < 0.0:
-            signs.append(-1)
-        else:
-            return None
+        signs.append(1 if value > 0.0 else -1 if value < 0.0 else 0)
     return tuple(signs)
 
 
 class Watch:
-    """The armed terms of one stay and their watch function (``value``; None if none is armed).
+    """The terms of one stay and their watch function (``value``; None if there is none).
 
+    ``signs[i]`` is the orientation of armed transition ``i``, None while it is
+    disarmed; ``inv_armed[k]`` says whether invariant ``k`` is armed; disarmed
+    terms are watched shifted by ``width`` (the band at the start of the stay).
     ``pending`` says whether some term is still disarmed (then :meth:`arm` is
     called at every point the search looks at); ``generation`` changes each time
     the watch function does.
     """
 
-    __slots__ = ("factories", "generation", "inv_armed", "mode", "pending", "signs", "value")
+    __slots__ = (
+        "factories",
+        "generation",
+        "inv_armed",
+        "mode",
+        "pending",
+        "signs",
+        "value",
+        "width",
+    )
 
     def __init__(
         self,
@@ -101,10 +119,11 @@ class Watch:
         t: float,
         x: Any,
         width: float,
-        factories: dict[tuple[float, ...], Factory],
+        factories: dict[tuple[Term, ...], Factory],
     ) -> None:
         self.mode = mode
         self.factories = factories
+        self.width = width
         self.signs: list[tuple[int, ...] | None] = [
             orientation(tr, t, x) if armed else None
             for tr, armed in zip(mode.transitions, guards_armed, strict=True)
@@ -116,25 +135,23 @@ class Watch:
         self._build()
 
     def armed(self, index: int) -> bool:
-        """Whether transition ``index`` takes part in the watch."""
+        """Whether transition ``index`` takes part in the watch with its real (oriented) rho."""
         return self.signs[index] is not None
 
     def _build(self) -> None:
         fns: list[Fn] = []
-        signs: list[float] = []
+        terms: list[Term] = []
         for tr, side in zip(self.mode.transitions, self.signs, strict=True):
-            if side is not None:
-                fns.append(tr.oriented(side))
-                signs.append(1.0)
+            fns.append(tr.oriented(side) if side is not None else tr.rho)
+            terms.append((1.0, side is None))
         for inv, armed in zip(self.mode.invariants, self.inv_armed, strict=True):
-            if armed:
-                fns.append(inv.rho)
-                signs.append(-1.0)
-        key = tuple(signs)
+            fns.append(inv.rho)
+            terms.append((-1.0, not armed))
+        key = tuple(terms)
         factory = self.factories.get(key)
         if factory is None and fns:
             factory = self.factories[key] = watch_factory(key)
-        self.value = factory(fns) if factory is not None and fns else None
+        self.value = factory(fns, self.width) if factory is not None and fns else None
         self.pending = None in self.signs or not all(self.inv_armed)
         self.generation += 1
 
@@ -143,10 +160,8 @@ class Watch:
         changed = False
         for i, tr in enumerate(self.mode.transitions):
             if self.signs[i] is None and tr.rho(t, x) > width:
-                side = orientation(tr, t, x)
-                if side is not None:
-                    self.signs[i] = side
-                    changed = True
+                self.signs[i] = orientation(tr, t, x)
+                changed = True
         for k, inv in enumerate(self.mode.invariants):
             if not self.inv_armed[k] and -inv.rho(t, x) > width:
                 self.inv_armed[k] = True

@@ -29,14 +29,22 @@ from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
 from hybrid.expr.dependencies import evaluation_order
 from hybrid.expr.generated import FRAME_PREFIX
+from hybrid.modes import Mode
 from hybrid.simulation.compiled import CompiledModel
 
 __all__ = ["describe_failure"]
 
 
-def describe_failure(compiled: CompiledModel, failure: EvalFailure) -> str:
-    """``<what> failed: <call(args)>: <error>`` for a recorded failure."""
-    source = compiled.sources.get(failure.where)
+def describe_failure(
+    compiled: CompiledModel, failure: EvalFailure, mode: Mode | None = None
+) -> str:
+    """``<what> failed: <call(args)>: <error>`` for a failure recorded in ``mode``.
+
+    A function compiled once and reused in several modes records its failures
+    under one name; ``mode`` (where the failure happened) says which mode's
+    description to use.
+    """
+    source = compiled.source(failure.where, mode)
     error = failure.error
     culprit = None
     from_input = isinstance(error, ValueError) and str(error).startswith("input ")

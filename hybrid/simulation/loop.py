@@ -62,7 +62,7 @@ class EventLoop:
         self.settings = settings
         self.interrupts = interrupts
         self.recorder = Recorder(compiled, settings)
-        self.watch_factories: dict[tuple[float, ...], Any] = {}
+        self.watch_factories: dict[tuple[tuple[float, bool], ...], Any] = {}
         self.progress = progress
         tick = None
         if progress is not None:
@@ -143,10 +143,11 @@ class EventLoop:
                     zeno_time=t,
                     location=mode.name,
                 )
+            source = mode
             mode, x = self._jump(mode, chosen, enabled, t, x, j)
             j += 1
-            if self._failed() is not None:
-                return self._eval_failure(t, j, mode)
+            if self._failed() is not None:  # the reset, evaluated in the source mode
+                return self._eval_failure(t, j, mode, source)
             if not _finite(x):
                 return Termination(
                     "nonfinite",
@@ -175,16 +176,16 @@ class EventLoop:
                 return failure
         return None
 
-    def _eval_failure(self, t: float, j: int, mode: CompiledMode) -> Termination:
+    def _eval_failure(
+        self, t: float, j: int, mode: CompiledMode, failed_in: CompiledMode | None = None
+    ) -> Termination:
+        """The end of a run after an evaluation failure in ``failed_in`` (default ``mode``)."""
         failure = self._failed()
         assert failure is not None
         where = float(failure.t) if failure.t is not None else t
+        what = describe_failure(self.compiled, failure, (failed_in or mode).key)
         return Termination(
-            "nonfinite",
-            where,
-            j,
-            f"{describe_failure(self.compiled, failure)} (at t={where:.9g})",
-            location=mode.name,
+            "nonfinite", where, j, f"{what} (at t={where:.9g})", location=mode.name
         )
 
     def _blocked(

@@ -138,14 +138,14 @@ class StayIntegrator:
                 message = solver.step()
             except _SOLVER_ERRORS as exc:
                 record.close(None, None)
-                return self._gave_up(t, x, f"solver stopped: {exc}")
+                return self._gave_up(mode, t, x, f"solver stopped: {exc}")
             if solver.status == "failed":
                 record.close(None, None)
-                return self._gave_up(t, x, f"solver stopped: {one_line(message)}")
+                return self._gave_up(mode, t, x, f"solver stopped: {one_line(message)}")
             t1 = float(solver.t)
             if not all(map(math.isfinite, solver.y.tolist())):
                 record.close(None, None)
-                return self._gave_up(t, x, "the state became non-finite", nonfinite=True)
+                return self._gave_up(mode, t, x, "the state became non-finite", nonfinite=True)
             stalls = stalls + 1 if t1 - t <= 4e-16 * max(1.0, abs(t1)) else 0
             if stalls > STALL_STEPS:
                 record.close(None, None)
@@ -197,7 +197,7 @@ class StayIntegrator:
         flow_failure.clear()
         derivative = mode.rhs(t0, x0)
         if flow_failure.error is not None:
-            message = describe_failure(self.compiled, flow_failure)
+            message = describe_failure(self.compiled, flow_failure, mode.key)
             return StayEnd("nonfinite", t0, x0, f"{message} (at t={t0:.9g})")
         if not all(map(math.isfinite, derivative)):
             names = self.compiled.state_names
@@ -222,7 +222,7 @@ class StayIntegrator:
                 first_step=self._first_step(t0),
             )
         except _SOLVER_ERRORS as exc:
-            return self._gave_up(t0, x0, f"solver could not start: {exc}")
+            return self._gave_up(mode, t0, x0, f"solver could not start: {exc}")
 
     def _first_step(self, t0: float) -> float | None:
         """Start a stay with the last full step of the previous one (None: let scipy choose).
@@ -250,7 +250,9 @@ class StayIntegrator:
             "without bound) and chatter across it",
         )
 
-    def _gave_up(self, t: float, x: np.ndarray, why: str, nonfinite: bool = False) -> StayEnd:
+    def _gave_up(
+        self, mode: CompiledMode, t: float, x: np.ndarray, why: str, nonfinite: bool = False
+    ) -> StayEnd:
         """The end of a stay whose solver cannot go on, at the last accepted point ``(t, x)``."""
         flow_failure = self.compiled.flow_failure
         if flow_failure.error is not None:
@@ -259,7 +261,7 @@ class StayIntegrator:
                 "nonfinite",
                 t,
                 x,
-                f"{describe_failure(self.compiled, flow_failure)} (at t={where:.9g}); "
+                f"{describe_failure(self.compiled, flow_failure, mode.key)} (at t={where:.9g}); "
                 f"the solution leaves the domain of the flow after t={t:.9g}",
             )
         peak = max(map(abs, x.tolist()), default=0.0)

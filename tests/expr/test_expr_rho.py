@@ -189,3 +189,18 @@ def _strip_cols(node: ir.Expr) -> ir.Expr:
     if isinstance(node, ir.BoolOp):
         return replace(node, col=0, values=tuple(_strip_cols(a) for a in node.values))
     return replace(node, col=0)
+
+
+@pytest.mark.parametrize(
+    "source, value",
+    [("0 >= 0", -1.0), ("1 < 0", 1.0), ("x < x", 1.0), ("x <= x", -1.0), ("x*y == x*y", -1.0)],
+)
+def test_a_comparison_that_cannot_change_has_the_rho_of_a_constant(
+    source: str, value: float
+) -> None:
+    # its a - b would be 0 everywhere: a rho that touches 0 and never crosses it
+    guard = parse_expression(source, SCOPE, want="bool")
+    assert _strip_cols(guard_to_rho(guard)) == ir.Num(value, 0)
+    rho = guard_to_rho(parse_expression(f"x <= 1 and {source}", SCOPE, want="bool"))
+    expected = ir.Call("max", (parse_expression("x - 1", SCOPE), ir.Num(value)))
+    assert _strip_cols(rho) == _strip_cols(expected)

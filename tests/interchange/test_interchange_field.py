@@ -121,14 +121,6 @@ def test_the_flattened_ball_bounces_as_the_closed_form_says(tmp_path: Path) -> N
     assert max(abs(a - b) for a, b in zip(bounces, expected, strict=True)) < 1e-7
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="simulator boundary rules (not interchange): with the equality guard "
-    "`x == 0 and v < 0`, the 24th bounce happens at x = 1.8e-11 with v = 1e-18; the next "
-    "stay starts within the band of both the guard's level and the invariant x >= 0, "
-    "both are disarmed, and the ball falls through the floor to t_end with x = -36 "
-    "(the invariant is never re-armed)",
-)
 def test_the_flattened_ball_never_goes_below_the_floor(tmp_path: Path) -> None:
     path = DATA / "bball" / "bball_flattened.xml"
     model = _load(tmp_path, path, path.with_suffix(".cfg"))

@@ -110,3 +110,23 @@ def test_dense_segments_cover_the_run():
         row = np.searchsorted(merged.t, mid)
         assert merged.j[min(row, len(merged.t) - 1)] >= j
     assert merged.segments[0][1] == 0.0 and merged.segments[-1][2] == 20.0
+
+
+def test_a_component_without_state_is_merged_too(monkeypatch):
+    # a controller made of locations only (no state variable), independent of the
+    # thermostats: its group has no column to fill (before: ValueError out of simulate)
+    timer = """
+automaton: ctrl
+locations: {idle: {}, busy: {}}
+edges:
+  - {name: start, from: idle, to: busy, guard: t >= 5}
+"""
+    model = system(timer)
+    merged = hybrid.simulate(model, t_end=10.0, handle_sigint=False)
+    whole = product_run(model, monkeypatch, t_end=10.0)
+    assert merged.termination.cause == whole.termination.cause == "t_end"
+    (start,) = [j for j in merged.jumps if j.edge == "ctrl.start"]
+    assert start.t == pytest.approx(5.0, abs=1e-9)
+    assert [j.edge for j in merged.jumps] == [j.edge for j in whole.jumps]
+    busy = np.array([loc.endswith("ctrl.busy") for loc in merged.location])
+    assert not busy[merged.t < 5.0].any() and busy[merged.t > 5.0].all()

@@ -1,0 +1,103 @@
+"""A disarmed guard or invariant is still watched: leaving its band on the active side is an event.
+
+A guard or invariant that sits on its boundary at the start of a stay is
+disarmed (docs/semantics.md, "Re-arming"); it used to take part again only once
+it had been strictly on its safe side. A state that leaves the boundary on the
+*other* side (the guard starts to hold, the invariant stops holding), for
+instance at second order while the slope test saw a zero slope, was then never
+seen: the bouncing ball at rest on its floor fell through it to h = -250.
+
+The rule now: a disarmed term is watched from the far edge of the band, so it
+is an event when a guard's rho falls to ``-b0`` or an invariant's rho rises to
+``+b0`` (``b0`` the band at the start of the stay). Each answer below is a hand
+computation from that rule: for ``x = 5 + t**2 / 2`` the event is where
+``t**2 / 2 = b0``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import hybrid
+
+H0, G, E = 10.0, 9.81, 0.8
+T1 = math.sqrt(2 * H0 / G)
+T_ZENO = T1 * (1 + E) / (1 - E)
+
+
+def band(*x: float) -> float:
+    return 1e-10 * (1.0 + max(abs(v) for v in x))
+
+
+def test_the_ball_at_rest_on_its_floor_keeps_bouncing_and_never_passes_it(
+    ball: hybrid.Automaton,
+) -> None:
+    # before: 176 jumps, then the ball fell through the floor to h = -250.7 at t_end
+    run = hybrid.simulate(ball, t_end=20.0, zeno=False, max_jumps=400)
+    assert run.termination.cause == "max_jumps" and len(run.jumps) == 400
+    # never below the floor by more than the band (b = 1e-10 (1 + |v|) near rest)
+    assert float(np.min(run["h"])) > -1e-9
+    # the bounces accumulate at the Zeno time t1 (1 + e) / (1 - e) and go on there
+    assert run.termination.t == pytest.approx(T_ZENO, abs=1e-3)
+    assert all(j.t < T_ZENO + 1e-3 for j in run.jumps)
+    assert all(j.edge == "bounce" for j in run.jumps)
+
+
+SITTING_INVARIANT = """
+automaton: sit
+state: {x: {initial: 5.0}, y: {initial: 0.0}}
+locations:
+  A: {flow: {x: y, y: 1}, invariant: 'INV'}
+"""
+
+
+@pytest.mark.parametrize(("inv", "level"), [("x <= 5", 5.0), ("x == 5", 5.0)])
+def test_an_invariant_sitting_on_its_boundary_is_left_at_second_order(
+    inv: str, level: float
+) -> None:
+    # x = 5 + t^2 / 2: the slope of x - 5 is 0 at t = 0 (the invariant holds and is
+    # disarmed), then x leaves the invariant; before, it was never noticed
+    model = hybrid.load_text(SITTING_INVARIANT.replace("INV", inv))
+    run = hybrid.simulate(model, t_end=1.0, rtol=1e-10, atol=1e-14)
+    end = run.termination
+    assert end.cause == "blocked", end
+    b0 = band(5.0, 0.0)
+    assert end.t == pytest.approx(math.sqrt(2 * b0), rel=1e-4)
+    assert float(run["x"][-1]) - level == pytest.approx(b0, rel=1e-3)
+
+
+def test_a_strict_guard_sitting_on_its_boundary_fires_when_entered_at_second_order() -> None:
+    text = """
+automaton: enter
+state: {x: {initial: 5.0}, y: {initial: 0.0}}
+locations:
+  A: {flow: {x: y, y: 1}}
+  B: {flow: {x: 0, y: 0}}
+edges:
+  - {name: go, from: A, to: B, guard: x > 5}
+"""
+    run = hybrid.simulate(hybrid.load_text(text), t_end=1.0, rtol=1e-10, atol=1e-14)
+    (jump,) = run.jumps  # before: no jump at all
+    b0 = band(5.0, 0.0)
+    assert jump.t == pytest.approx(math.sqrt(2 * b0), rel=1e-4)
+    assert jump.before["x"] - 5.0 == pytest.approx(b0, rel=1e-3)
+
+
+def test_an_equality_guard_whose_level_the_flow_keeps_fires_when_the_rest_holds() -> None:
+    # x stays exactly on the level x == 0; the guard holds from y = 1 (t = 1) on
+    text = """
+automaton: keep
+state: {x: {initial: 0.0}, y: {initial: 0.0}}
+locations:
+  A: {flow: {x: 0, y: 1}}
+  B: {flow: {x: 0, y: 0}}
+edges:
+  - {name: go, from: A, to: B, guard: x == 0 and y >= 1}
+"""
+    run = hybrid.simulate(hybrid.load_text(text), t_end=3.0, rtol=1e-10, atol=1e-12)
+    (jump,) = run.jumps  # before: no jump (a level exactly at 0 never armed)
+    assert jump.t == pytest.approx(1.0, abs=1e-9)
+    assert run.termination.cause == "t_end"
