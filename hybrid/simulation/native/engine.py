@@ -35,7 +35,6 @@ from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
 
 __all__ = [
-    "INTERIOR_SAMPLES",
     "CompiledNative",
     "compiled_native",
     "config",
@@ -43,9 +42,6 @@ __all__ = [
     "run_in_worker",
     "simulate_compiled",
 ]
-
-INTERIOR_SAMPLES = 10
-"""Interior points of each step where the watch is sampled (the first-crossing rule)."""
 
 _CACHE_SIZE = 16
 _CACHE: dict[tuple[Any, ...], tuple[tuple[Any, ...], CompiledNative]] = {}
@@ -192,7 +188,6 @@ def config(settings: Settings) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     cfg_i[b.CI_ZENO] = int(settings.zeno)
     cfg_i[b.CI_PER_INSTANT] = settings.max_jumps_per_instant
     cfg_i[b.CI_DENSE] = int(settings.dense)
-    cfg_i[b.CI_SAMPLES] = INTERIOR_SAMPLES
     return cfg_f, cfg_i
 
 

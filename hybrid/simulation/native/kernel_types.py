@@ -16,8 +16,14 @@ once per machine. By ``op`` (``OP_*`` of :mod:`~hybrid.simulation.native.buffers
 - ``OP_VALUE``, a form: returns the scalar form (a rho, an equality level);
 - ``OP_TRUTH``, a form: returns 1.0 if the boolean form holds, else 0.0;
 - ``OP_RESET``, a global transition: the state after it;
-- ``OP_TERMS``, a mode: the watch's terms at once (each guard's rho, each
-  equality level, each invariant's rho), one call a sample.
+- ``OP_WATCH``, a mode: the watch's terms at once (each guard's oriented
+  rho, then each invariant's rho), one call a sample;
+- ``OP_ARM``, a mode: what arming reads (each guard's plain rho, then each
+  equality level ``a - b`` of the mode's guards).
+
+``p*`` is the run's parameter vector followed by the mode's level slots: the
+sign of each equality level (its oriented reading) and its snap (-1 at the
+level, +1 not), which the oriented and snapped forms read.
 
 One function rather than six: each function pointer costs a load from the
 cache and a conversion on every call from Python.

@@ -43,11 +43,18 @@ from hybrid.expr import ir
 from hybrid.expr.rho import guard_to_rho
 from hybrid.simulation.native.buffers import T_MODE_TR, TAB_HEADER, TABLES
 from hybrid.simulation.native.printer import body_lines
-from hybrid.simulation.native.structure import COMPILED_FORM, NativeMode, NativeModel, slot_name
+from hybrid.simulation.native.structure import (
+    COMPILED_FORM,
+    NativeMode,
+    NativeModel,
+    sign_name,
+    slot_name,
+    snap_name,
+)
 
 __all__ = ["KERNEL_MODULES", "Generated", "generate", "kernel_module", "kernel_source"]
 
-KERNEL_MODULES = ("integrator", "decide", "store", "watch", "stay", "loop", "ensemble")
+KERNEL_MODULES = ("integrator", "decide", "store", "watch", "search", "stay", "loop", "ensemble")
 """The kernel modules, in this order (callees first); the last is the parallel ensemble loop."""
 
 MARKER = "# --- kernel ---"
@@ -156,15 +163,21 @@ def _function(name: str, args: str, cases: Sequence[list[str]], fallback: str) -
 def generate(model: NativeModel) -> Generated:
     """The source of the module that runs ``model`` compiled."""
     states = model.state_names
+    modes = model.modes
+    n_params = len(model.slot_names)
+    max_lv = max(1, *(sum(len(t.levels) for t in m.transitions) for m in modes))
     names = {s: f"x[{i}]" for i, s in enumerate(states)}
-    names.update({slot_name(k): f"p[{k}]" for k in range(len(model.slot_names))})
-    for mode in model.modes:
+    names.update({slot_name(k): f"p[{k}]" for k in range(n_params)})
+    names.update({sign_name(a): f"p[{n_params + a}]" for a in range(max_lv)})
+    names.update({snap_name(a): f"p[{n_params + max_lv + a}]" for a in range(max_lv)})
+    for mode in modes:
         names.update({s: f"s_{s}" for s in mode.signals})
     forms = _Forms()
     tables: dict[str, list[int]] = {k: [] for k in TABLES}
-    rhs_cases, out_cases, reset_cases, term_cases = [], [], [], []
+    rhs_cases, out_cases, reset_cases, watch_cases, arm_cases = [], [], [], [], []
     outputs_ir = _output_exprs(model)
-    for mode in model.modes:
+    levels = 0
+    for mode in modes:
         flows = [mode.flow.get(s, ir.Num(0.0)) for s in states]
         pre, items = body_lines(flows, mode.signals, names)
         rhs_cases.append(pre + [f"out[{i}] = {v}" for i, v in enumerate(items)])
@@ -172,16 +185,27 @@ def generate(model: NativeModel) -> Generated:
         out_cases.append(pre + [f"out[{c}] = {v}" for c, v in enumerate(items)])
         tables["MODE_TR"].append(len(tables["TR_TARGET"]))
         tables["MODE_INV"].append(len(tables["INV_RHO"]))
+        oriented: list[ir.Expr] = []
+        raw: list[ir.Expr] = []
+        differences: list[ir.Expr] = []
         for tr in mode.transitions:
+            first = len(differences)
+            rho = guard_to_rho(tr.guard)
             tables["TR_TARGET"].append(model.index[tr.view.target])
             tables["TR_PRIORITY"].append(tr.view.priority)
-            tables["TR_RHO"].append(forms.value(mode, guard_to_rho(tr.guard)))
+            tables["TR_RHO"].append(forms.value(mode, rho))
             tables["TR_BOOL"].append(forms.truth(mode, tr.guard))
-            tables["TR_LV"].append(len(tables["LV_E"]))
-            for level in tr.levels:
-                tables["LV_E"].append(forms.value(mode, level.difference))
-                tables["LV_RHO"].append(forms.value(mode, guard_to_rho(level.relaxed)))
-                tables["LV_BOOL"].append(forms.truth(mode, level.relaxed))
+            if tr.levels:
+                snapped = tr.snapped(first)
+                tables["TR_SRHO"].append(forms.value(mode, guard_to_rho(snapped)))
+                tables["TR_SBOOL"].append(forms.truth(mode, snapped))
+            else:
+                tables["TR_SRHO"].append(tables["TR_RHO"][-1])
+                tables["TR_SBOOL"].append(tables["TR_BOOL"][-1])
+            tables["TR_LV"].append(levels + first)
+            oriented.append(tr.oriented_rho(first))
+            raw.append(rho)
+            differences.extend(tr.levels)
             resets = [tr.reset.get(s) for s in states]
             pre, items = body_lines([e for e in resets if e is not None], mode.signals, names)
             it = iter(items)
@@ -189,17 +213,18 @@ def generate(model: NativeModel) -> Generated:
                 pre
                 + [f"out[{i}] = {next(it) if e is not None else f'x[{i}]'}" for i, e in enumerate(resets)]
             )
+        levels += len(differences)
         for _, expr in mode.invariants:
             tables["INV_RHO"].append(forms.value(mode, guard_to_rho(expr)))
             tables["INV_BOOL"].append(forms.truth(mode, expr))
-        terms = [guard_to_rho(tr.guard) for tr in mode.transitions]
-        terms += [level.difference for tr in mode.transitions for level in tr.levels]
-        terms += [guard_to_rho(expr) for _, expr in mode.invariants]
+        terms = oriented + [guard_to_rho(expr) for _, expr in mode.invariants]
         pre, items = body_lines(terms, mode.signals, names)
-        term_cases.append(pre + [f"out[{k}] = {v}" for k, v in enumerate(items)])
+        watch_cases.append(pre + [f"out[{k}] = {v}" for k, v in enumerate(items)])
+        pre, items = body_lines(raw + differences, mode.signals, names)
+        arm_cases.append(pre + [f"out[{k}] = {v}" for k, v in enumerate(items)])
     tables["MODE_TR"].append(len(tables["TR_TARGET"]))
     tables["MODE_INV"].append(len(tables["INV_RHO"]))
-    tables["TR_LV"].append(len(tables["LV_E"]))
+    tables["TR_LV"].append(levels)
 
     def form_cases(chosen: list[tuple[NativeMode, ir.Expr]]) -> list[list[str]]:
         cases = []
@@ -208,45 +233,42 @@ def generate(model: NativeModel) -> Generated:
             cases.append([*pre, f"return {item}"])
         return cases
 
-    modes = model.modes
-    sizes = [
-        len(states),
-        len(model.columns),
-        max(1, *(len(m.transitions) for m in modes)),
-        max(1, *(sum(len(t.levels) for t in m.transitions) for m in modes)),
-        max(1, *(len(m.invariants) for m in modes)),
-        len(model.slot_names),
-    ]
+    max_tr = max(1, *(len(m.transitions) for m in modes))
+    max_inv = max(1, *(len(m.invariants) for m in modes))
+    sizes = [len(states), len(model.columns), max_tr, max_lv, max_inv, n_params]
     header, library_modules = _header(model)
     mathlib, helpers = kernel_source(("mathlib",))
-    out_size = max(1, len(states), len(model.columns), sizes[2] + sizes[3] + sizes[4])
+    n_pe = n_params + 2 * max_lv + 1
+    out_size = max(1, len(states), len(model.columns), max_tr + max_inv, max_tr + max_lv)
     body = {
         "model_rhs": rhs_cases,
         "model_outputs": out_cases,
         "model_value": form_cases(forms.values),
         "model_truth": form_cases(forms.truths),
         "model_reset": reset_cases,
-        "model_terms": term_cases,
+        "model_watch": watch_cases,
+        "model_arm": arm_cases,
     }
     functions: list[str] = []
     for name, cases in body.items():
         index = {"model_value": "f", "model_truth": "f", "model_reset": "tr"}.get(name, "m")
         fallback = {"model_value": "return _NAN", "model_truth": "return False"}.get(name, "return")
         functions += _function(name, f"{index}, t, x, p, out", cases, fallback)
-    p_view = f"carray(pp, ({len(model.slot_names)},))" if model.slot_names else "np.zeros(0)"
     functions += [
         "def model(op, i, t, xp, pp, outp):",
-        f"    x = carray(xp, ({len(states)},))",
-        f"    p = {p_view}",
+        f"    x = carray(xp, ({max(1, len(states))},))",
+        f"    p = carray(pp, ({n_pe},))",
         f"    out = carray(outp, ({out_size},))",
-        "    if op == OP_VALUE:",
+        "    if op == OP_WATCH:",
+        "        model_watch(i, t, x, p, out)",
+        "    elif op == OP_VALUE:",
         "        return model_value(i, t, x, p, out)",
-        "    if op == OP_TRUTH:",
+        "    elif op == OP_TRUTH:",
         "        return 1.0 if model_truth(i, t, x, p, out) else 0.0",
-        "    if op == OP_TERMS:",
-        "        model_terms(i, t, x, p, out)",
         "    elif op == OP_RHS:",
         "        model_rhs(i, t, x, p, out)",
+        "    elif op == OP_ARM:",
+        "        model_arm(i, t, x, p, out)",
         "    elif op == OP_OUTPUTS:",
         "        model_outputs(i, t, x, p, out)",
         "    elif op == OP_RESET:",
@@ -303,8 +325,8 @@ def _header(model: NativeModel) -> tuple[list[str], tuple[str, ...]]:
         "import warnings",
         "from numba import carray, cfunc, njit",
         "from numba.core.errors import NumbaExperimentalFeatureWarning",
-        "from hybrid.simulation.native.buffers import OP_OUTPUTS, OP_RESET, OP_RHS, OP_TERMS",
-        "from hybrid.simulation.native.buffers import OP_TRUTH, OP_VALUE",
+        "from hybrid.simulation.native.buffers import OP_ARM, OP_OUTPUTS, OP_RESET, OP_RHS",
+        "from hybrid.simulation.native.buffers import OP_TRUTH, OP_VALUE, OP_WATCH",
         "from hybrid.simulation.native.kernel_types import model_signature",
         "_NAN = math.nan",
         "_INF = math.inf",
