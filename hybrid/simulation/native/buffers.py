@@ -61,6 +61,7 @@ __all__ = [
     "F_INVARIANT",
     "F_NONE",
     "F_NOW",
+    "F_PEAK",
     "F_RESET",
     "F_SIGNALS",
     "F_T",
@@ -171,7 +172,7 @@ I_DETAIL, I_DETAIL_INDEX, I_OVERFLOW, I_RHS_CALLS, I_STEPS = 6, 7, 8, 9, 10
 I_FAIL_KIND, I_FAIL_INDEX, I_FAIL_MODE = 11, 12, 13
 N_OUT_I = 16
 # out_f slots (F_NOW: the time reached so far, for progress; F_AUX*: numbers for a message)
-F_T, F_ZENO_TIME, F_FAIL_T, F_NOW, F_AUX0, F_AUX1 = 0, 1, 2, 3, 4, 5
+F_T, F_ZENO_TIME, F_FAIL_T, F_NOW, F_AUX0, F_AUX1, F_PEAK = 0, 1, 2, 3, 4, 5, 6
 N_OUT_F = 8
 
 # the run's settings: cfg_f (floats) and cfg_i (integers)

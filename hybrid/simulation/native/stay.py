@@ -52,6 +52,7 @@ from hybrid.simulation.native.buffers import (
     F_AUX1,
     F_FLOW,
     F_NOW,
+    F_PEAK,
     I_STEPS,
     OP_RHS,
     S_FAIL_T,
@@ -150,9 +151,18 @@ def record_grid(fns: Fns, pts: Array2, oi: Ints, lo: float, hi: float, inclusive
     return True
 
 
+def _peak(of: Array, wf: Array, wi: Ints) -> None:
+    """The largest ``|state|`` at the last accepted point, for the message."""
+    big = 0.0
+    for i in range(wi[W_D]):
+        big = max(big, abs(wf[wi[W_Y] + i]))
+    of[F_PEAK] = big
+
+
 def _gave_up(oi: Ints, of: Array, t: float, j: int, m: int, detail: int, cause: int, wf: Array,
              wi: Ints) -> None:  # fmt: skip
     """The end of a stay whose integrator cannot go on, at the last accepted point (``_gave_up``)."""
+    _peak(of, wf, wi)
     sc = wi[W_SCAL]
     if wf[sc + S_FLOW_FAIL] != 0.0:
         fail = wi[W_FAILI]
@@ -230,6 +240,7 @@ def flow_stay(fns: Fns, tab: Ints, m: int, t0: float, x: Array, j: int, stay: in
             return STAY_DONE, t, -1
         stalls = stalls + 1 if t_new - t <= 4e-16 * max(1.0, abs(t_new)) else 0
         if stalls > STALL_STEPS:
+            _peak(of, wf, wi)
             end_run(oi, of, C_SOLVER_FAILURE, t, j, m, D_NOT_ADVANCING, 0, math.nan, wf, wi)
             return STAY_DONE, t, -1
         longest = max(longest, h)
@@ -240,6 +251,7 @@ def flow_stay(fns: Fns, tab: Ints, m: int, t0: float, x: Array, j: int, stay: in
             window_start = t_new
             if pace < CRAWL_DROP * longest and t_end - t_new > CRAWL_PROJECTION * pace:
                 of[F_AUX0], of[F_AUX1] = pace, longest
+                _peak(of, wf, wi)
                 end_run(oi, of, C_SOLVER_FAILURE, t, j, m, D_CRAWL, 0, math.nan, wf, wi)
                 return STAY_DONE, t, -1
         kind, t_event, w = first_event(fns, tab, m, t, t_new, w, spacing, wf, wi)
