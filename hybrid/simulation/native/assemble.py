@@ -43,7 +43,7 @@ class Layout:
     """Per mode, the global index of its first invariant (as ``MODE_INV``)."""
     describe: tuple[tuple[str, str | None, str, str], ...]
     """Per global transition: its name, label, source and target mode names."""
-    choices: dict[tuple[int, tuple[float, ...]], tuple[tuple[str, ...], str]]
+    choices: dict[tuple[int, bytes], tuple[tuple[str, ...], str]]
     """Enabled names and ``chosen_by`` per (transition, enabled flags) seen so far."""
     modes: tuple[Any, ...]
     """The modes (:class:`~hybrid.simulation.native.structure.NativeMode`)."""
@@ -63,7 +63,7 @@ class Layout:
         )  # fmt: skip
         return cls(names, tuple(rows), tuple(first), describe, {}, tuple(native.modes))
 
-    def enabled(self, tr: int, flags: tuple[float, ...]) -> tuple[tuple[str, ...], str]:
+    def enabled(self, tr: int, flags: bytes) -> tuple[tuple[str, ...], str]:
         """The names of the transitions enabled with ``tr`` chosen, and how it was chosen."""
         key = (tr, flags)
         hit = self.choices.get(key)
@@ -104,31 +104,34 @@ def _jumps(native: NativeModel, layout: Layout, buf: b.RunArrays) -> list[Jump]:
     names = native.state_names
     d = len(names)
     n = int(buf.oi[b.I_JUMPS])
+    if n == 0:
+        return []
     rows = buf.jps[:n]
     times = rows[:, b.J_T].tolist()
     hybrid_times = rows[:, b.J_J].astype(np.int64).tolist()
     transitions = rows[:, b.J_TR].astype(np.int64).tolist()
     befores = rows[:, b.J_X : b.J_X + d].tolist()
     afters = rows[:, b.J_X + d : b.J_X + 2 * d].tolist()
-    flags = rows[:, b.J_X + 2 * d :].tolist()
-    jumps = []
-    new, enabled_of, describe, seen = object.__new__, layout.enabled, layout.describe, layout.choices
-    for t, j, tr, before, after, on in zip(
-        times, hybrid_times, transitions, befores, afters, flags, strict=True
-    ):
-        key = (tr, tuple(on))
+    width = rows.shape[1] - b.J_X - 2 * d
+    flags = (rows[:, b.J_X + 2 * d :] != 0.0).astype(np.uint8).tobytes()
+    jumps: list[Jump] = []
+    append = jumps.append
+    new, set_field = object.__new__, object.__setattr__
+    enabled_of, describe, seen = layout.enabled, layout.describe, layout.choices
+    for k in range(n):
+        tr = transitions[k]
+        key = (tr, flags[k * width : (k + 1) * width])
         enabled, how = seen.get(key) or enabled_of(*key)
         name, label, source, target = describe[tr]
         jump = new(Jump)
-        # the fields set directly: Jump is a frozen dataclass without slots, and its
+        # the fields set at once: Jump is a frozen dataclass without slots, and its
         # generated __init__ (one object.__setattr__ per field) costs as much as the run
-        jump.__dict__.update(
-            t=t, j=j, edge=name, label=label, source=source, target=target,
-            before=dict(zip(names, before, strict=True)),
-            after=dict(zip(names, after, strict=True)),
-            enabled=enabled, chosen_by=how,
-        )  # fmt: skip
-        jumps.append(jump)
+        set_field(jump, "__dict__", {
+            "t": times[k], "j": hybrid_times[k], "edge": name, "label": label,
+            "source": source, "target": target, "before": dict(zip(names, befores[k], strict=True)),
+            "after": dict(zip(names, afters[k], strict=True)), "enabled": enabled, "chosen_by": how,
+        })  # fmt: skip
+        append(jump)
     return jumps
 
 

@@ -27,6 +27,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "ASK_ENTRY",
+    "ASK_EVENT",
+    "ASK_LEFT",
+    "ASK_WATCH",
     "CAUSE_CODES",
     "CF_ATOL",
     "CF_DT",
@@ -53,6 +57,12 @@ __all__ = [
     "D_STEP_TOO_SMALL",
     "D_ZENO_GEOMETRIC",
     "D_ZENO_INSTANT",
+    "FP_DECIDE",
+    "FP_MODEL",
+    "FP_RUN",
+    "FP_SEARCH",
+    "FP_STAY",
+    "FP_STEP",
     "F_AUX0",
     "F_AUX1",
     "F_FAIL_T",
@@ -86,6 +96,7 @@ __all__ = [
     "J_X",
     "N_CFG_F",
     "N_CFG_I",
+    "N_FP",
     "N_OUT_F",
     "N_OUT_I",
     "N_SCALARS",
@@ -192,6 +203,13 @@ F_NONE, F_GUARD, F_INVARIANT, F_SIGNALS, F_RESET, F_FLOW = 0, 1, 2, 3, 4, 5
 
 # what the model's one compiled function computes: fns(op, index, t, x*, p*, out*)
 OP_RHS, OP_OUTPUTS, OP_VALUE, OP_TRUTH, OP_RESET, OP_WATCH, OP_ARM = 0, 1, 2, 3, 4, 5, 6
+
+# the addresses the compiled loop calls (``fp``): C wrapper, then compiled code, of each
+FP_MODEL, FP_STEP, FP_SEARCH, FP_DECIDE, FP_STAY, FP_RUN = 0, 2, 4, 6, 8, 10
+N_FP = 12
+
+# what the decisions piece is asked (``pieces.decide``)
+ASK_ENTRY, ASK_EVENT, ASK_LEFT, ASK_WATCH = 0, 1, 2, 3
 
 # the model's tables (one int64 array, ``tab``): sizes, then where each table starts
 T_N_STATES, T_N_SIGNALS, T_MAX_TR, T_MAX_LV, T_MAX_INV, T_N_PARAMS = 0, 1, 2, 3, 4, 5

@@ -63,7 +63,7 @@ from hybrid.simulation.native.buffers import (
     W_SCAL,
     W_TRARMED,
 )
-from hybrid.simulation.native.kernel_types import Array, Fns, Ints
+from hybrid.simulation.native.kernel_types import Array, Fns, Ints, at
 
 __all__ = [
     "band",
@@ -108,8 +108,8 @@ def value_checked(
     fns: Fns, f: int, kind: int, index: int, m: int, t: float, x: Array, wf: Array, wi: Ints,
 ) -> float:  # fmt: skip
     """Form ``f`` at ``(t, x)``, a NaN recorded as a failure of ``kind``/``index``."""
-    pe = wf[wi[W_PE] :]
-    v: float = fns(OP_VALUE, f, t, x.ctypes, pe.ctypes, x.ctypes)
+    x_c = at(x, 0)
+    v: float = fns(OP_VALUE, f, t, x_c, at(wf, wi[W_PE]), x_c)
     if v != v:
         note_failure(kind, index, m, t, x, wf, wi)
     return v
@@ -122,9 +122,8 @@ def slope(
     d = wi[W_D]
     rate = wf[wi[W_RATE] : wi[W_RATE] + d]
     ahead = wf[wi[W_AHEAD] : wi[W_AHEAD] + d]
-    pe = wf[wi[W_PE] :]
     h = 1e-7 * max(1.0, abs(t))
-    fns(OP_RHS, m, t, x.ctypes, pe.ctypes, rate.ctypes)
+    fns(OP_RHS, m, t, at(x, 0), at(wf, wi[W_PE]), at(rate, 0))
     for i in range(d):
         if rate[i] != rate[i]:
             note_failure(F_FLOW, m, m, t, x, wf, wi)
@@ -150,8 +149,8 @@ def holds_now(
         return True, True
     if rate > width:
         return False, False  # on the boundary, moving away: disarm until strictly false
-    pe = wf[wi[W_PE] :]
-    return fns(OP_TRUTH, bool_f, t, x.ctypes, pe.ctypes, x.ctypes) != 0.0, False
+    x_c = at(x, 0)
+    return fns(OP_TRUTH, bool_f, t, x_c, at(wf, wi[W_PE]), x_c) != 0.0, False
 
 
 def choose(tab: Ints, m: int, wi: Ints) -> int:
@@ -197,9 +196,8 @@ def enabled_at_event(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
     n_tr = tab[tab[T_MODE_TR] + m + 1] - first
     lv0 = tab[tab[T_TR_LV] + first]
     snaps = wi[W_PE] + tab[T_N_PARAMS] + tab[T_MAX_LV]
-    pe = wf[wi[W_PE] :]
     armv = wf[wi[W_ARMV] :]
-    fns(OP_ARM, m, t, x.ctypes, pe.ctypes, armv.ctypes)
+    fns(OP_ARM, m, t, at(x, 0), at(wf, wi[W_PE]), at(wf, wi[W_ARMV]))
     for k in range(n_tr):
         tr = first + k
         wi[wi[W_ENABLED] + k] = 0
@@ -227,7 +225,6 @@ def invariant_left_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array
     """The place in its mode of an invariant that does not hold or is being left (-1: none)."""
     width = band(x)
     first = tab[tab[T_MODE_INV] + m]
-    pe = wf[wi[W_PE] :]
     for k in range(tab[tab[T_MODE_INV] + m + 1] - first):
         inv = first + k
         rho_f = tab[tab[T_INV_RHO] + inv]
@@ -236,7 +233,8 @@ def invariant_left_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array
             return k
         if value >= -width:
             rate = slope(fns, rho_f, F_INVARIANT, inv, m, t, x, wf, wi)
-            truth = fns(OP_TRUTH, tab[tab[T_INV_BOOL] + inv], t, x.ctypes, pe.ctypes, x.ctypes)
+            x_c = at(x, 0)
+            truth = fns(OP_TRUTH, tab[tab[T_INV_BOOL] + inv], t, x_c, at(wf, wi[W_PE]), x_c)
             if rate > width or (abs(rate) <= width and truth == 0.0):
                 return k
     return -1

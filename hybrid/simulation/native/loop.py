@@ -27,6 +27,8 @@ import math
 import numpy as np
 
 from hybrid.simulation.native.buffers import (
+    ASK_ENTRY,
+    ASK_LEFT,
     CF_T_END,
     CF_T_START,
     CI_MAX_JUMPS,
@@ -40,6 +42,11 @@ from hybrid.simulation.native.buffers import (
     D_ZENO_GEOMETRIC,
     D_ZENO_INSTANT,
     F_RESET,
+    FP_DECIDE,
+    FP_MODEL,
+    FP_SEARCH,
+    FP_STAY,
+    FP_STEP,
     N_SCALARS,
     OP_RESET,
     S_FLOW_FAIL,
@@ -79,10 +86,22 @@ from hybrid.simulation.native.buffers import (
     WI_HEADER,
     ZENO_SIZE,
 )
-from hybrid.simulation.native.decide import enabled_at_entry, invariant_left_at, note_failure
-from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints
+from hybrid.simulation.native.decide import note_failure
+from hybrid.simulation.native.kernel_types import (
+    DECIDE_FN_T,
+    MODEL_FN_T,
+    SEARCH_FN_T,
+    STAY_FN_T,
+    STEP_FN_T,
+    Array,
+    Array2,
+    Fns,
+    Ints,
+    at,
+    function_at,
+)
 from hybrid.simulation.native.search import HORIZON_SAMPLES
-from hybrid.simulation.native.stay import STAY_EVENT, end_run, failed, flow_stay
+from hybrid.simulation.native.stay import STAY_EVENT, end_run, failed
 from hybrid.simulation.native.store import finish, record_jump, record_point
 
 __all__ = ["jump", "new_work", "run_one", "zeno_update"]
@@ -192,8 +211,7 @@ def jump(fns: Fns, tab: Ints, pts: Array2, jps: Array2, oi: Ints, m: int, tr: in
     """Take transition ``tr`` at ``t``: reset into ``x``, record the jump and the new point."""
     d = wi[W_D]
     x_new = wf[wi[W_XNEW] : wi[W_XNEW] + d]
-    pe = wf[wi[W_PE] :]
-    fns(OP_RESET, tr, t, x.ctypes, pe.ctypes, x_new.ctypes)
+    fns(OP_RESET, tr, t, at(x, 0), at(wf, wi[W_PE]), at(x_new, 0))
     failed = False
     for i in range(d):
         if x_new[i] != x_new[i]:
@@ -209,10 +227,18 @@ def jump(fns: Fns, tab: Ints, pts: Array2, jps: Array2, oi: Ints, m: int, tr: in
     return record_point(fns, pts, oi, t, j + 1, tab[tab[T_TR_TARGET] + tr], x, wf, wi)
 
 
-def run_one(fns: Fns, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f: Array,
+def run_one(fp: Ints, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f: Array,
             cfg_i: Ints, pts: Array2, jps: Array2, sts: Array2, oi: Ints, of: Array,
             flag: Ints) -> None:  # fmt: skip
-    """Simulate from ``(t0, x0)`` in mode ``m0`` until the run ends; all of it into the arrays."""
+    """Simulate from ``(t0, x0)`` in mode ``m0`` until the run ends; all of it into the arrays.
+
+    ``fp`` holds the addresses of the model and of the kernel's pieces (``FP_*``).
+    """
+    fns = function_at(fp[FP_MODEL], fp[FP_MODEL + 1], MODEL_FN_T)
+    step = function_at(fp[FP_STEP], fp[FP_STEP + 1], STEP_FN_T)
+    search = function_at(fp[FP_SEARCH], fp[FP_SEARCH + 1], SEARCH_FN_T)
+    decide = function_at(fp[FP_DECIDE], fp[FP_DECIDE + 1], DECIDE_FN_T)
+    stay_fn = function_at(fp[FP_STAY], fp[FP_STAY + 1], STAY_FN_T)
     wi = np.zeros(WI_HEADER + 2 * tab[T_MAX_TR] + tab[T_MAX_INV] + 6, np.int64)
     wf = new_work(tab, p, wi)
     x = x0.copy()
@@ -234,19 +260,20 @@ def run_one(fns: Fns, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f:
         if flag[0] != 0:
             finish(oi, of, L_INTERRUPTED, t, j, m, D_NONE, 0, math.nan, wf, wi)
             return
-        chosen = enabled_at_entry(fns, tab, m, t, x, wf, wi)
+        chosen = decide(ASK_ENTRY, fns, tab, m, t, x, wf, wi)
         if failed(wi):
             continue  # ends as nonfinite above
         if chosen < 0:
-            left = invariant_left_at(fns, tab, m, t, x, wf, wi)
+            left = decide(ASK_LEFT, fns, tab, m, t, x, wf, wi)
             if left >= 0:
                 finish(oi, of, L_BLOCKED, t, j, m, D_BLOCKED_ENTRY, left, math.nan, wf, wi)
                 return
             if t >= t_end:  # a jump landed exactly at t_end: nothing left to flow
                 finish(oi, of, L_T_END, t, j, m, D_NONE, 0, math.nan, wf, wi)
                 return
-            outcome, t_after, chosen = flow_stay(fns, tab, m, t, x, j, stay, spacing, cfg_f, cfg_i,
-                                                 pts, sts, oi, of, wf, wi, flag)  # fmt: skip
+            outcome, t_after, chosen = stay_fn(fns, step, search, decide, tab, m, t, x, j, stay,
+                                               spacing, cfg_f, cfg_i, pts, sts, oi, of, wf, wi,
+                                               flag)  # fmt: skip
             stay += 1
             if outcome != STAY_EVENT:
                 return

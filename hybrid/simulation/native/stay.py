@@ -32,6 +32,9 @@ from __future__ import annotations
 import math
 
 from hybrid.simulation.native.buffers import (
+    ASK_EVENT,
+    ASK_LEFT,
+    ASK_WATCH,
     CF_ATOL,
     CF_DT,
     CF_MAX_STEP,
@@ -75,12 +78,21 @@ from hybrid.simulation.native.buffers import (
     W_Y,
     W_YNEW,
 )
-from hybrid.simulation.native.decide import enabled_at_event, invariant_left_at, note_failure
-from hybrid.simulation.native.integrator import dense_eval, initial_step, rk45_step
-from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints
-from hybrid.simulation.native.search import EV_FAILED, EV_NONE, first_event
+from hybrid.simulation.native.decide import note_failure
+from hybrid.simulation.native.integrator import dense_eval, initial_step
+from hybrid.simulation.native.kernel_types import (
+    Array,
+    Array2,
+    DecideFn,
+    Fns,
+    Ints,
+    SearchFn,
+    StepFn,
+    at,
+)
+from hybrid.simulation.native.search import EV_FAILED, EV_NONE
 from hybrid.simulation.native.store import finish, record_point, record_step
-from hybrid.simulation.native.watch import watch_start, watch_terms, watch_value
+from hybrid.simulation.native.watch import watch_terms, watch_value
 
 __all__ = [
     "CRAWL_DROP",
@@ -176,9 +188,10 @@ def _gave_up(oi: Ints, of: Array, t: float, j: int, m: int, detail: int, cause: 
     end_run(oi, of, cause, t, j, m, detail, 0, math.nan, wf, wi)
 
 
-def flow_stay(fns: Fns, tab: Ints, m: int, t0: float, x: Array, j: int, stay: int, spacing: float,
-              cfg_f: Array, cfg_i: Ints, pts: Array2, sts: Array2, oi: Ints, of: Array,
-              wf: Array, wi: Ints, flag: Ints) -> tuple[int, float, int]:  # fmt: skip
+def flow_stay(fns: Fns, step: StepFn, search: SearchFn, decide: DecideFn, tab: Ints, m: int,
+              t0: float, x: Array, j: int, stay: int, spacing: float, cfg_f: Array, cfg_i: Ints,
+              pts: Array2, sts: Array2, oi: Ints, of: Array, wf: Array, wi: Ints,
+              flag: Ints) -> tuple[int, float, int]:  # fmt: skip
     """Integrate one stay from ``(t0, x)``: ``(STAY_EVENT, t, chosen)`` or ``(STAY_DONE, t, -1)``.
 
     On ``STAY_EVENT`` the event point is in ``x`` and recorded, and ``chosen``
@@ -200,14 +213,14 @@ def flow_stay(fns: Fns, tab: Ints, m: int, t0: float, x: Array, j: int, stay: in
     K = wf[wi[W_K] : wi[W_K] + 7 * d].reshape((7, d))
     q = wf[wi[W_Q] : wi[W_Q] + 4 * d].reshape((d, 4))
     pe = wf[wi[W_PE] :]
-    watch_start(fns, tab, m, t0, x, wf, wi)
+    decide(ASK_WATCH, fns, tab, m, t0, x, wf, wi)
     if wi[fail] != 0:
         end_run(oi, of, C_NONFINITE, t0, j, m, D_EVAL, 0, math.nan, wf, wi)
         return STAY_DONE, t0, -1
     for i in range(d):
         y[i] = x[i]
     wf[sc + S_FLOW_FAIL] = 0.0
-    fns(OP_RHS, m, t0, y.ctypes, pe.ctypes, f.ctypes)
+    fns(OP_RHS, m, t0, at(y, 0), at(wf, wi[W_PE]), at(f, 0))
     for i in range(d):
         if not math.isfinite(f[i]):  # the flow at the start: the assembler words it
             note_failure(F_FLOW, m, m, t0, y, wf, wi)
@@ -227,7 +240,7 @@ def flow_stay(fns: Fns, tab: Ints, m: int, t0: float, x: Array, j: int, stay: in
         if d == 0:  # scipy steps a stateless system to its end at once
             t_new, h = t_end, t_end - t
         else:
-            ok, t_new, h_abs, h = rk45_step(fns, m, t, t_end, h_abs, max_step, rtol, atol, pe, wf, wi)
+            ok, t_new, h_abs, h = step(fns, m, t, t_end, h_abs, max_step, rtol, atol, pe, wf, wi)
             if not ok:
                 _gave_up(oi, of, t, j, m, D_STEP_TOO_SMALL, C_SOLVER_FAILURE, wf, wi)
                 return STAY_DONE, t, -1
@@ -254,7 +267,7 @@ def flow_stay(fns: Fns, tab: Ints, m: int, t0: float, x: Array, j: int, stay: in
                 _peak(of, wf, wi)
                 end_run(oi, of, C_SOLVER_FAILURE, t, j, m, D_CRAWL, 0, math.nan, wf, wi)
                 return STAY_DONE, t, -1
-        kind, t_event, w = first_event(fns, tab, m, t, t_new, w, spacing, wf, wi)
+        kind, t_event, w = search(fns, tab, m, t, t_new, w, spacing, wf, wi)
         stop = t_new if kind == EV_NONE else t_event
         finished = t_new >= t_end
         going_on = kind == EV_NONE and not finished and flag[0] == 0
@@ -270,7 +283,7 @@ def flow_stay(fns: Fns, tab: Ints, m: int, t0: float, x: Array, j: int, stay: in
             if kind == EV_FAILED or failed(wi):
                 end_run(oi, of, C_NONFINITE, t_event, j, m, D_EVAL, 0, math.nan, wf, wi)
                 return STAY_DONE, t_event, -1
-            chosen = enabled_at_event(fns, tab, m, t_event, x, wf, wi)
+            chosen = decide(ASK_EVENT, fns, tab, m, t_event, x, wf, wi)
             if failed(wi) or wf[sc + S_FLOW_FAIL] != 0.0:
                 if wi[fail] == 0 and wi[wi[W_SIGFAIL]] == 0:  # a flow failure at a trial point
                     wi[fail], wi[fail + 1], wi[fail + 2] = F_FLOW, m, m
@@ -280,7 +293,7 @@ def flow_stay(fns: Fns, tab: Ints, m: int, t0: float, x: Array, j: int, stay: in
                 end_run(oi, of, C_NONFINITE, t_event, j, m, D_EVAL, 0, math.nan, wf, wi)
                 return STAY_DONE, t_event, -1
             if chosen < 0:
-                left = invariant_left_at(fns, tab, m, t_event, x, wf, wi)
+                left = decide(ASK_LEFT, fns, tab, m, t_event, x, wf, wi)
                 if left >= 0:
                     finish(oi, of, C_BLOCKED, t_event, j, m, D_BLOCKED_FLOW, left, math.nan, wf, wi)
                     return STAY_DONE, t_event, -1

@@ -60,7 +60,7 @@ from hybrid.simulation.native.buffers import (
     W_SIGFAIL,
     W_SIGX,
 )
-from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints
+from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints, at
 
 __all__ = ["finish", "record_jump", "record_point", "record_step"]
 
@@ -87,8 +87,7 @@ def record_point(fns: Fns, pts: Array2, oi: Ints, t: float, j: int, m: int, x: A
     for i in range(d):
         row[P_X + i] = x[i]
     signals = row[P_X + d :]
-    pe = wf[wi[W_PE] :]
-    fns(OP_OUTPUTS, m, t, x.ctypes, pe.ctypes, signals.ctypes)
+    fns(OP_OUTPUTS, m, t, at(x, 0), at(wf, wi[W_PE]), at(signals, 0))
     for c in range(signals.shape[0]):
         if signals[c] != signals[c]:
             sig = wi[W_SIGFAIL]

@@ -45,7 +45,7 @@ from hybrid.simulation.native.buffers import (
     W_TRARMED,
 )
 from hybrid.simulation.native.decide import band, note_failure, value_checked
-from hybrid.simulation.native.kernel_types import Array, Fns, Ints
+from hybrid.simulation.native.kernel_types import Array, Fns, Ints, at
 
 __all__ = ["arm_at", "pending", "watch_start", "watch_terms", "watch_value"]
 
@@ -60,10 +60,9 @@ def watch_start(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
     n_tr = tab[tab[T_MODE_TR] + m + 1] - first
     lv0 = tab[tab[T_TR_LV] + first]
     signs = wi[W_PE] + tab[T_N_PARAMS]
-    pe = wf[wi[W_PE] :]
     armv = wf[wi[W_ARMV] :]
     if tab[tab[T_TR_LV] + first + n_tr] > lv0:  # some guard has levels: orient them
-        fns(OP_ARM, m, t, x.ctypes, pe.ctypes, armv.ctypes)
+        fns(OP_ARM, m, t, at(x, 0), at(wf, wi[W_PE]), at(wf, wi[W_ARMV]))
     for k in range(n_tr):
         tr = first + k
         if wi[wi[W_TRARMED] + k] == 0:
@@ -102,9 +101,7 @@ def pending(tab: Ints, m: int, wi: Ints) -> bool:
 
 def watch_terms(fns: Fns, m: int, t: float, x: Array, wf: Array, wi: Ints) -> None:
     """Every term of the watch at ``(t, x)`` into ``terms``: oriented rhos, then invariants' rhos."""
-    pe = wf[wi[W_PE] :]
-    terms = wf[wi[W_TERMS] :]
-    fns(OP_WATCH, m, t, x.ctypes, pe.ctypes, terms.ctypes)
+    fns(OP_WATCH, m, t, at(x, 0), at(wf, wi[W_PE]), at(wf, wi[W_TERMS]))
 
 
 def watch_value(tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints) -> float:
@@ -152,8 +149,7 @@ def arm_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints)
             continue
         tr = first + k
         if not evaluated:
-            pe = wf[wi[W_PE] :]
-            fns(OP_ARM, m, t, x.ctypes, pe.ctypes, armv.ctypes)
+            fns(OP_ARM, m, t, at(x, 0), at(wf, wi[W_PE]), at(wf, wi[W_ARMV]))
             evaluated = True
         rho = armv[k]
         if rho != rho:
