@@ -231,6 +231,9 @@ def _compiled(
     _CACHE.models = cache
     hit = cache.get(id(model))
     if hit is not None and hit[0] is model:
+        # a failure recorded by an earlier run of this model must not end this one
+        hit[1].failure.clear()
+        hit[1].flow_failure.clear()
         return hit[1]
     compiled = CompiledModel(model, held_inputs(model, None))
     if len(cache) >= _CACHE_SIZE:

@@ -12,7 +12,7 @@ the message names the expression and its arguments exactly as it does there.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,7 +26,10 @@ from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Jump, Run, Termination
 from hybrid.simulation.settings import Settings
 
-__all__ = ["DenseSegment", "Layout", "run_from", "settings_record"]
+__all__ = ["DenseSegment", "Inputs", "Layout", "run_from", "settings_record"]
+
+Inputs = Mapping[str, Callable[[float], float]] | None
+"""The reference engine's inputs of a model (to word a failure as the reference does)."""
 
 
 @dataclass(frozen=True)
@@ -40,7 +43,7 @@ class Layout:
     """Per mode, the global index of its first invariant (as ``MODE_INV``)."""
     describe: tuple[tuple[str, str | None, str, str], ...]
     """Per global transition: its name, label, source and target mode names."""
-    choices: dict[tuple[int, tuple[float, ...]], tuple[tuple[str, ...], str]]
+    choices: dict[tuple[int, bytes], tuple[tuple[str, ...], str]]
     """Enabled names and ``chosen_by`` per (transition, enabled flags) seen so far."""
     modes: tuple[Any, ...]
     """The modes (:class:`~hybrid.simulation.native.structure.NativeMode`)."""
@@ -60,7 +63,7 @@ class Layout:
         )  # fmt: skip
         return cls(names, tuple(rows), tuple(first), describe, {}, tuple(native.modes))
 
-    def enabled(self, tr: int, flags: tuple[float, ...]) -> tuple[tuple[str, ...], str]:
+    def enabled(self, tr: int, flags: bytes) -> tuple[tuple[str, ...], str]:
         """The names of the transitions enabled with ``tr`` chosen, and how it was chosen."""
         key = (tr, flags)
         hit = self.choices.get(key)
@@ -101,31 +104,34 @@ def _jumps(native: NativeModel, layout: Layout, buf: b.RunArrays) -> list[Jump]:
     names = native.state_names
     d = len(names)
     n = int(buf.oi[b.I_JUMPS])
+    if n == 0:
+        return []
     rows = buf.jps[:n]
     times = rows[:, b.J_T].tolist()
     hybrid_times = rows[:, b.J_J].astype(np.int64).tolist()
     transitions = rows[:, b.J_TR].astype(np.int64).tolist()
     befores = rows[:, b.J_X : b.J_X + d].tolist()
     afters = rows[:, b.J_X + d : b.J_X + 2 * d].tolist()
-    flags = rows[:, b.J_X + 2 * d :].tolist()
-    jumps = []
-    new, enabled_of, describe, seen = object.__new__, layout.enabled, layout.describe, layout.choices
-    for t, j, tr, before, after, on in zip(
-        times, hybrid_times, transitions, befores, afters, flags, strict=True
-    ):
-        key = (tr, tuple(on))
+    width = rows.shape[1] - b.J_X - 2 * d
+    flags = (rows[:, b.J_X + 2 * d :] != 0.0).astype(np.uint8).tobytes()
+    jumps: list[Jump] = []
+    append = jumps.append
+    new, set_field = object.__new__, object.__setattr__
+    enabled_of, describe, seen = layout.enabled, layout.describe, layout.choices
+    for k in range(n):
+        tr = transitions[k]
+        key = (tr, flags[k * width : (k + 1) * width])
         enabled, how = seen.get(key) or enabled_of(*key)
         name, label, source, target = describe[tr]
         jump = new(Jump)
-        # the fields set directly: Jump is a frozen dataclass without slots, and its
+        # the fields set at once: Jump is a frozen dataclass without slots, and its
         # generated __init__ (one object.__setattr__ per field) costs as much as the run
-        jump.__dict__.update(
-            t=t, j=j, edge=name, label=label, source=source, target=target,
-            before=dict(zip(names, before, strict=True)),
-            after=dict(zip(names, after, strict=True)),
-            enabled=enabled, chosen_by=how,
-        )  # fmt: skip
-        jumps.append(jump)
+        set_field(jump, "__dict__", {
+            "t": times[k], "j": hybrid_times[k], "edge": name, "label": label,
+            "source": source, "target": target, "before": dict(zip(names, befores[k], strict=True)),
+            "after": dict(zip(names, afters[k], strict=True)), "enabled": enabled, "chosen_by": how,
+        })  # fmt: skip
+        append(jump)
     return jumps
 
 
@@ -163,6 +169,7 @@ def run_from(
     model: Automaton | System,
     settings: Settings,
     buf: b.RunArrays,
+    inputs: Inputs = None,
 ) -> Run:
     """The :class:`Run` recorded in ``buf`` (one run's arrays) for ``model``."""
     n = int(buf.oi[b.I_POINTS])
@@ -178,7 +185,7 @@ def run_from(
         states=pts[:, b.P_X : b.P_X + d].copy(),
         signals=pts[:, b.P_X + d :].copy(),
         jumps=_jumps(native, layout, buf),
-        termination=termination_of(native, layout, model, settings, buf),
+        termination=termination_of(native, layout, model, settings, buf, inputs),
         settings=settings_record(settings),
         segments=_segments(buf, d),
     )
@@ -190,6 +197,7 @@ def termination_of(
     model: Automaton | System,
     settings: Settings,
     buf: b.RunArrays,
+    inputs: Inputs = None,
 ) -> Termination:
     """How the run in ``buf`` ended, worded as the reference engine words it."""
     code = int(buf.oi[b.I_CAUSE])
@@ -223,24 +231,36 @@ def termination_of(
         message = f"reset of {layout.transitions[index][2].view.name} gave a non-finite state"
     elif detail in (b.D_EVAL, b.D_FLOW):
         fail_t = float(buf.of[b.F_FAIL_T])
-        described = describe_native_failure(native, layout, model, buf)
+        described = describe_native_failure(native, layout, model, buf, inputs)
+        if described is None:
+            what = _reference_function(int(buf.oi[b.I_FAIL_KIND]), int(buf.oi[b.I_FAIL_INDEX]),
+                                       int(buf.oi[b.I_FAIL_MODE]), None, layout, native)[0]  # fmt: skip
+            described = f"{what} gave a non-finite value"
         message = f"{described} (at t={fail_t:.9g})"
         if detail == b.D_FLOW:
             message += f"; the solution leaves the domain of the flow after t={t:.9g}"
         if detail == b.D_EVAL:
             t = fail_t
     elif detail in (b.D_STEP_TOO_SMALL, b.D_STATE_NONFINITE):
-        n, d = int(buf.oi[b.I_POINTS]), len(native.state_names)
-        peak = float(np.max(np.abs(buf.pts[n - 1, b.P_X : b.P_X + d]))) if n else math.nan
-        what = (
-            "Required step size is less than spacing between numbers."
+        why = (
+            "solver stopped: Required step size is less than spacing between numbers."
             if detail == b.D_STEP_TOO_SMALL
-            else "the solution is no longer finite."
+            else "the state became non-finite"
         )
         message = (
-            f"solver stopped: {what} (largest |state| {peak:.3g}; the solution may blow up "
-            "here, or try tighter tolerances, or the scipy backend with another --method)"
+            f"{why} (largest |state| {float(buf.of[b.F_PEAK]):.3g}; the solution may blow up "
+            "here, or try another --method or tighter tolerances)"
         )
+    elif detail == b.D_NOT_ADVANCING:
+        message = (
+            "solver stopped advancing: its step size fell below the spacing of floating-point "
+            f"numbers at t={t:.9g} (largest |state| {float(buf.of[b.F_PEAK]):.3g}; the solution "
+            "may blow up here, or try another --method)"
+        )
+    elif detail == b.D_CRAWL:
+        message = _crawl_message(settings, t, buf)
+    elif detail == b.D_FLOW_START:
+        message = _flow_at_start(native, layout, model, buf, index, inputs)
     elif cause == "t_end":
         message = "reached t_end"
     elif cause == "max_jumps":
@@ -250,37 +270,82 @@ def termination_of(
     return Termination(cause, t, j, message, zeno_time=zeno_time, location=mode.name)
 
 
-def describe_native_failure(
-    native: NativeModel, layout: Layout, model: Automaton | System, buf: b.RunArrays
-) -> str:
-    """``<what> failed: <call(args)>: <error>``, found by the reference engine's functions."""
+def _crawl_message(settings: Settings, t: float, buf: b.RunArrays) -> str:
+    """``StayIntegrator._crawled``'s words."""
+    from hybrid.simulation.stay import CRAWL_STEPS
+
+    pace, longest = float(buf.of[b.F_AUX0]), float(buf.of[b.F_AUX1])
+    remaining = (settings.t_end - t) / pace
+    return (
+        f"solver crawls: its last {CRAWL_STEPS} steps averaged {pace:.3g} (it took steps of "
+        f"{longest:.3g} before), so t_end is still {remaining:.2g} steps away (largest "
+        f"|state| {float(buf.of[b.F_PEAK]):.3g}); the solution may near a singularity here (a "
+        "derivative without bound) and chatter across it"
+    )
+
+
+def _flow_at_start(native: NativeModel, layout: Layout, model: Automaton | System,
+                   buf: b.RunArrays, index: int, inputs: Inputs) -> str:  # fmt: skip
+    """``StayIntegrator._start``'s words for a flow that fails or is not finite at the start."""
+    t = float(buf.of[b.F_FAIL_T])
+    described = describe_native_failure(native, layout, model, buf, inputs)
+    if described is not None:
+        return f"{described} (at t={t:.9g})"
+    x = np.array(buf.of[b.N_OUT_F : b.N_OUT_F + len(native.state_names)], dtype=float)
+    mode = native.modes[int(buf.oi[b.I_FAIL_MODE])]
+    derivative = _reference_mode(native, model, int(buf.oi[b.I_FAIL_MODE]), inputs)[1].rhs(t, x)
+    names = native.state_names
+    bad = next((k for k, v in enumerate(derivative) if not math.isfinite(v)), index)
+    return f"the flow of {mode.name} gives {names[bad]}' = {derivative[bad]} (at t={t:.9g})"
+
+
+def _reference_mode(native: NativeModel, model: Automaton | System, m: int,
+                    inputs: Inputs) -> tuple[Any, Any]:  # fmt: skip
+    """The reference engine's compiled model and its mode ``m`` (for the words of a failure)."""
     from hybrid.simulation.compiled import CompiledModel
+
+    compiled = CompiledModel(model, inputs)
+    return compiled, compiled.mode(native.modes[m].key)
+
+
+def describe_native_failure(native: NativeModel, layout: Layout, model: Automaton | System,
+                            buf: b.RunArrays, inputs: Inputs = None) -> str | None:  # fmt: skip
+    """``<what> failed: <call(args)>: <error>``, found by the reference engine's functions.
+
+    None if the reference's function does not fail at that point (a value that
+    is not finite without an error).
+    """
     from hybrid.simulation.failures import describe_failure
 
     kind, index = int(buf.oi[b.I_FAIL_KIND]), int(buf.oi[b.I_FAIL_INDEX])
     m = int(buf.oi[b.I_FAIL_MODE])
     t = float(buf.of[b.F_FAIL_T])
     x = np.array(buf.of[b.N_OUT_F : b.N_OUT_F + len(native.state_names)], dtype=float)
-    compiled = CompiledModel(model)
-    mode = compiled.mode(native.modes[m].key)
-    what, call = _reference_function(kind, index, m, mode, layout)
+    compiled, mode = _reference_mode(native, model, m, inputs)
+    _, call = _reference_function(kind, index, m, mode, layout)
     call(t, x)
     for failure in (compiled.failure, compiled.flow_failure):
         if failure.error is not None:
-            return describe_failure(compiled, failure)
-    return f"{what} gave a non-finite value"
+            return str(describe_failure(compiled, failure))
+    return None
 
 
-def _reference_function(kind: int, index: int, m: int, mode: Any, layout: Layout) -> Sequence[Any]:
-    if kind == b.F_GUARD:
+def _reference_function(kind: int, index: int, m: int, mode: Any, layout: Layout,
+                        native: NativeModel | None = None) -> Sequence[Any]:  # fmt: skip
+    """``(what, the reference's function)`` that failed (``mode`` None: the words only)."""
+    names = native.modes[m] if native is not None else mode
+    if kind in (b.F_GUARD, b.F_RESET):
         k = layout.transitions[index][1]
-        return f"the guard of {mode.transitions[k].name}", mode.transitions[k].rho
+        name = names.transitions[k].view.name if native is not None else mode.transitions[k].name
+        what = f"the {'guard' if kind == b.F_GUARD else 'reset'} of {name}"
+        if mode is None:
+            return what, None
+        tr = mode.transitions[k]
+        return what, tr.rho if kind == b.F_GUARD else tr.reset
     if kind == b.F_INVARIANT:
-        inv = mode.invariants[index - layout.invariant_first[m]]
-        return f"the invariant of {inv.name}", inv.rho
-    if kind == b.F_RESET:
-        k = layout.transitions[index][1]
-        return f"the reset of {mode.transitions[k].name}", mode.transitions[k].reset
+        inv = index - layout.invariant_first[m]
+        name = names.invariants[inv][0] if native is not None else mode.invariants[inv].name
+        return f"the invariant of {name}", None if mode is None else mode.invariants[inv].rho
     if kind == b.F_SIGNALS:
-        return f"the signals of {mode.name}", mode.outputs
-    return f"the flow of {mode.name}", mode.rhs
+        return f"the signals of {names.name}", None if mode is None else mode.outputs
+    return f"the flow of {names.name}", None if mode is None else mode.rhs

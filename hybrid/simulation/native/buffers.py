@@ -27,6 +27,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "ASK_ENTRY",
+    "ASK_EVENT",
+    "ASK_LEFT",
+    "ASK_WATCH",
     "CAUSE_CODES",
     "CF_ATOL",
     "CF_DT",
@@ -37,25 +41,37 @@ __all__ = [
     "CI_DENSE",
     "CI_MAX_JUMPS",
     "CI_PER_INSTANT",
-    "CI_SAMPLES",
     "CI_ZENO",
     "D_BLOCKED_ENTRY",
     "D_BLOCKED_FLOW",
+    "D_CRAWL",
     "D_EVAL",
     "D_FLOW",
+    "D_FLOW_START",
     "D_INITIAL",
     "D_NONE",
+    "D_NOT_ADVANCING",
     "D_RESET_NONFINITE",
     "D_STALL",
     "D_STATE_NONFINITE",
     "D_STEP_TOO_SMALL",
     "D_ZENO_GEOMETRIC",
     "D_ZENO_INSTANT",
+    "FP_DECIDE",
+    "FP_MODEL",
+    "FP_RUN",
+    "FP_SEARCH",
+    "FP_STAY",
+    "FP_STEP",
+    "F_AUX0",
+    "F_AUX1",
     "F_FAIL_T",
     "F_FLOW",
     "F_GUARD",
     "F_INVARIANT",
     "F_NONE",
+    "F_NOW",
+    "F_PEAK",
     "F_RESET",
     "F_SIGNALS",
     "F_T",
@@ -80,15 +96,17 @@ __all__ = [
     "J_X",
     "N_CFG_F",
     "N_CFG_I",
+    "N_FP",
     "N_OUT_F",
     "N_OUT_I",
     "N_SCALARS",
+    "OP_ARM",
     "OP_OUTPUTS",
     "OP_RESET",
     "OP_RHS",
-    "OP_TERMS",
     "OP_TRUTH",
     "OP_VALUE",
+    "OP_WATCH",
     "P_J",
     "P_M",
     "P_T",
@@ -102,18 +120,13 @@ __all__ = [
     "S_FAIL_T",
     "S_FLOW_FAIL",
     "S_FLOW_T",
+    "S_GEN",
     "S_LAST_STEP",
-    "S_TS0",
-    "S_TS1",
-    "S_TS2",
-    "S_TS_COUNT",
+    "S_SIG_T",
     "TABLES",
     "TAB_HEADER",
     "T_INV_BOOL",
     "T_INV_RHO",
-    "T_LV_BOOL",
-    "T_LV_E",
-    "T_LV_RHO",
     "T_MAX_INV",
     "T_MAX_LV",
     "T_MAX_TR",
@@ -126,10 +139,12 @@ __all__ = [
     "T_TR_LV",
     "T_TR_PRIORITY",
     "T_TR_RHO",
+    "T_TR_SBOOL",
+    "T_TR_SRHO",
     "T_TR_TARGET",
     "WI_HEADER",
     "W_AHEAD",
-    "W_CUR",
+    "W_ARMV",
     "W_D",
     "W_ENABLED",
     "W_F",
@@ -138,13 +153,15 @@ __all__ = [
     "W_FLOWX",
     "W_INVARMED",
     "W_K",
-    "W_LVARMED",
-    "W_LVSIGN",
+    "W_NPE",
     "W_NT",
-    "W_PREV",
+    "W_PE",
     "W_Q",
     "W_RATE",
     "W_SCAL",
+    "W_SIGFAIL",
+    "W_SIGX",
+    "W_TERMS",
     "W_TRARMED",
     "W_XNEW",
     "W_XS",
@@ -165,36 +182,43 @@ I_POINTS, I_JUMPS, I_STORED_STEPS, I_CAUSE, I_J, I_MODE = 0, 1, 2, 3, 4, 5
 I_DETAIL, I_DETAIL_INDEX, I_OVERFLOW, I_RHS_CALLS, I_STEPS = 6, 7, 8, 9, 10
 I_FAIL_KIND, I_FAIL_INDEX, I_FAIL_MODE = 11, 12, 13
 N_OUT_I = 16
-# out_f slots
-F_T, F_ZENO_TIME, F_FAIL_T = 0, 1, 2
-N_OUT_F = 4
+# out_f slots (F_NOW: the time reached so far, for progress; F_AUX*: numbers for a message)
+F_T, F_ZENO_TIME, F_FAIL_T, F_NOW, F_AUX0, F_AUX1, F_PEAK = 0, 1, 2, 3, 4, 5, 6
+N_OUT_F = 8
 
 # the run's settings: cfg_f (floats) and cfg_i (integers)
 CF_T_END, CF_RTOL, CF_ATOL, CF_MAX_STEP, CF_DT, CF_T_START = 0, 1, 2, 3, 4, 5
 N_CFG_F = 6
-CI_MAX_JUMPS, CI_ZENO, CI_PER_INSTANT, CI_DENSE, CI_SAMPLES = 0, 1, 2, 3, 4
-N_CFG_I = 5
+CI_MAX_JUMPS, CI_ZENO, CI_PER_INSTANT, CI_DENSE = 0, 1, 2, 3
+N_CFG_I = 4
 
 # what ended the run, beyond its cause (for the message)
 D_NONE, D_INITIAL, D_BLOCKED_ENTRY, D_BLOCKED_FLOW, D_STALL = 0, 1, 2, 3, 4
 D_ZENO_INSTANT, D_ZENO_GEOMETRIC, D_RESET_NONFINITE, D_EVAL, D_FLOW = 5, 6, 7, 8, 9
-D_STEP_TOO_SMALL, D_STATE_NONFINITE = 10, 11
+D_STEP_TOO_SMALL, D_STATE_NONFINITE, D_FLOW_START, D_NOT_ADVANCING, D_CRAWL = 10, 11, 12, 13, 14
 
 # which compiled function could not be evaluated (out_i[I_FAIL_KIND])
 F_NONE, F_GUARD, F_INVARIANT, F_SIGNALS, F_RESET, F_FLOW = 0, 1, 2, 3, 4, 5
 
 
 # what the model's one compiled function computes: fns(op, index, t, x*, p*, out*)
-OP_RHS, OP_OUTPUTS, OP_VALUE, OP_TRUTH, OP_RESET, OP_TERMS = 0, 1, 2, 3, 4, 5
+OP_RHS, OP_OUTPUTS, OP_VALUE, OP_TRUTH, OP_RESET, OP_WATCH, OP_ARM = 0, 1, 2, 3, 4, 5, 6
+
+# the addresses the compiled loop calls (``fp``): C wrapper, then compiled code, of each
+FP_MODEL, FP_STEP, FP_SEARCH, FP_DECIDE, FP_STAY, FP_RUN = 0, 2, 4, 6, 8, 10
+N_FP = 12
+
+# what the decisions piece is asked (``pieces.decide``)
+ASK_ENTRY, ASK_EVENT, ASK_LEFT, ASK_WATCH = 0, 1, 2, 3
 
 # the model's tables (one int64 array, ``tab``): sizes, then where each table starts
 T_N_STATES, T_N_SIGNALS, T_MAX_TR, T_MAX_LV, T_MAX_INV, T_N_PARAMS = 0, 1, 2, 3, 4, 5
 T_MODE_TR, T_MODE_INV, T_TR_TARGET, T_TR_PRIORITY, T_TR_RHO, T_TR_BOOL = 6, 7, 8, 9, 10, 11
-T_TR_LV, T_LV_E, T_LV_RHO, T_LV_BOOL, T_INV_RHO, T_INV_BOOL = 12, 13, 14, 15, 16, 17
-TAB_HEADER = 18
+T_TR_SRHO, T_TR_SBOOL, T_TR_LV, T_INV_RHO, T_INV_BOOL = 12, 13, 14, 15, 16
+TAB_HEADER = 17
 TABLES = (
     "MODE_TR", "MODE_INV", "TR_TARGET", "TR_PRIORITY", "TR_RHO", "TR_BOOL",
-    "TR_LV", "LV_E", "LV_RHO", "LV_BOOL", "INV_RHO", "INV_BOOL",
+    "TR_SRHO", "TR_SBOOL", "TR_LV", "INV_RHO", "INV_BOOL",
 )  # fmt: skip
 """The tables in ``tab`` order (from ``T_MODE_TR`` on)."""
 
@@ -202,12 +226,13 @@ TABLES = (
 # where each piece starts (float pieces in wf, integer pieces in wi)
 W_D, W_NT = 0, 1
 W_K, W_Y, W_F, W_YNEW, W_YTMP, W_XS, W_Q, W_RATE, W_AHEAD, W_XNEW = 2, 3, 4, 5, 6, 7, 8, 9, 10, 11
-W_LVSIGN, W_PREV, W_CUR, W_ZENO, W_FAILX, W_FLOWX, W_SCAL = 12, 13, 14, 15, 16, 17, 18
-W_TRARMED, W_ENABLED, W_LVARMED, W_INVARMED, W_FAILI = 19, 20, 21, 22, 23
-WI_HEADER = 24
+W_PE, W_TERMS, W_ARMV, W_ZENO, W_FAILX, W_FLOWX, W_SIGX, W_SCAL = 12, 13, 14, 15, 16, 17, 18, 19
+W_TRARMED, W_ENABLED, W_INVARMED, W_FAILI, W_SIGFAIL = 20, 21, 22, 23, 24
+W_NPE = 25
+WI_HEADER = 26
 # scalars in wf from wi[W_SCAL]
-S_FAIL_T, S_FLOW_FAIL, S_FLOW_T, S_TS0, S_TS1, S_TS2, S_TS_COUNT, S_LAST_STEP = range(8)
-N_SCALARS = 8
+S_FAIL_T, S_FLOW_FAIL, S_FLOW_T, S_LAST_STEP, S_SIG_T, S_GEN = range(6)
+N_SCALARS = 6
 ZENO_SIZE = 17  # last t, start gap, counts (2), 7 gaps, 6 ratios
 
 # columns of the recorded arrays

@@ -5,18 +5,24 @@ Function by function (docs/semantics.md, "Deciding a guard at a point"):
 - :func:`band` is ``boundary.band``; :func:`slope` is ``boundary.slope``;
 - :func:`holds_now` is ``boundary.holds_now`` (band, slope test, boolean form);
 - :func:`enabled_at_entry` is ``boundary.enabled_at_entry``;
+- :func:`enabled_at_event` is ``boundary.enabled_at_event``: an armed guard is
+  decided *snapped* (each equality atom true where its two sides differ by at
+  most the band: the snap slots of the model's parameter vector are set, then
+  the snapped form is decided), a disarmed one counts only at or below its
+  boundary;
 - :func:`invariant_left_at` is ``boundary.invariant_left_at``;
 - :func:`choose` is ``boundary.choose`` (highest priority, then file order;
-  ``boundary.chosen_by`` is computed in Python from the recorded flags);
-- :func:`decide_at_event` is the end of ``EventLoop._flow`` (every transition
-  decided at the point where the integration stopped), plus the announced rule
-  for equality guards: an equality ``a == b`` (or ``a >= b and a <= b``) whose
-  level was reached during the stay counts as holding there, and the guard is
-  decided with that equality taken as true (its *relaxed* form).
+  ``boundary.chosen_by`` is computed in Python from the recorded flags).
+
+A change of these rules in ``boundary.py`` is made here the same way, function
+for function; the forms they read (raw, snapped) come from the generator
+(:mod:`~hybrid.simulation.native.source`), which uses the reference's own
+rewrites of guards.
 
 Indices: ``m`` a mode; ``k`` a transition's place in its mode (the
 ``enabled`` and ``tr_armed`` flags in ``wi``); ``tr = MODE_TR[m] + k`` its
-global index. An evaluation failure (NaN) is recorded once, the first, like
+global index. ``pe`` is the run's parameter vector with the level slots after
+the parameters. An evaluation failure (NaN) is recorded once, the first, like
 :class:`hybrid.expr.codegen.EvalFailure`: what failed in ``wi``, where in
 ``wf``.
 
@@ -29,38 +35,41 @@ from hybrid.simulation.native.buffers import (
     F_FLOW,
     F_GUARD,
     F_INVARIANT,
+    OP_ARM,
     OP_RHS,
     OP_TRUTH,
     OP_VALUE,
     S_FAIL_T,
     T_INV_BOOL,
     T_INV_RHO,
-    T_LV_BOOL,
-    T_LV_E,
-    T_LV_RHO,
+    T_MAX_LV,
     T_MODE_INV,
     T_MODE_TR,
+    T_N_PARAMS,
     T_TR_BOOL,
     T_TR_LV,
     T_TR_PRIORITY,
     T_TR_RHO,
+    T_TR_SBOOL,
+    T_TR_SRHO,
     W_AHEAD,
+    W_ARMV,
     W_D,
     W_ENABLED,
     W_FAILI,
     W_FAILX,
-    W_LVARMED,
+    W_PE,
     W_RATE,
     W_SCAL,
     W_TRARMED,
 )
-from hybrid.simulation.native.kernel_types import Array, Fns, Ints
+from hybrid.simulation.native.kernel_types import Array, Fns, Ints, at
 
 __all__ = [
     "band",
     "choose",
-    "decide_at_event",
     "enabled_at_entry",
+    "enabled_at_event",
     "holds_now",
     "invariant_left_at",
     "note_failure",
@@ -96,52 +105,52 @@ def note_failure(kind: int, index: int, m: int, t: float, x: Array, wf: Array, w
 
 
 def value_checked(
-    fns: Fns, f: int, kind: int, index: int, m: int, t: float, x: Array, p: Array, wf: Array,
-    wi: Ints,
+    fns: Fns, f: int, kind: int, index: int, m: int, t: float, x: Array, wf: Array, wi: Ints,
 ) -> float:  # fmt: skip
     """Form ``f`` at ``(t, x)``, a NaN recorded as a failure of ``kind``/``index``."""
-    v: float = fns(OP_VALUE, f, t, x.ctypes, p.ctypes, x.ctypes)
+    x_c = at(x, 0)
+    v: float = fns(OP_VALUE, f, t, x_c, at(wf, wi[W_PE]), x_c)
     if v != v:
         note_failure(kind, index, m, t, x, wf, wi)
     return v
 
 
 def slope(
-    fns: Fns, f: int, kind: int, index: int, m: int, t: float, x: Array, p: Array, wf: Array,
-    wi: Ints,
+    fns: Fns, f: int, kind: int, index: int, m: int, t: float, x: Array, wf: Array, wi: Ints,
 ) -> float:  # fmt: skip
     """d/dt of form ``f`` along the flow of mode ``m``, by a small forward difference."""
     d = wi[W_D]
     rate = wf[wi[W_RATE] : wi[W_RATE] + d]
     ahead = wf[wi[W_AHEAD] : wi[W_AHEAD] + d]
     h = 1e-7 * max(1.0, abs(t))
-    fns(OP_RHS, m, t, x.ctypes, p.ctypes, rate.ctypes)
+    fns(OP_RHS, m, t, at(x, 0), at(wf, wi[W_PE]), at(rate, 0))
     for i in range(d):
         if rate[i] != rate[i]:
             note_failure(F_FLOW, m, m, t, x, wf, wi)
         ahead[i] = x[i] + h * rate[i]
-    later = value_checked(fns, f, kind, index, m, t + h, ahead, p, wf, wi)
-    return (later - value_checked(fns, f, kind, index, m, t, x, p, wf, wi)) / h
+    later = value_checked(fns, f, kind, index, m, t + h, ahead, wf, wi)
+    return (later - value_checked(fns, f, kind, index, m, t, x, wf, wi)) / h
 
 
 def holds_now(
-    fns: Fns, rho_f: int, bool_f: int, index: int, m: int, t: float, x: Array, p: Array,
+    fns: Fns, rho_f: int, bool_f: int, kind: int, index: int, m: int, t: float, x: Array,
     armed: bool, width: float, wf: Array, wi: Ints,
 ) -> tuple[bool, bool]:  # fmt: skip
-    """``(enabled now, armed)`` for a guard at a point where no event says so."""
-    value = value_checked(fns, rho_f, F_GUARD, index, m, t, x, p, wf, wi)
+    """``(enabled now, armed)`` for a condition given by its rho and boolean forms."""
+    value = value_checked(fns, rho_f, kind, index, m, t, x, wf, wi)
     if value < -width:
         return True, True
     if value > width:
         return False, True
     if not armed:
         return False, False
-    rate = slope(fns, rho_f, F_GUARD, index, m, t, x, p, wf, wi)
+    rate = slope(fns, rho_f, kind, index, m, t, x, wf, wi)
     if rate < -width:
         return True, True
     if rate > width:
         return False, False  # on the boundary, moving away: disarm until strictly false
-    return fns(OP_TRUTH, bool_f, t, x.ctypes, p.ctypes, x.ctypes) != 0.0, False
+    x_c = at(x, 0)
+    return fns(OP_TRUTH, bool_f, t, x_c, at(wf, wi[W_PE]), x_c) != 0.0, False
 
 
 def choose(tab: Ints, m: int, wi: Ints) -> int:
@@ -159,7 +168,7 @@ def choose(tab: Ints, m: int, wi: Ints) -> int:
     return best
 
 
-def enabled_at_entry(fns: Fns, tab: Ints, m: int, t: float, x: Array, p: Array, wf: Array,
+def enabled_at_entry(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
                      wi: Ints) -> int:  # fmt: skip
     """At a point where a stay starts: the transition that fires (-1: none); flags in ``wi``."""
     width = band(x)
@@ -167,13 +176,51 @@ def enabled_at_entry(fns: Fns, tab: Ints, m: int, t: float, x: Array, p: Array, 
     for k in range(tab[tab[T_MODE_TR] + m + 1] - first):
         tr = first + k
         rho_f, bool_f = tab[tab[T_TR_RHO] + tr], tab[tab[T_TR_BOOL] + tr]
-        now, armed = holds_now(fns, rho_f, bool_f, tr, m, t, x, p, True, width, wf, wi)
+        now, armed = holds_now(fns, rho_f, bool_f, F_GUARD, tr, m, t, x, True, width, wf, wi)
         wi[wi[W_TRARMED] + k] = 1 if armed else 0
         wi[wi[W_ENABLED] + k] = 1 if now else 0
     return choose(tab, m, wi)
 
 
-def invariant_left_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, p: Array, wf: Array,
+def enabled_at_event(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
+                     wi: Ints) -> int:  # fmt: skip
+    """Where the search stopped: every transition decided; the one that fires (-1: none).
+
+    ``tr_armed`` says which guards were in the watch. An armed guard is
+    decided with its equality atoms snapped; a disarmed one only if it is at or
+    below its boundary here. A crossing the search found still has to pass the
+    boundary rule (a strict guard whose rho reaches 0 and stays there never holds).
+    """
+    width = band(x)
+    first = tab[tab[T_MODE_TR] + m]
+    n_tr = tab[tab[T_MODE_TR] + m + 1] - first
+    lv0 = tab[tab[T_TR_LV] + first]
+    snaps = wi[W_PE] + tab[T_N_PARAMS] + tab[T_MAX_LV]
+    armv = wf[wi[W_ARMV] :]
+    fns(OP_ARM, m, t, at(x, 0), at(wf, wi[W_PE]), at(wf, wi[W_ARMV]))
+    for k in range(n_tr):
+        tr = first + k
+        wi[wi[W_ENABLED] + k] = 0
+        if wi[wi[W_TRARMED] + k] != 0:
+            for a in range(tab[tab[T_TR_LV] + tr] - lv0, tab[tab[T_TR_LV] + tr + 1] - lv0):
+                level = armv[n_tr + a]
+                if level != level:
+                    note_failure(F_GUARD, tr, m, t, x, wf, wi)
+                wf[snaps + a] = -1.0 if abs(level) <= width else 1.0
+            rho_f, bool_f = tab[tab[T_TR_SRHO] + tr], tab[tab[T_TR_SBOOL] + tr]
+        else:
+            rho = armv[k]
+            if rho != rho:
+                note_failure(F_GUARD, tr, m, t, x, wf, wi)
+            if not rho <= width:
+                continue
+            rho_f, bool_f = tab[tab[T_TR_RHO] + tr], tab[tab[T_TR_BOOL] + tr]
+        if holds_now(fns, rho_f, bool_f, F_GUARD, tr, m, t, x, True, width, wf, wi)[0]:
+            wi[wi[W_ENABLED] + k] = 1
+    return choose(tab, m, wi)
+
+
+def invariant_left_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
                       wi: Ints) -> int:  # fmt: skip
     """The place in its mode of an invariant that does not hold or is being left (-1: none)."""
     width = band(x)
@@ -181,45 +228,13 @@ def invariant_left_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, p: Array,
     for k in range(tab[tab[T_MODE_INV] + m + 1] - first):
         inv = first + k
         rho_f = tab[tab[T_INV_RHO] + inv]
-        value = value_checked(fns, rho_f, F_INVARIANT, inv, m, t, x, p, wf, wi)
+        value = value_checked(fns, rho_f, F_INVARIANT, inv, m, t, x, wf, wi)
         if value > width:
             return k
         if value >= -width:
-            rate = slope(fns, rho_f, F_INVARIANT, inv, m, t, x, p, wf, wi)
-            holds = fns(OP_TRUTH, tab[tab[T_INV_BOOL] + inv], t, x.ctypes, p.ctypes, x.ctypes) != 0.0
-            if rate > width or (abs(rate) <= width and not holds):
+            rate = slope(fns, rho_f, F_INVARIANT, inv, m, t, x, wf, wi)
+            x_c = at(x, 0)
+            truth = fns(OP_TRUTH, tab[tab[T_INV_BOOL] + inv], t, x_c, at(wf, wi[W_PE]), x_c)
+            if rate > width or (abs(rate) <= width and truth == 0.0):
                 return k
     return -1
-
-
-def decide_at_event(fns: Fns, tab: Ints, m: int, t: float, x: Array, p: Array, wf: Array,
-                    wi: Ints) -> int:  # fmt: skip
-    """Where the integration stopped: every transition decided; the one that fires (-1: none).
-
-    A crossing the watch found still has to pass the boundary rule (a strict
-    guard whose rho reaches 0 and stays there never holds). An equality level
-    that was armed and is reached here makes its guard hold if the rest of
-    the guard does (the relaxed form, decided by the same rule).
-    """
-    width = band(x)
-    first = tab[tab[T_MODE_TR] + m]
-    lv0 = tab[tab[T_TR_LV] + first]
-    for k in range(tab[tab[T_MODE_TR] + m + 1] - first):
-        tr = first + k
-        rho_f, bool_f = tab[tab[T_TR_RHO] + tr], tab[tab[T_TR_BOOL] + tr]
-        rho = value_checked(fns, rho_f, F_GUARD, tr, m, t, x, p, wf, wi)
-        armed_now = wi[wi[W_TRARMED] + k] != 0 or rho <= width
-        now = holds_now(fns, rho_f, bool_f, tr, m, t, x, p, armed_now, width, wf, wi)[0]
-        if not now:
-            for a in range(tab[tab[T_TR_LV] + tr], tab[tab[T_TR_LV] + tr + 1]):
-                if wi[wi[W_LVARMED] + a - lv0] == 0:
-                    continue
-                level = value_checked(fns, tab[tab[T_LV_E] + a], F_GUARD, tr, m, t, x, p, wf, wi)
-                if abs(level) <= width:
-                    relaxed_rho, relaxed_bool = tab[tab[T_LV_RHO] + a], tab[tab[T_LV_BOOL] + a]
-                    if holds_now(fns, relaxed_rho, relaxed_bool, tr, m, t, x, p, True, width,
-                                 wf, wi)[0]:  # fmt: skip
-                        now = True
-                        break
-        wi[wi[W_ENABLED] + k] = 1 if now else 0
-    return choose(tab, m, wi)

@@ -29,13 +29,13 @@ from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import Layout, run_from
 from hybrid.simulation.native.cache import load_generated, require_numba
+from hybrid.simulation.native.kernel_types import PIECES
 from hybrid.simulation.native.source import generate, kernel_module
 from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
 
 __all__ = [
-    "INTERIOR_SAMPLES",
     "CompiledNative",
     "compiled_native",
     "config",
@@ -44,15 +44,14 @@ __all__ = [
     "simulate_compiled",
 ]
 
-INTERIOR_SAMPLES = 10
-"""Interior points of each step where the watch is sampled (the first-crossing rule)."""
-
 _CACHE_SIZE = 16
 _CACHE: dict[tuple[Any, ...], tuple[tuple[Any, ...], CompiledNative]] = {}
 _CACHE_LOCK = threading.Lock()
 
 
 _KERNEL: dict[str, ModuleType] = {}
+_PIECES: dict[str, tuple[int, ...]] = {}
+"""The addresses of the kernel's pieces (C wrapper, compiled code), in ``PIECES`` order."""
 
 
 def kernel(parallel: bool = False) -> ModuleType:
@@ -66,6 +65,11 @@ def kernel(parallel: bool = False) -> ModuleType:
             warnings.filterwarnings("ignore", category=NumbaExperimentalFeatureWarning)
         if "one" not in _KERNEL:
             _KERNEL["one"] = load_generated(kernel_module())
+            from hybrid.simulation.native.pointers import addresses
+
+            _PIECES["one"] = tuple(
+                address for name, _ in PIECES for address in addresses(getattr(_KERNEL["one"], name))
+            )
         if parallel and "many" not in _KERNEL:
             _KERNEL["many"] = load_generated(kernel_module(_KERNEL["one"].__name__))
         return _KERNEL["many" if parallel else "one"]
@@ -89,6 +93,9 @@ class CompiledNative:
                 f"(library functions: {what}): {lines[0] if lines else type(exc).__name__}"
             ) from exc
         self.functions: Any = self.module.model
+        self.fp = np.array([self.functions.address, 0, *_PIECES["one"]], dtype=np.int64)
+        """The addresses the compiled loop calls: the model (a ``cfunc``), then the pieces."""
+        assert self.fp.size == b.N_FP
         self.tab = self.generated.tab
         self.max_transitions = max(1, *(len(m.transitions) for m in self.native.modes))
         self._one = _entry_point(self.kernel.run_one)
@@ -103,8 +110,8 @@ class CompiledNative:
 
     def _run_one(self, p: Any, x0: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
                  flag: Any) -> None:  # fmt: skip
-        self._one(self.functions, self.tab, p, x0, t0, m0, cfg[0], cfg[1],
-                  arrays.pts, arrays.jps, arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
+        self._one(self.fp, self.tab, p, x0, t0, m0, cfg[0], cfg[1], arrays.pts, arrays.jps,
+                  arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
 
     def run_many(self, ps: Any, x0s: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
                  flag: Any) -> None:  # fmt: skip
@@ -118,8 +125,8 @@ class CompiledNative:
     def _many_call(self, ps: Any, x0s: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
                    flag: Any) -> None:  # fmt: skip
         assert self._many is not None
-        self._many(self.functions, self.tab, ps, x0s, t0, m0, cfg[0], cfg[1],
-                   arrays.pts, arrays.jps, arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
+        self._many(self.fp, self.tab, ps, x0s, t0, m0, cfg[0], cfg[1], arrays.pts, arrays.jps,
+                   arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
 
     def buffers(self, points: int, jumps: int, steps: int, runs: int | None = None) -> b.RunArrays:
         return b.allocate(
@@ -192,7 +199,6 @@ def config(settings: Settings) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     cfg_i[b.CI_ZENO] = int(settings.zeno)
     cfg_i[b.CI_PER_INSTANT] = settings.max_jumps_per_instant
     cfg_i[b.CI_DENSE] = int(settings.dense)
-    cfg_i[b.CI_SAMPLES] = INTERIOR_SAMPLES
     return cfg_f, cfg_i
 
 

@@ -40,7 +40,7 @@ from hybrid.simulation.native.buffers import (
     W_YNEW,
     W_YTMP,
 )
-from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints
+from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints, at
 
 __all__ = [
     "P_DENSE",
@@ -102,7 +102,7 @@ def remember_flow_failure(t: float, x: Array, out: Array, wf: Array, wi: Ints) -
 
 def eval_rhs(fns: Fns, m: int, t: float, x: Array, p: Array, out: Array, wf: Array, wi: Ints) -> None:
     """The right-hand side into ``out``; a NaN there is remembered (the latest wins)."""
-    fns(OP_RHS, m, t, x.ctypes, p.ctypes, out.ctypes)
+    fns(OP_RHS, m, t, at(x, 0), at(p, 0), at(out, 0))
     remember_flow_failure(t, x, out, wf, wi)
 
 
@@ -130,7 +130,8 @@ def rk45_step(
     y_new = wf[wi[W_YNEW] : wi[W_YNEW] + d]
     z = wf[wi[W_YTMP] : wi[W_YTMP] + d]
     K = wf[wi[W_K] : wi[W_K] + 7 * d].reshape((7, d))
-    p_c, z_c, yn_c = p.ctypes, z.ctypes, y_new.ctypes
+    p_c, z_c, yn_c = at(p, 0), at(z, 0), at(y_new, 0)
+    k_at = wi[W_K]
     k1, k2, k3, k4, k5, k6 = K[1], K[2], K[3], K[4], K[5], K[6]
     min_step = 10.0 * abs(np.nextafter(t, math.inf) - t)
     if h_abs > max_step:
@@ -149,28 +150,28 @@ def rk45_step(
         for i in range(d):
             K[0, i] = f[i]
             z[i] = y[i] + (K[0, i] * A21) * h
-        fns(OP_RHS, m, t + C2 * h, z_c, p_c, k1.ctypes)
+        fns(OP_RHS, m, t + C2 * h, z_c, p_c, at(wf, k_at + 1 * d))
         for i in range(d):
             if k1[i] != k1[i]:
                 remember_flow_failure(t + C2 * h, z, k1, wf, wi)
                 break
         for i in range(d):
             z[i] = y[i] + (K[0, i] * A31 + K[1, i] * A32) * h
-        fns(OP_RHS, m, t + C3 * h, z_c, p_c, k2.ctypes)
+        fns(OP_RHS, m, t + C3 * h, z_c, p_c, at(wf, k_at + 2 * d))
         for i in range(d):
             if k2[i] != k2[i]:
                 remember_flow_failure(t + C3 * h, z, k2, wf, wi)
                 break
         for i in range(d):
             z[i] = y[i] + (K[0, i] * A41 + K[1, i] * A42 + K[2, i] * A43) * h
-        fns(OP_RHS, m, t + C4 * h, z_c, p_c, k3.ctypes)
+        fns(OP_RHS, m, t + C4 * h, z_c, p_c, at(wf, k_at + 3 * d))
         for i in range(d):
             if k3[i] != k3[i]:
                 remember_flow_failure(t + C4 * h, z, k3, wf, wi)
                 break
         for i in range(d):
             z[i] = y[i] + (K[0, i] * A51 + K[1, i] * A52 + K[2, i] * A53 + K[3, i] * A54) * h
-        fns(OP_RHS, m, t + C5 * h, z_c, p_c, k4.ctypes)
+        fns(OP_RHS, m, t + C5 * h, z_c, p_c, at(wf, k_at + 4 * d))
         for i in range(d):
             if k4[i] != k4[i]:
                 remember_flow_failure(t + C5 * h, z, k4, wf, wi)
@@ -179,7 +180,7 @@ def rk45_step(
             z[i] = y[i] + (
                 K[0, i] * A61 + K[1, i] * A62 + K[2, i] * A63 + K[3, i] * A64 + K[4, i] * A65
             ) * h
-        fns(OP_RHS, m, t + h, z_c, p_c, k5.ctypes)
+        fns(OP_RHS, m, t + h, z_c, p_c, at(wf, k_at + 5 * d))
         for i in range(d):
             if k5[i] != k5[i]:
                 remember_flow_failure(t + h, z, k5, wf, wi)
@@ -188,7 +189,7 @@ def rk45_step(
             y_new[i] = y[i] + h * (
                 K[0, i] * B1 + K[2, i] * B3 + K[3, i] * B4 + K[4, i] * B5 + K[5, i] * B6
             )
-        fns(OP_RHS, m, t + h, yn_c, p_c, k6.ctypes)
+        fns(OP_RHS, m, t + h, yn_c, p_c, at(wf, k_at + 6 * d))
         for i in range(d):
             if k6[i] != k6[i]:
                 remember_flow_failure(t + h, y_new, k6, wf, wi)

@@ -16,13 +16,31 @@ once per machine. By ``op`` (``OP_*`` of :mod:`~hybrid.simulation.native.buffers
 - ``OP_VALUE``, a form: returns the scalar form (a rho, an equality level);
 - ``OP_TRUTH``, a form: returns 1.0 if the boolean form holds, else 0.0;
 - ``OP_RESET``, a global transition: the state after it;
-- ``OP_TERMS``, a mode: the watch's terms at once (each guard's rho, each
-  equality level, each invariant's rho), one call a sample.
+- ``OP_WATCH``, a mode: the watch's terms at once (each guard's oriented
+  rho, then each invariant's rho), one call a sample;
+- ``OP_ARM``, a mode: what arming reads (each guard's plain rho, then each
+  equality level ``a - b`` of the mode's guards).
+
+``p*`` is the run's parameter vector followed by the mode's level slots: the
+sign of each equality level (its oriented reading) and its snap (-1 at the
+level, +1 not), which the oriented and snapped forms read.
 
 One function rather than six: each function pointer costs a load from the
 cache and a conversion on every call from Python.
 
 NaN from any of them is an evaluation failure (docs/semantics.md).
+
+**Pieces.** The kernel is compiled as a few separate units, the *pieces*
+(:data:`PIECES`: the integrator's step, the search of a step, the decisions
+at a point, a stay, a run), which call each other through function pointers
+(``StepFn``, ``SearchFn``, ``DecideFn``, ``StayFn``, ``RunFn``: numba
+first-class functions, like the model). numba links the code of every
+function a function calls into it and optimizes the whole again, so a call
+tree of depth five compiled the deepest code five times; as pieces each is
+compiled once. Python passes the addresses of the model and of the pieces in
+one array (``fp``, slots ``FP_*``), which the run turns into functions
+(:func:`~hybrid.simulation.native.pointers.function_at`; the names
+``*_FN_T`` below are bound to the function types in the generated module).
 """
 
 from __future__ import annotations
@@ -34,12 +52,27 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "DECIDE_FN_T",
+    "FUNCTION_TYPES",
+    "MODEL_FN_T",
+    "PIECES",
+    "RUN_FN_T",
+    "SEARCH_FN_T",
+    "STAY_FN_T",
+    "STEP_FN_T",
     "Array",
     "Array2",
     "Array3",
+    "DecideFn",
     "Fns",
     "Ints",
     "Ints2",
+    "RunFn",
+    "SearchFn",
+    "StayFn",
+    "StepFn",
+    "at",
+    "function_at",
     "model_signature",
     "numba_signature",
     "numba_types",
@@ -51,6 +84,47 @@ Array3 = NDArray[np.float64]
 Ints = NDArray[np.int64]
 Ints2 = NDArray[np.int64]
 Fns = Callable[..., float]
+StepFn = Callable[..., tuple[bool, float, float, float]]
+SearchFn = Callable[..., tuple[int, float, float]]
+DecideFn = Callable[..., int]
+StayFn = Callable[..., tuple[int, float, int]]
+RunFn = Callable[..., None]
+
+PIECES = (
+    ("rk45_step", "StepFn"),
+    ("first_event", "SearchFn"),
+    ("decide", "DecideFn"),
+    ("flow_stay", "StayFn"),
+    ("run_one", "RunFn"),
+)
+"""The separately compiled pieces of the kernel and the names of their function types."""
+
+FUNCTION_TYPES = (
+    ("Fns", "MODEL_FN_T"),
+    ("StepFn", "STEP_FN_T"),
+    ("SearchFn", "SEARCH_FN_T"),
+    ("DecideFn", "DECIDE_FN_T"),
+    ("StayFn", "STAY_FN_T"),
+    ("RunFn", "RUN_FN_T"),
+)
+"""Each function type and the global the kernel reads it from (bound in the generated module)."""
+
+MODEL_FN_T: Any = None
+STEP_FN_T: Any = None
+SEARCH_FN_T: Any = None
+DECIDE_FN_T: Any = None
+STAY_FN_T: Any = None
+RUN_FN_T: Any = None
+
+
+def at(array: Any, index: int) -> Any:
+    """Stand-in for :func:`hybrid.simulation.native.pointers.at` (numba's intrinsic)."""
+    raise NotImplementedError("only in compiled code")
+
+
+def function_at(c_address: int, jit_address: int, kind: Any) -> Any:
+    """Stand-in for :func:`hybrid.simulation.native.pointers.function_at` (numba's intrinsic)."""
+    raise NotImplementedError("only in compiled code")
 
 
 def model_signature() -> Any:

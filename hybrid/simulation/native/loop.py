@@ -11,7 +11,8 @@ Function by function:
   jump and the post-jump point);
 - :func:`zeno_update` is :meth:`hybrid.simulation.zeno.ZenoDetector.update`
   (window 6, spread 2 %, shrink 1e-3), its state in ``wf``;
-- :func:`new_work` allocates the scratch space (``wf``, ``wi``) of a run.
+- :func:`new_work` allocates the scratch space (``wf``, ``wi``) of a run, the
+  run's parameter vector with the level slots after the parameters among it.
 
 The flow of a stay is :func:`~hybrid.simulation.native.stay.flow_stay`; the
 decisions at a point are :mod:`~hybrid.simulation.native.decide`'s.
@@ -26,12 +27,14 @@ import math
 import numpy as np
 
 from hybrid.simulation.native.buffers import (
+    ASK_ENTRY,
+    ASK_LEFT,
     CF_T_END,
+    CF_T_START,
     CI_MAX_JUMPS,
     CI_PER_INSTANT,
     CI_ZENO,
     D_BLOCKED_ENTRY,
-    D_EVAL,
     D_INITIAL,
     D_NONE,
     D_RESET_NONFINITE,
@@ -39,16 +42,23 @@ from hybrid.simulation.native.buffers import (
     D_ZENO_GEOMETRIC,
     D_ZENO_INSTANT,
     F_RESET,
+    FP_DECIDE,
+    FP_MODEL,
+    FP_SEARCH,
+    FP_STAY,
+    FP_STEP,
     N_SCALARS,
     OP_RESET,
-    S_FAIL_T,
+    S_FLOW_FAIL,
+    S_GEN,
     T_MAX_INV,
     T_MAX_LV,
     T_MAX_TR,
+    T_N_PARAMS,
     T_N_STATES,
     T_TR_TARGET,
     W_AHEAD,
-    W_CUR,
+    W_ARMV,
     W_D,
     W_ENABLED,
     W_F,
@@ -57,13 +67,15 @@ from hybrid.simulation.native.buffers import (
     W_FLOWX,
     W_INVARMED,
     W_K,
-    W_LVARMED,
-    W_LVSIGN,
+    W_NPE,
     W_NT,
-    W_PREV,
+    W_PE,
     W_Q,
     W_RATE,
     W_SCAL,
+    W_SIGFAIL,
+    W_SIGX,
+    W_TERMS,
     W_TRARMED,
     W_XNEW,
     W_XS,
@@ -74,9 +86,22 @@ from hybrid.simulation.native.buffers import (
     WI_HEADER,
     ZENO_SIZE,
 )
-from hybrid.simulation.native.decide import enabled_at_entry, invariant_left_at, note_failure
-from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints
-from hybrid.simulation.native.stay import STAY_EVENT, flow_stay
+from hybrid.simulation.native.decide import note_failure
+from hybrid.simulation.native.kernel_types import (
+    DECIDE_FN_T,
+    MODEL_FN_T,
+    SEARCH_FN_T,
+    STAY_FN_T,
+    STEP_FN_T,
+    Array,
+    Array2,
+    Fns,
+    Ints,
+    at,
+    function_at,
+)
+from hybrid.simulation.native.search import HORIZON_SAMPLES
+from hybrid.simulation.native.stay import STAY_EVENT, end_run, failed
 from hybrid.simulation.native.store import finish, record_jump, record_point
 
 __all__ = ["jump", "new_work", "run_one", "zeno_update"]
@@ -94,14 +119,15 @@ L_T_END, L_MAX_JUMPS, L_ZENO, L_BLOCKED, L_NONFINITE, L_SOLVER_FAILURE, L_INTERR
 )  # fmt: skip  # CAUSE_CODES
 
 
-def new_work(tab: Ints, wi: Ints) -> Array:
+def new_work(tab: Ints, p: Array, wi: Ints) -> Array:
     """The float scratch space of a run, with ``wi`` (``WI_HEADER`` + flags) laid out."""
     d, max_tr, max_lv, max_inv = tab[T_N_STATES], tab[T_MAX_TR], tab[T_MAX_LV], tab[T_MAX_INV]
-    n_terms = max_tr + max_lv + max_inv
+    n_pe = tab[T_N_PARAMS] + 2 * max_lv + 1
     sizes = (
         (W_K, 7 * d), (W_Y, d), (W_F, d), (W_YNEW, d), (W_YTMP, d), (W_XS, d), (W_Q, 4 * d),
-        (W_RATE, d), (W_AHEAD, d), (W_XNEW, d), (W_LVSIGN, max_lv), (W_PREV, n_terms),
-        (W_CUR, n_terms), (W_ZENO, ZENO_SIZE), (W_FAILX, d), (W_FLOWX, d), (W_SCAL, N_SCALARS),
+        (W_RATE, d), (W_AHEAD, d), (W_XNEW, d), (W_TERMS, max_tr + max_inv),
+        (W_ARMV, max_tr + max_lv), (W_ZENO, ZENO_SIZE), (W_FAILX, d), (W_FLOWX, d),
+        (W_SIGX, d), (W_SCAL, N_SCALARS), (W_PE, n_pe),
     )  # fmt: skip
     at = 0
     for slot, size in sizes:
@@ -109,16 +135,20 @@ def new_work(tab: Ints, wi: Ints) -> Array:
         at += size
     wf = np.zeros(at)
     at = WI_HEADER
-    for slot, size in ((W_TRARMED, max_tr), (W_ENABLED, max_tr), (W_LVARMED, max_lv),
-                       (W_INVARMED, max_inv), (W_FAILI, 3)):  # fmt: skip
+    for slot, size in ((W_TRARMED, max_tr), (W_ENABLED, max_tr), (W_INVARMED, max_inv),
+                       (W_FAILI, 3), (W_SIGFAIL, 3)):  # fmt: skip
         wi[slot] = at
         at += size
     for i in range(WI_HEADER, wi.shape[0]):
         wi[i] = 0
     wi[W_D] = d
-    wi[W_NT] = n_terms
-    for i in range(wi[W_LVSIGN], wi[W_LVSIGN] + max_lv):
-        wf[i] = 1.0
+    wi[W_NT] = max_tr + max_inv
+    wi[W_NPE] = n_pe
+    pe = wi[W_PE]
+    for i in range(p.shape[0]):
+        wf[pe + i] = p[i]
+    for i in range(p.shape[0], n_pe):
+        wf[pe + i] = 1.0
     z = wi[W_ZENO]
     for i in range(ZENO_SIZE):
         wf[z + i] = math.nan
@@ -127,7 +157,8 @@ def new_work(tab: Ints, wi: Ints) -> Array:
     sc = wi[W_SCAL]
     for i in range(N_SCALARS):
         wf[sc + i] = math.nan
-    wf[sc + 1] = 0.0  # no flow failure
+    wf[sc + S_FLOW_FAIL] = 0.0
+    wf[sc + S_GEN] = 0.0
     return wf
 
 
@@ -176,11 +207,11 @@ def zeno_update(z: Array, t: float) -> float:
 
 
 def jump(fns: Fns, tab: Ints, pts: Array2, jps: Array2, oi: Ints, m: int, tr: int, t: float,
-         j: int, x: Array, p: Array, wf: Array, wi: Ints) -> bool:  # fmt: skip
+         j: int, x: Array, wf: Array, wi: Ints) -> bool:  # fmt: skip
     """Take transition ``tr`` at ``t``: reset into ``x``, record the jump and the new point."""
     d = wi[W_D]
     x_new = wf[wi[W_XNEW] : wi[W_XNEW] + d]
-    fns(OP_RESET, tr, t, x.ctypes, p.ctypes, x_new.ctypes)
+    fns(OP_RESET, tr, t, at(x, 0), at(wf, wi[W_PE]), at(x_new, 0))
     failed = False
     for i in range(d):
         if x_new[i] != x_new[i]:
@@ -193,47 +224,56 @@ def jump(fns: Fns, tab: Ints, pts: Array2, jps: Array2, oi: Ints, m: int, tr: in
         return False
     for i in range(d):
         x[i] = x_new[i]
-    return record_point(fns, pts, oi, t, j + 1, tab[tab[T_TR_TARGET] + tr], x, p, wf, wi)
+    return record_point(fns, pts, oi, t, j + 1, tab[tab[T_TR_TARGET] + tr], x, wf, wi)
 
 
-def run_one(fns: Fns, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f: Array,
+def run_one(fp: Ints, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f: Array,
             cfg_i: Ints, pts: Array2, jps: Array2, sts: Array2, oi: Ints, of: Array,
             flag: Ints) -> None:  # fmt: skip
-    """Simulate from ``(t0, x0)`` in mode ``m0`` until the run ends; all of it into the arrays."""
-    wi = np.zeros(WI_HEADER + 2 * tab[T_MAX_TR] + tab[T_MAX_LV] + tab[T_MAX_INV] + 3, np.int64)
-    wf = new_work(tab, wi)
-    fail, sc = wi[W_FAILI], wi[W_SCAL]
+    """Simulate from ``(t0, x0)`` in mode ``m0`` until the run ends; all of it into the arrays.
+
+    ``fp`` holds the addresses of the model and of the kernel's pieces (``FP_*``).
+    """
+    fns = function_at(fp[FP_MODEL], fp[FP_MODEL + 1], MODEL_FN_T)
+    step = function_at(fp[FP_STEP], fp[FP_STEP + 1], STEP_FN_T)
+    search = function_at(fp[FP_SEARCH], fp[FP_SEARCH + 1], SEARCH_FN_T)
+    decide = function_at(fp[FP_DECIDE], fp[FP_DECIDE + 1], DECIDE_FN_T)
+    stay_fn = function_at(fp[FP_STAY], fp[FP_STAY + 1], STAY_FN_T)
+    wi = np.zeros(WI_HEADER + 2 * tab[T_MAX_TR] + tab[T_MAX_INV] + 6, np.int64)
+    wf = new_work(tab, p, wi)
     x = x0.copy()
     t, m, j = t0, m0, 0
     t_end = cfg_f[CF_T_END]
+    spacing = (t_end - cfg_f[CF_T_START]) / HORIZON_SAMPLES
     max_jumps, per_instant = cfg_i[CI_MAX_JUMPS], cfg_i[CI_PER_INSTANT]
     for i in range(x.shape[0]):
         if not math.isfinite(x[i]):
             finish(oi, of, L_NONFINITE, t, j, m, D_INITIAL, 0, math.nan, wf, wi)
             return
-    if not record_point(fns, pts, oi, t, j, m, x, p, wf, wi):
+    if not record_point(fns, pts, oi, t, j, m, x, wf, wi):
         return
     same_instant, last_jump_t, stalls, stay = 0, math.nan, 0, 0
     while True:
-        if wi[fail] != 0:
-            finish(oi, of, L_NONFINITE, wf[sc + S_FAIL_T], j, m, D_EVAL, 0, math.nan, wf, wi)
+        if failed(wi):
+            end_run(oi, of, L_NONFINITE, t, j, m, D_NONE, 0, math.nan, wf, wi)
             return
         if flag[0] != 0:
             finish(oi, of, L_INTERRUPTED, t, j, m, D_NONE, 0, math.nan, wf, wi)
             return
-        chosen = enabled_at_entry(fns, tab, m, t, x, p, wf, wi)
+        chosen = decide(ASK_ENTRY, fns, tab, m, t, x, wf, wi)
+        if failed(wi):
+            continue  # ends as nonfinite above
         if chosen < 0:
-            left = invariant_left_at(fns, tab, m, t, x, p, wf, wi)
-            if wi[fail] != 0:
-                continue  # ends as nonfinite above
+            left = decide(ASK_LEFT, fns, tab, m, t, x, wf, wi)
             if left >= 0:
                 finish(oi, of, L_BLOCKED, t, j, m, D_BLOCKED_ENTRY, left, math.nan, wf, wi)
                 return
             if t >= t_end:  # a jump landed exactly at t_end: nothing left to flow
                 finish(oi, of, L_T_END, t, j, m, D_NONE, 0, math.nan, wf, wi)
                 return
-            outcome, t_after, chosen = flow_stay(fns, tab, m, t, x, j, stay, p, cfg_f, cfg_i,
-                                                 pts, sts, oi, of, wf, wi, flag)  # fmt: skip
+            outcome, t_after, chosen = stay_fn(fns, step, search, decide, tab, m, t, x, j, stay,
+                                               spacing, cfg_f, cfg_i, pts, sts, oi, of, wf, wi,
+                                               flag)  # fmt: skip
             stay += 1
             if outcome != STAY_EVENT:
                 return
@@ -244,8 +284,6 @@ def run_one(fns: Fns, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f:
                     finish(oi, of, L_SOLVER_FAILURE, t, j, m, D_STALL, 0, math.nan, wf, wi)
                     return
                 continue
-        elif wi[fail] != 0:
-            continue
         if j >= max_jumps:
             finish(oi, of, L_MAX_JUMPS, t, j, m, D_NONE, 0, math.nan, wf, wi)
             return
@@ -254,11 +292,11 @@ def run_one(fns: Fns, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f:
         if same_instant > per_instant:
             finish(oi, of, L_ZENO, t, j, m, D_ZENO_INSTANT, chosen, t, wf, wi)
             return
-        if not jump(fns, tab, pts, jps, oi, m, chosen, t, j, x, p, wf, wi):
+        if not jump(fns, tab, pts, jps, oi, m, chosen, t, j, x, wf, wi):
             return
         m = tab[tab[T_TR_TARGET] + chosen]
         j += 1
-        if wi[fail] != 0:
+        if failed(wi):
             continue
         for i in range(x.shape[0]):
             if not math.isfinite(x[i]):

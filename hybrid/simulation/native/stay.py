@@ -1,17 +1,28 @@
-"""Kernel source: one stay in a mode, integrated until the first event or the end.
+"""Kernel source: one stay in a mode, as :class:`hybrid.simulation.stay.StayIntegrator` runs it.
 
-The compiled counterpart of ``EventLoop._flow`` and ``EventLoop._solver_end``
-(:mod:`hybrid.simulation.loop`), of the watch event
-(:func:`hybrid.simulation.events.watch_factory`) and of what ``solve_ivp``
-does with it, with the announced first-crossing rule:
+:func:`flow_stay` is ``EventLoop._flow`` around ``StayIntegrator.stay``, step
+for step:
 
-- the watch, its arming and the first-crossing rule are
-  :mod:`~hybrid.simulation.native.watch`'s;
-- :func:`flow_stay` is ``_flow`` and ``_solver_end``: the steps, the points
-  recorded (step ends, or the ``dt`` grid), the end of the stay (an event
-  decided by :func:`~hybrid.simulation.native.decide.decide_at_event`,
-  ``t_end``, a collapsed step size, Ctrl-C) and the warm start of the next
-  stay (``_first_step``).
+- the watch of the stay (:func:`~hybrid.simulation.native.watch.watch_start`);
+- the flow at the start (``_start``): a failing or non-finite derivative ends
+  the run as ``nonfinite`` before the first step;
+- the integrator started warm with the last full step of the run
+  (``_first_step``), else with scipy's initial step;
+- each accepted step: a step size that collapses, or a non-finite state, ends
+  the run at the last accepted point (``_gave_up``, ``nonfinite`` when the
+  flow failed on the way); :data:`STALL_STEPS` steps that do not advance, or a
+  crawl (``CRAWL_*``), end it as ``solver_failure``; then the step is searched
+  (:func:`~hybrid.simulation.native.search.first_event`) before it is
+  recorded: an event ends the stay there (the points of the step before it,
+  then the event point), and the transitions are decided
+  (:func:`~hybrid.simulation.native.decide.enabled_at_event`; ``blocked`` if
+  none is enabled while an invariant is being left); a failed evaluation
+  ends the run at the last good sample; ``t_end`` and Ctrl-C end it at the
+  step's end;
+- evaluation failures take precedence over every other end (``_eval_failure``).
+
+Points are recorded as the reference's ``StayRecord`` stores them: step ends
+(or the ``dt`` grid points of each step) and the end of the stay.
 
 Copied into the kernel module (below the ``kernel`` marker).
 """
@@ -21,6 +32,9 @@ from __future__ import annotations
 import math
 
 from hybrid.simulation.native.buffers import (
+    ASK_EVENT,
+    ASK_LEFT,
+    ASK_WATCH,
     CF_ATOL,
     CF_DT,
     CF_MAX_STEP,
@@ -28,89 +42,167 @@ from hybrid.simulation.native.buffers import (
     CF_T_END,
     CF_T_START,
     CI_DENSE,
-    CI_SAMPLES,
     D_BLOCKED_FLOW,
+    D_CRAWL,
     D_EVAL,
     D_FLOW,
+    D_FLOW_START,
     D_NONE,
+    D_NOT_ADVANCING,
     D_STATE_NONFINITE,
     D_STEP_TOO_SMALL,
+    F_AUX0,
+    F_AUX1,
     F_FLOW,
-    I_POINTS,
-    P_J,
-    P_T,
+    F_NOW,
+    F_PEAK,
+    I_STEPS,
+    OP_RHS,
     S_FAIL_T,
     S_FLOW_FAIL,
     S_FLOW_T,
     S_LAST_STEP,
-    S_TS0,
-    S_TS1,
-    S_TS2,
-    S_TS_COUNT,
+    S_SIG_T,
     W_D,
     W_F,
     W_FAILI,
     W_FAILX,
     W_FLOWX,
     W_K,
+    W_PE,
     W_Q,
     W_SCAL,
+    W_SIGFAIL,
+    W_SIGX,
     W_XS,
     W_Y,
     W_YNEW,
 )
-from hybrid.simulation.native.decide import (
-    decide_at_event,
-    invariant_left_at,
+from hybrid.simulation.native.decide import note_failure
+from hybrid.simulation.native.integrator import dense_eval, initial_step
+from hybrid.simulation.native.kernel_types import (
+    Array,
+    Array2,
+    DecideFn,
+    Fns,
+    Ints,
+    SearchFn,
+    StepFn,
+    at,
 )
-from hybrid.simulation.native.integrator import dense_eval, eval_rhs, initial_step, rk45_step
-from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints
+from hybrid.simulation.native.search import EV_FAILED, EV_NONE
 from hybrid.simulation.native.store import finish, record_point, record_step
-from hybrid.simulation.native.watch import scan_step, start_arming
+from hybrid.simulation.native.watch import watch_terms, watch_value
 
-__all__ = ["STAY_DONE", "STAY_EVENT", "flow_stay", "record_grid"]
+__all__ = [
+    "CRAWL_DROP",
+    "CRAWL_PROJECTION",
+    "CRAWL_STEPS",
+    "STALL_STEPS",
+    "STAY_DONE",
+    "STAY_EVENT",
+    "end_run",
+    "failed",
+    "flow_stay",
+    "record_grid",
+]
 
 # --- kernel ---
 
 STAY_EVENT = 0
 STAY_DONE = 1
 C_T_END, C_BLOCKED, C_NONFINITE, C_SOLVER_FAILURE, C_INTERRUPTED = 0, 3, 4, 5, 6  # CAUSE_CODES
+STALL_STEPS = 50
+CRAWL_STEPS = 1000
+CRAWL_DROP = 1e-6
+CRAWL_PROJECTION = 1e6
 
 
-def record_grid(fns: Fns, pts: Array2, oi: Ints, k_next: int, lo: float, hi: float,
-                inclusive: bool, t_old: float, h: float, j: int, m: int, p: Array, cfg_f: Array,
-                wf: Array, wi: Ints) -> int:  # fmt: skip
-    """Store the ``dt`` grid points in ``(lo, hi)`` (``hi`` too if ``inclusive``); next index."""
+def failed(wi: Ints) -> bool:
+    """Whether an evaluation has failed at a point of the trajectory (a signal included)."""
+    return bool(wi[wi[W_FAILI]] != 0 or wi[wi[W_SIGFAIL]] != 0)
+
+
+def end_run(oi: Ints, of: Array, cause: int, t: float, j: int, m: int, detail: int, index: int,
+            zeno_time: float, wf: Array, wi: Ints) -> None:  # fmt: skip
+    """End the run, unless an evaluation failed first: then ``nonfinite`` at the failure.
+
+    The first failure recorded wins (the search's and the decisions' before a
+    signal's, which the reference computes when a stay's points are stored).
+    """
+    fail = wi[W_FAILI]
+    sig = wi[W_SIGFAIL]
+    if wi[fail] == 0 and wi[sig] != 0:
+        wi[fail], wi[fail + 1], wi[fail + 2] = wi[sig], wi[sig + 1], wi[sig + 2]
+        wf[wi[W_SCAL] + S_FAIL_T] = wf[wi[W_SCAL] + S_SIG_T]
+        for i in range(wi[W_D]):
+            wf[wi[W_FAILX] + i] = wf[wi[W_SIGX] + i]
+    if wi[fail] != 0:
+        finish(oi, of, C_NONFINITE, wf[wi[W_SCAL] + S_FAIL_T], j, m, D_EVAL, 0, math.nan, wf, wi)
+    else:
+        finish(oi, of, cause, t, j, m, detail, index, zeno_time, wf, wi)
+
+
+def record_grid(fns: Fns, pts: Array2, oi: Ints, lo: float, hi: float, inclusive: bool,
+                t_old: float, h: float, j: int, m: int, cfg_f: Array, wf: Array,
+                wi: Ints) -> bool:  # fmt: skip
+    """Store the ``dt`` grid points in ``(lo, hi)`` (``hi`` too if ``inclusive``); False if full."""
     d = wi[W_D]
     y = wf[wi[W_Y] : wi[W_Y] + d]
     q = wf[wi[W_Q] : wi[W_Q] + 4 * d].reshape((d, 4))
     xs = wf[wi[W_XS] : wi[W_XS] + d]
-    while True:
-        g = cfg_f[CF_T_START] + cfg_f[CF_DT] * k_next
-        if g > hi or (g == hi and not inclusive):
-            return k_next
-        if g > lo:
+    start, dt = cfg_f[CF_T_START], cfg_f[CF_DT]
+    k0 = math.floor((lo - start) / dt)
+    k1 = math.floor((hi - start) / dt) + 1
+    for k in range(k0, k1 + 1):
+        g = start + dt * k
+        if g > lo and (g <= hi if inclusive else g < hi):
             dense_eval(g, t_old, h, y, q, xs)
-            if not record_point(fns, pts, oi, g, j, m, xs, p, wf, wi):
-                return -1
-        k_next += 1
+            if not record_point(fns, pts, oi, g, j, m, xs, wf, wi):
+                return False
+    return True
 
 
-def flow_stay(fns: Fns, tab: Ints, m: int, t0: float, x: Array, j: int, stay: int, p: Array,
-              cfg_f: Array, cfg_i: Ints, pts: Array2, sts: Array2, oi: Ints, of: Array,
-              wf: Array, wi: Ints, flag: Ints) -> tuple[int, float, int]:  # fmt: skip
+def _peak(of: Array, wf: Array, wi: Ints) -> None:
+    """The largest ``|state|`` at the last accepted point, for the message."""
+    big = 0.0
+    for i in range(wi[W_D]):
+        big = max(big, abs(wf[wi[W_Y] + i]))
+    of[F_PEAK] = big
+
+
+def _gave_up(oi: Ints, of: Array, t: float, j: int, m: int, detail: int, cause: int, wf: Array,
+             wi: Ints) -> None:  # fmt: skip
+    """The end of a stay whose integrator cannot go on, at the last accepted point (``_gave_up``)."""
+    _peak(of, wf, wi)
+    sc = wi[W_SCAL]
+    if wf[sc + S_FLOW_FAIL] != 0.0:
+        fail = wi[W_FAILI]
+        if wi[fail] == 0 and wi[wi[W_SIGFAIL]] == 0:
+            wi[fail], wi[fail + 1], wi[fail + 2] = F_FLOW, m, m
+            wf[sc + S_FAIL_T] = wf[sc + S_FLOW_T]
+            for i in range(wi[W_D]):
+                wf[wi[W_FAILX] + i] = wf[wi[W_FLOWX] + i]
+            finish(oi, of, C_NONFINITE, t, j, m, D_FLOW, 0, math.nan, wf, wi)
+            return
+    end_run(oi, of, cause, t, j, m, detail, 0, math.nan, wf, wi)
+
+
+def flow_stay(fns: Fns, step: StepFn, search: SearchFn, decide: DecideFn, tab: Ints, m: int,
+              t0: float, x: Array, j: int, stay: int, spacing: float, cfg_f: Array, cfg_i: Ints,
+              pts: Array2, sts: Array2, oi: Ints, of: Array, wf: Array, wi: Ints,
+              flag: Ints) -> tuple[int, float, int]:  # fmt: skip
     """Integrate one stay from ``(t0, x)``: ``(STAY_EVENT, t, chosen)`` or ``(STAY_DONE, t, -1)``.
 
     On ``STAY_EVENT`` the event point is in ``x`` and recorded, and ``chosen``
-    is the global transition that fires there (-1: none, the stay goes on).
-    On ``STAY_DONE`` the run has ended (its termination is in ``oi``/``of``),
-    or a buffer is full (``I_OVERFLOW``).
+    is the global transition that fires there (-1: none, a new stay starts
+    there). On ``STAY_DONE`` the run has ended (its termination is in
+    ``oi``/``of``), or a buffer is full (``I_OVERFLOW``).
     """
     t_end, rtol, atol = cfg_f[CF_T_END], cfg_f[CF_RTOL], cfg_f[CF_ATOL]
     max_step = cfg_f[CF_MAX_STEP]
     gridded = cfg_f[CF_DT] == cfg_f[CF_DT]
     dense = cfg_i[CI_DENSE] != 0
-    samples = cfg_i[CI_SAMPLES]
     d = wi[W_D]
     sc = wi[W_SCAL]
     fail = wi[W_FAILI]
@@ -118,99 +210,109 @@ def flow_stay(fns: Fns, tab: Ints, m: int, t0: float, x: Array, j: int, stay: in
     f = wf[wi[W_F] : wi[W_F] + d]
     y_new = wf[wi[W_YNEW] : wi[W_YNEW] + d]
     xs = wf[wi[W_XS] : wi[W_XS] + d]
-    q = wf[wi[W_Q] : wi[W_Q] + 4 * d].reshape((d, 4))
     K = wf[wi[W_K] : wi[W_K] + 7 * d].reshape((7, d))
-    start_arming(fns, tab, m, t0, x, p, wf, wi)
+    q = wf[wi[W_Q] : wi[W_Q] + 4 * d].reshape((d, 4))
+    pe = wf[wi[W_PE] :]
+    decide(ASK_WATCH, fns, tab, m, t0, x, wf, wi)
     if wi[fail] != 0:
-        finish(oi, of, C_NONFINITE, wf[sc + S_FAIL_T], j, m, D_EVAL, 0, math.nan, wf, wi)
+        end_run(oi, of, C_NONFINITE, t0, j, m, D_EVAL, 0, math.nan, wf, wi)
         return STAY_DONE, t0, -1
     for i in range(d):
         y[i] = x[i]
     wf[sc + S_FLOW_FAIL] = 0.0
-    eval_rhs(fns, m, t0, y, p, f, wf, wi)
+    fns(OP_RHS, m, t0, at(y, 0), at(wf, wi[W_PE]), at(f, 0))
+    for i in range(d):
+        if not math.isfinite(f[i]):  # the flow at the start: the assembler words it
+            note_failure(F_FLOW, m, m, t0, y, wf, wi)
+            finish(oi, of, C_NONFINITE, t0, j, m, D_FLOW_START, i, math.nan, wf, wi)
+            return STAY_DONE, t0, -1
     warm = wf[sc + S_LAST_STEP]
-    if warm == warm and warm > 0.0:
+    if warm == warm and warm > 0.0 and t_end > t0:
         h_abs = min(warm, max_step, t_end - t0)
     else:
-        h_abs = initial_step(fns, m, t0, t_end, max_step, rtol, atol, p, wf, wi)
+        h_abs = initial_step(fns, m, t0, t_end, max_step, rtol, atol, pe, wf, wi)
+    watch_terms(fns, m, t0, y, wf, wi)
+    w = watch_value(tab, m, t0, y, wf, wi)
     t = t0
-    wf[sc + S_TS0], wf[sc + S_TS1], wf[sc + S_TS2], wf[sc + S_TS_COUNT] = math.nan, math.nan, t0, 1.0
-    k_next = 0
-    if gridded:
-        k_next = math.floor((t0 - cfg_f[CF_T_START]) / cfg_f[CF_DT]) + 1
+    stalls = steps = 0
+    longest, window_start = 0.0, t0
     while True:
-        ok, t_new, h_abs, h = rk45_step(fns, m, t, t_end, h_abs, max_step, rtol, atol, p, wf, wi)
-        if not ok:
-            if gridded and not record_point(fns, pts, oi, t, j, m, y, p, wf, wi):
+        if d == 0:  # scipy steps a stateless system to its end at once
+            t_new, h = t_end, t_end - t
+        else:
+            ok, t_new, h_abs, h = step(fns, m, t, t_end, h_abs, max_step, rtol, atol, pe, wf, wi)
+            if not ok:
+                _gave_up(oi, of, t, j, m, D_STEP_TOO_SMALL, C_SOLVER_FAILURE, wf, wi)
                 return STAY_DONE, t, -1
-            if wf[sc + S_FLOW_FAIL] != 0.0:
-                wi[fail], wi[fail + 1], wi[fail + 2] = F_FLOW, m, m
-                wf[sc + S_FAIL_T] = wf[sc + S_FLOW_T]
-                for i in range(d):
-                    wf[wi[W_FAILX] + i] = wf[wi[W_FLOWX] + i]
-                finish(oi, of, C_NONFINITE, t, j, m, D_FLOW, 0, math.nan, wf, wi)
-            else:
-                finish(oi, of, C_SOLVER_FAILURE, t, j, m, D_STEP_TOO_SMALL, 0, math.nan, wf, wi)
-            return STAY_DONE, t, -1
         finite = True
         for i in range(d):
             if not math.isfinite(y_new[i]):
                 finite = False
         if not finite:
-            record_point(fns, pts, oi, t_new, j, m, y_new, p, wf, wi)
-            finish(oi, of, C_NONFINITE, t_new, j, m, D_STATE_NONFINITE, 0, math.nan, wf, wi)
-            return STAY_DONE, t_new, -1
-        t_event = scan_step(fns, tab, m, t, t_new, h, samples, p, wf, wi)
-        if wi[fail] != 0:
-            finish(oi, of, C_NONFINITE, wf[sc + S_FAIL_T], j, m, D_EVAL, 0, math.nan, wf, wi)
+            _gave_up(oi, of, t, j, m, D_STATE_NONFINITE, C_NONFINITE, wf, wi)
             return STAY_DONE, t, -1
-        found = t_event == t_event
-        stop = t_event if found else t_new
-        if gridded:
-            inclusive = not found and t_new < t_end
-            k_next = record_grid(fns, pts, oi, k_next, t, stop, inclusive, t, h, j, m, p, cfg_f,
-                                 wf, wi)  # fmt: skip
-            if k_next < 0:
+        stalls = stalls + 1 if t_new - t <= 4e-16 * max(1.0, abs(t_new)) else 0
+        if stalls > STALL_STEPS:
+            _peak(of, wf, wi)
+            end_run(oi, of, C_SOLVER_FAILURE, t, j, m, D_NOT_ADVANCING, 0, math.nan, wf, wi)
+            return STAY_DONE, t, -1
+        longest = max(longest, h)
+        steps += 1
+        oi[I_STEPS] += 1
+        if steps % CRAWL_STEPS == 0:
+            pace = (t_new - window_start) / CRAWL_STEPS
+            window_start = t_new
+            if pace < CRAWL_DROP * longest and t_end - t_new > CRAWL_PROJECTION * pace:
+                of[F_AUX0], of[F_AUX1] = pace, longest
+                _peak(of, wf, wi)
+                end_run(oi, of, C_SOLVER_FAILURE, t, j, m, D_CRAWL, 0, math.nan, wf, wi)
                 return STAY_DONE, t, -1
+        kind, t_event, w = search(fns, tab, m, t, t_new, w, spacing, wf, wi)
+        stop = t_new if kind == EV_NONE else t_event
+        finished = t_new >= t_end
+        going_on = kind == EV_NONE and not finished and flag[0] == 0
+        if gridded and not record_grid(fns, pts, oi, t, stop, going_on, t, h, j, m, cfg_f, wf, wi):
+            return STAY_DONE, t, -1
         if dense and not record_step(sts, oi, t, h, stop, j, stay, y, q):
             return STAY_DONE, t, -1
-        wf[sc + S_TS0], wf[sc + S_TS1], wf[sc + S_TS2] = wf[sc + S_TS1], wf[sc + S_TS2], stop
-        wf[sc + S_TS_COUNT] += 1.0
-        if wf[sc + S_TS_COUNT] >= 3.0:  # the next stay starts with the last full step
-            wf[sc + S_LAST_STEP] = wf[sc + S_TS1] - wf[sc + S_TS0]
-        if found:
-            dense_eval(t_event, t, h, y, q, xs)
+        if kind != EV_NONE:
             for i in range(d):
                 x[i] = xs[i]
-            if not record_point(fns, pts, oi, t_event, j, m, x, p, wf, wi):
+            if not record_point(fns, pts, oi, t_event, j, m, x, wf, wi):
                 return STAY_DONE, t_event, -1
-            chosen = -1
-            if wi[fail] == 0:
-                chosen = decide_at_event(fns, tab, m, t_event, x, p, wf, wi)
-            if wi[fail] != 0:
-                finish(oi, of, C_NONFINITE, wf[sc + S_FAIL_T], j, m, D_EVAL, 0, math.nan, wf, wi)
+            if kind == EV_FAILED or failed(wi):
+                end_run(oi, of, C_NONFINITE, t_event, j, m, D_EVAL, 0, math.nan, wf, wi)
+                return STAY_DONE, t_event, -1
+            chosen = decide(ASK_EVENT, fns, tab, m, t_event, x, wf, wi)
+            if failed(wi) or wf[sc + S_FLOW_FAIL] != 0.0:
+                if wi[fail] == 0 and wi[wi[W_SIGFAIL]] == 0:  # a flow failure at a trial point
+                    wi[fail], wi[fail + 1], wi[fail + 2] = F_FLOW, m, m
+                    wf[sc + S_FAIL_T] = wf[sc + S_FLOW_T]
+                    for i in range(d):
+                        wf[wi[W_FAILX] + i] = wf[wi[W_FLOWX] + i]
+                end_run(oi, of, C_NONFINITE, t_event, j, m, D_EVAL, 0, math.nan, wf, wi)
                 return STAY_DONE, t_event, -1
             if chosen < 0:
-                left = invariant_left_at(fns, tab, m, t_event, x, p, wf, wi)
+                left = decide(ASK_LEFT, fns, tab, m, t_event, x, wf, wi)
                 if left >= 0:
                     finish(oi, of, C_BLOCKED, t_event, j, m, D_BLOCKED_FLOW, left, math.nan, wf, wi)
                     return STAY_DONE, t_event, -1
+            of[F_NOW] = t_event
             return STAY_EVENT, t_event, chosen
-        if not gridded and not record_point(fns, pts, oi, t_new, j, m, y_new, p, wf, wi):
+        wf[sc + S_FLOW_FAIL] = 0.0  # only at trial points the integrator rejected: stepped around
+        if not going_on:
+            for i in range(d):
+                x[i] = y_new[i]
+            if not record_point(fns, pts, oi, t_new, j, m, x, wf, wi):
+                return STAY_DONE, t_new, -1
+            cause = C_T_END if finished else C_INTERRUPTED
+            end_run(oi, of, cause, t_new, j, m, D_NONE, 0, math.nan, wf, wi)
             return STAY_DONE, t_new, -1
+        if not gridded and not record_point(fns, pts, oi, t_new, j, m, y_new, wf, wi):
+            return STAY_DONE, t_new, -1
+        wf[sc + S_LAST_STEP] = h
         for i in range(d):
             y[i] = y_new[i]
             f[i] = K[6, i]
-            x[i] = y[i]
         t = t_new
-        if wi[fail] != 0:
-            finish(oi, of, C_NONFINITE, wf[sc + S_FAIL_T], j, m, D_EVAL, 0, math.nan, wf, wi)
-            return STAY_DONE, t, -1
-        if t >= t_end or flag[0] != 0:
-            last = oi[I_POINTS] - 1
-            stored = last >= 0 and pts[last, P_T] == t and pts[last, P_J] == j
-            if gridded and not stored and not record_point(fns, pts, oi, t, j, m, y, p, wf, wi):
-                return STAY_DONE, t, -1
-            cause = C_T_END if t >= t_end else C_INTERRUPTED
-            finish(oi, of, cause, t, j, m, D_NONE, 0, math.nan, wf, wi)
-            return STAY_DONE, t, -1
+        of[F_NOW] = t

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from hybrid.simulation.native.buffers import (
     F_FAIL_T,
+    F_NOW,
     F_SIGNALS,
     F_T,
     F_ZENO_TIME,
@@ -48,24 +49,32 @@ from hybrid.simulation.native.buffers import (
     Q_TV,
     Q_Y,
     S_FAIL_T,
+    S_SIG_T,
     T_MODE_TR,
     W_D,
     W_ENABLED,
     W_FAILI,
     W_FAILX,
+    W_PE,
     W_SCAL,
+    W_SIGFAIL,
+    W_SIGX,
 )
-from hybrid.simulation.native.decide import note_failure
-from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints
+from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints, at
 
 __all__ = ["finish", "record_jump", "record_point", "record_step"]
 
 # --- kernel ---
 
 
-def record_point(fns: Fns, pts: Array2, oi: Ints, t: float, j: int, m: int, x: Array, p: Array,
-                 wf: Array, wi: Ints) -> bool:  # fmt: skip
-    """Store the point ``(t, j, m, x)`` with its signals; False if the buffer is full."""
+def record_point(fns: Fns, pts: Array2, oi: Ints, t: float, j: int, m: int, x: Array, wf: Array,
+                 wi: Ints) -> bool:  # fmt: skip
+    """Store the point ``(t, j, m, x)`` with its signals; False if the buffer is full.
+
+    A signal that cannot be evaluated is recorded apart (the first one): the
+    reference computes a stay's signals when the stay ends, so such a failure
+    ends the run only then.
+    """
     n = oi[I_POINTS]
     if n >= pts.shape[0]:
         oi[I_OVERFLOW] = 1
@@ -78,10 +87,15 @@ def record_point(fns: Fns, pts: Array2, oi: Ints, t: float, j: int, m: int, x: A
     for i in range(d):
         row[P_X + i] = x[i]
     signals = row[P_X + d :]
-    fns(OP_OUTPUTS, m, t, x.ctypes, p.ctypes, signals.ctypes)
+    fns(OP_OUTPUTS, m, t, at(x, 0), at(wf, wi[W_PE]), at(signals, 0))
     for c in range(signals.shape[0]):
         if signals[c] != signals[c]:
-            note_failure(F_SIGNALS, m, m, t, x, wf, wi)
+            sig = wi[W_SIGFAIL]
+            if wi[sig] == 0:
+                wi[sig], wi[sig + 1], wi[sig + 2] = F_SIGNALS, m, m
+                wf[wi[W_SCAL] + S_SIG_T] = t
+                for i in range(d):
+                    wf[wi[W_SIGX] + i] = x[i]
             break
     oi[I_POINTS] = n + 1
     return True
@@ -141,6 +155,7 @@ def finish(oi: Ints, of: Array, cause: int, t: float, j: int, m: int, detail: in
     oi[I_DETAIL] = detail
     oi[I_DETAIL_INDEX] = index
     of[F_T] = t
+    of[F_NOW] = t
     of[F_ZENO_TIME] = zeno_time
     fi = wi[W_FAILI]
     oi[I_FAIL_KIND] = wi[fi]

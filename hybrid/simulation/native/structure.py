@@ -11,11 +11,14 @@ Modes: every location of a plain automaton (so ``initial_location`` is a
 run-time choice too); for a system, the modes reachable from its initial mode
 through the transition graph (guards ignored), at most :data:`MAX_MODES`.
 
-Guards are prepared for the announced equality rule: a conjunction of
-``a >= b`` and ``a <= b`` (in any spelling, chains included) is the equality
-``a == b`` (same truth, same rho), and each equality not under a ``not`` is a
-*level* of its guard: the difference ``a - b`` (whose sign change means the
-level is reached) and the guard with that equality taken as true.
+Guards keep the reference's equality rule (docs/semantics.md, "Equality
+guards"): the atoms of each guard are :func:`hybrid.expr.rho.levels`' (the same
+walk, so the same numbering), and the two rewritten forms the reference compiles
+per pattern of signs or truths are generated once here with the pattern as
+run-time slots: the *oriented* rho reads atom ``i`` as ``S_i * (a - b) <= 0``
+and the *snapped* guard as ``Z_i <= 0``, with ``S_i = +-1`` and ``Z_i = -1`` (at
+the level) or ``+1`` set by the compiled loop in slots after the parameters
+(:func:`sign_name`, :func:`snap_name`; numbered per mode).
 
 Examples
 --------
@@ -38,20 +41,20 @@ from hybrid.compose import Component, System, as_system
 from hybrid.errors import UsageError
 from hybrid.expr import ir
 from hybrid.expr.functions import BUILTINS, Function
-from hybrid.expr.printer import expression_text
+from hybrid.expr.rho import _rewrite, guard_to_rho, levels
 from hybrid.model import Automaton, Location
 from hybrid.modes import Mode, TransitionView, transitions_of
 
 __all__ = [
     "COMPILED_FORM",
     "MAX_MODES",
-    "Level",
     "NativeMode",
     "NativeModel",
     "NativeTransition",
-    "levels_of",
-    "merge_equalities",
+    "replace_levels",
+    "sign_name",
     "slot_name",
+    "snap_name",
 ]
 
 MAX_MODES = 4096
@@ -66,22 +69,58 @@ def slot_name(k: int) -> str:
     return f"#p{k}"
 
 
-@dataclass(frozen=True)
-class Level:
-    """An equality ``a == b`` in a guard: ``difference = a - b`` and the guard with it true."""
+def replace_levels(guard: ir.Expr, replacement: Callable[[int, ir.Expr, int], ir.Expr]) -> ir.Expr:
+    """``guard`` with equality atom ``i`` replaced by ``replacement(i, a - b, column)``.
 
-    difference: ir.Expr
-    relaxed: ir.Expr
+    The reference's own walk (:func:`hybrid.expr.rho.levels` numbers the atoms
+    the same way), so a change of what counts as an atom reaches both backends.
+    """
+    return _rewrite(guard, replacement, True, [0])
+
+
+def sign_name(a: int) -> str:
+    """The IR name of the sign slot of level ``a`` of a mode (its oriented reading)."""
+    return f"#s{a}"
+
+
+def snap_name(a: int) -> str:
+    """The IR name of the snap slot of level ``a`` of a mode (-1: at the level, +1: not)."""
+    return f"#z{a}"
 
 
 @dataclass(frozen=True)
 class NativeTransition:
-    """An outgoing transition: the reference view (names, target) and its prepared guard."""
+    """An outgoing transition: the reference view (names, target), its guard and levels.
+
+    ``levels`` are the differences ``a - b`` of the guard's equality atoms, in
+    :func:`hybrid.expr.rho.levels`' order.
+    """
 
     view: TransitionView
     guard: ir.Expr
     reset: Mapping[str, ir.Expr]
-    levels: tuple[Level, ...]
+    levels: tuple[ir.Expr, ...]
+
+    def oriented_rho(self, first: int) -> ir.Expr:
+        """Rho with atom ``i`` read as ``S_(first+i) * (a - b) <= 0`` (the plain rho without levels)."""
+        if not self.levels:
+            return guard_to_rho(self.guard)
+
+        def one_sided(index: int, difference: ir.Expr, col: int) -> ir.Expr:
+            sign = ir.Var(sign_name(first + index), ir.PARAM, col)
+            return ir.Cmp(("<=",), (ir.Bin("*", sign, difference, col), ir.Num(0.0, col)), col)
+
+        return guard_to_rho(replace_levels(self.guard, one_sided))
+
+    def snapped(self, first: int) -> ir.Expr:
+        """The guard with atom ``i`` read as ``Z_(first+i) <= 0`` (the guard itself without levels)."""
+        if not self.levels:
+            return self.guard
+
+        def constant(index: int, difference: ir.Expr, col: int) -> ir.Expr:
+            return ir.Cmp(("<=",), (ir.Var(snap_name(first + index), ir.PARAM, col), ir.Num(0.0, col)), col)
+
+        return replace_levels(self.guard, constant)
 
 
 @dataclass(frozen=True)
@@ -157,10 +196,10 @@ class NativeModel:
             flow.update(loc.flow)
             if not (isinstance(loc.invariant, ir.BoolConst) and loc.invariant.value):
                 invariants.append((system.qualified(i, loc_name), loc.invariant))
-        transitions = []
-        for view in transitions_of(system, key, bind=False):
-            guard = merge_equalities(view.guard)
-            transitions.append(NativeTransition(view, guard, view.reset, levels_of(guard)))
+        transitions = [
+            NativeTransition(view, view.guard, view.reset, levels(view.guard))
+            for view in transitions_of(system, key, bind=False)
+        ]
         return NativeMode(
             key=key,
             name=system.mode_name(key),
@@ -263,92 +302,3 @@ def _renamed_location(loc: Location, ren: Callable[[ir.Expr], ir.Expr]) -> Locat
         signals=MappingProxyType({k: ren(v) for k, v in loc.signals.items()}),
         invariant=ren(loc.invariant),
     )
-
-
-def _conjuncts(node: ir.Expr) -> list[ir.Expr]:
-    """The conjuncts of ``node``, chains split into single comparisons."""
-    if isinstance(node, ir.BoolOp) and node.op == "and":
-        return [c for v in node.values for c in _conjuncts(v)]
-    if isinstance(node, ir.Cmp) and len(node.ops) > 1:
-        return [
-            ir.Cmp((op,), (node.operands[i], node.operands[i + 1]), node.col)
-            for i, op in enumerate(node.ops)
-        ]
-    return [node]
-
-
-def _as_le(node: ir.Expr) -> tuple[str, str, ir.Expr, ir.Expr] | None:
-    """``(text of u, text of v, u, v)`` if ``node`` is ``u <= v`` (or ``v >= u``)."""
-    if not (isinstance(node, ir.Cmp) and len(node.ops) == 1 and node.ops[0] in ("<=", ">=")):
-        return None
-    a, b = node.operands
-    u, v = (a, b) if node.ops[0] == "<=" else (b, a)
-    return expression_text(u), expression_text(v), u, v
-
-
-def merge_equalities(node: ir.Expr) -> ir.Expr:
-    """``a >= b and a <= b`` (any spelling) as ``a == b``; the rest unchanged."""
-    if isinstance(node, ir.Not):
-        return replace(node, operand=merge_equalities(node.operand))
-    if isinstance(node, ir.BoolOp) and node.op == "or":
-        return replace(node, values=tuple(merge_equalities(v) for v in node.values))
-    parts = _conjuncts(node)
-    if len(parts) < 2:
-        return node
-    parts = [merge_equalities(p) if isinstance(p, ir.BoolOp | ir.Not) else p for p in parts]
-    used: set[int] = set()
-    merged: list[ir.Expr] = []
-    les = [_as_le(p) for p in parts]
-    for i, le in enumerate(les):
-        if i in used:
-            continue
-        partner = None
-        if le is not None:
-            for k in range(i + 1, len(les)):
-                other = les[k]
-                if k not in used and other is not None and (other[0], other[1]) == (le[1], le[0]):
-                    partner = k
-                    break
-        if partner is None or le is None:
-            merged.append(parts[i])
-            continue
-        used.update((i, partner))
-        merged.append(ir.Cmp(("==",), (le[2], le[3]), parts[i].col))
-    if len(merged) == len(parts):
-        return node
-    return merged[0] if len(merged) == 1 else ir.BoolOp("and", tuple(merged), node.col)
-
-
-def _replace_node(node: ir.Expr, target: ir.Expr, by: ir.Expr) -> ir.Expr:
-    if node == target:
-        return by
-    if isinstance(node, ir.Not):
-        return replace(node, operand=_replace_node(node.operand, target, by))
-    if isinstance(node, ir.BoolOp):
-        return replace(node, values=tuple(_replace_node(v, target, by) for v in node.values))
-    return node
-
-
-def levels_of(guard: ir.Expr) -> tuple[Level, ...]:
-    """The equality levels of a (merged) guard: those not under a ``not``."""
-    found: list[ir.Expr] = []
-
-    def visit(node: ir.Expr) -> None:
-        if isinstance(node, ir.BoolOp):
-            for v in node.values:
-                visit(v)
-        elif (
-            isinstance(node, ir.Cmp)
-            and node.ops == ("==",)
-            and node not in found
-        ):
-            found.append(node)
-
-    visit(guard)
-    levels = []
-    for atom in found:
-        assert isinstance(atom, ir.Cmp)
-        a, b = atom.operands
-        relaxed = _replace_node(guard, atom, ir.BoolConst(True, atom.col))
-        levels.append(Level(ir.Bin("-", a, b, atom.col), relaxed))
-    return tuple(levels)

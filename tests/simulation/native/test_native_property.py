@@ -62,7 +62,7 @@ parameters = st.fixed_dictionaries(
 @given(values=parameters, x0=st.floats(-0.1, 0.4), y0=st.floats(-1.0, 0.4))
 def test_generated_models_agree(values: dict[str, float], x0: float, y0: float) -> None:
     model = MODEL.with_parameters(values)
-    common = {"t_end": 6.0, "max_jumps": 40, "rtol": 1e-10, "atol": 1e-12, "max_step": 0.05,
+    common = {"t_end": 6.0, "max_jumps": 40, "rtol": 1e-10, "atol": 1e-12,
               "initial": {"x": x0, "y": y0}, "handle_sigint": False}  # fmt: skip
     compiled = hybrid.simulate(model, backend="compiled", **common)  # type: ignore[arg-type]
     reference = hybrid.simulate(model, **common)  # type: ignore[arg-type]
