@@ -141,9 +141,11 @@ def simulate(
     if settings.backend == "compiled":
         from hybrid.simulation.native.engine import simulate_compiled
 
-        return simulate_compiled(
+        run = simulate_compiled(
             model, settings, initial=initial, inputs=inputs, handle_sigint=handle_sigint
         )
+        run.settings["start"] = start
+        return run
     compiled = _compiled(model, inputs)
     x0 = np.array(_initial_vector(model, compiled, initial), dtype=float)
     tracker = None
