@@ -32,6 +32,7 @@ from hybrid.expr.parse import (
 from hybrid.model import Automaton, Edge, Location, Properties, StateVar
 from hybrid.reader.characters import ascii_only
 from hybrid.reader.messages import closest
+from hybrid.reader.requirements import build_requirements
 from hybrid.reader.schema import AutomatonSpec, PropertiesSpec
 from hybrid.reader.yamlpos import PositionMap
 
@@ -123,6 +124,8 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
     properties = build_properties(spec.properties, positions, problems.items, list(spec.locations))
     if spec.checks is not None:
         properties = replace(properties, ignore=tuple(spec.checks.ignore))
+    locs = list(spec.locations)
+    requirements = build_requirements(spec.requirements, positions, scope, locs, problems.items)
 
     if problems.items:
         raise SpecError.many(problems.items)
@@ -148,6 +151,7 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
         signal_positions={k: positions.key(("signals", k)) for k in spec.signals},
         input_positions={k: positions.value(("inputs", i)) for i, k in enumerate(spec.inputs)},
         label_positions={k: positions.value(("labels", i)) for i, k in enumerate(spec.labels)},
+        requirements=requirements,
     )
 
 

@@ -28,6 +28,7 @@ __all__ = [
     "InitialSpec",
     "LocationSpec",
     "PropertiesSpec",
+    "RequirementSpec",
     "StateVarSpec",
     "SystemSpec",
 ]
@@ -121,6 +122,27 @@ class PropertiesSpec(_Strict):
     deterministic: bool | None = None
 
 
+class RequirementSpec(_Strict):
+    """A requirement every simulated trajectory is monitored for (docs/semantics.md)."""
+
+    name: Name
+    always: Expression | None = Field(
+        None, description="A condition that must hold at every point in scope."
+    )
+    eventually: Expression | None = Field(
+        None, description="A condition that must hold at some point in scope."
+    )
+    within: tuple[Number, Number] | None = Field(
+        None, description="[start, end]: only this window of time t (ends included)."
+    )
+    location: QualifiedName | None = Field(
+        None,
+        alias="in",
+        description="Only while in this location (comp.loc in a system file).",
+    )
+    description: str = ""
+
+
 RULE_IDS = (
     "unreachable-location",
     "sink-location",
@@ -174,6 +196,7 @@ class AutomatonSpec(_Strict):
     initial: InitialSpec | None = None
     edges: list[EdgeSpec] = Field(default_factory=list)
     properties: PropertiesSpec | None = None
+    requirements: list[RequirementSpec] = Field(default_factory=list)
     checks: ChecksSpec | None = None
     uses: list[Name] = Field(default_factory=list)
 
@@ -194,4 +217,5 @@ class SystemSpec(_Strict):
     description: str = ""
     components: list[ComponentSpec] = Field(min_length=1)
     properties: PropertiesSpec | None = None
+    requirements: list[RequirementSpec] = Field(default_factory=list)
     checks: ChecksSpec | None = None

@@ -12,8 +12,10 @@ from dataclasses import replace
 
 from hybrid.compose import Component, System, check_system
 from hybrid.errors import Position, SpecError
+from hybrid.expr.parse import Scope
 from hybrid.model import Automaton
 from hybrid.reader.build import build_properties
+from hybrid.reader.requirements import build_requirements
 from hybrid.reader.schema import SystemSpec
 from hybrid.reader.yamlpos import PositionMap
 
@@ -56,10 +58,33 @@ def build_system(
     properties = build_properties(spec.properties, positions, problems, qualified)
     if spec.checks is not None:
         properties = replace(properties, ignore=tuple(spec.checks.ignore))
+    requirements = build_requirements(
+        spec.requirements, positions, _system_scope(parts), qualified, problems
+    )
     if problems:
         raise SpecError.many(problems)
     system = System(
-        spec.system, tuple(parts), properties, spec.description, positions.file, positions.value(())
+        spec.system,
+        tuple(parts),
+        properties,
+        spec.description,
+        positions.file,
+        positions.value(()),
+        requirements=requirements,
     )
     check_system(system)
     return system
+
+
+def _system_scope(parts: Sequence[Component]) -> Scope:
+    """What a system file's requirements may read: every state variable and signal, by name."""
+    kinds: dict[str, str] = {}
+    functions = {}
+    vectors: dict[str, int] = {}
+    for c in parts:
+        a = c.automaton
+        kinds.update(dict.fromkeys(a.state_names, "state"))
+        kinds.update(dict.fromkeys(a.signal_names, "signal"))
+        functions.update(a.functions)
+        vectors.update(a.vector_sizes)
+    return Scope(variables=kinds, functions=functions, vectors=vectors)
