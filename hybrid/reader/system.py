@@ -12,6 +12,7 @@ from dataclasses import replace
 
 from hybrid.compose import Component, System, check_system
 from hybrid.errors import Position, SpecError
+from hybrid.expr.functions import Function
 from hybrid.expr.parse import Scope
 from hybrid.model import Automaton
 from hybrid.reader.build import build_properties
@@ -79,7 +80,7 @@ def build_system(
 def _system_scope(parts: Sequence[Component]) -> Scope:
     """What a system file's requirements may read: every state variable and signal, by name."""
     kinds: dict[str, str] = {}
-    functions = {}
+    functions: dict[str, Function] = {}
     vectors: dict[str, int] = {}
     for c in parts:
         a = c.automaton
