@@ -179,7 +179,9 @@ def mode_of(system: System, key: Mode, *, binder: Binder | None = None) -> ModeV
         a = c.automaton
         loc = a.locations[loc_name]
         for name in a.signal_names:
-            signals[name] = _bound(system, i, loc.signals.get(name, a.signals[name]), True, binder)
+            signals[name] = _bound(
+                system, i, loc.signals.get(name, a.signals[name]), True, binder
+            )
         for var, expr in loc.flow.items():
             flow[var] = _bound(system, i, expr, True, binder)
         if not (isinstance(loc.invariant, ir.BoolConst) and loc.invariant.value):

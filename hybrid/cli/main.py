@@ -39,7 +39,9 @@ def _param(text: str) -> tuple[str, float]:
             f"value of '{key}' must be a number, got '{value}'"
         ) from None
     if not math.isfinite(number):
-        raise argparse.ArgumentTypeError(f"value of '{key}' must be a finite number, got '{value}'")
+        raise argparse.ArgumentTypeError(
+            f"value of '{key}' must be a finite number, got '{value}'"
+        )
     return key.strip(), number
 
 
@@ -173,7 +175,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "check":
             from hybrid.cli.check import run_check
 
-            return run_check(args.files, fmt=args.format, strict=args.strict, ignore=args.ignore)
+            return run_check(
+                args.files, fmt=args.format, strict=args.strict, ignore=args.ignore
+            )
         if args.command == "graph":
             from hybrid.cli.check import run_graph
 
