@@ -26,11 +26,15 @@ from hybrid.version import __version__
 if TYPE_CHECKING:
     from hybrid.analysis.api import check
     from hybrid.analysis.findings import Report
+    from hybrid.campaigns.falsify import Falsification, falsify
+    from hybrid.campaigns.sweep import sweep
+    from hybrid.campaigns.table import SweepTable
     from hybrid.simulation.engine import simulate
     from hybrid.simulation.result import Jump, Run, Termination
 
 __all__ = [
     "Automaton",
+    "Falsification",
     "HybridError",
     "Jump",
     "Position",
@@ -38,15 +42,18 @@ __all__ = [
     "Run",
     "SimulationError",
     "SpecError",
+    "SweepTable",
     "System",
     "Termination",
     "UsageError",
     "__version__",
     "check",
     "compose",
+    "falsify",
     "load",
     "load_text",
     "simulate",
+    "sweep",
 ]
 
 # The simulator (scipy) and the analysis (networkx) load on first use, so that
@@ -58,6 +65,10 @@ _LAZY = {
     "simulate": "hybrid.simulation.engine",
     "Report": "hybrid.analysis.findings",
     "check": "hybrid.analysis.api",
+    "sweep": "hybrid.campaigns.sweep",
+    "falsify": "hybrid.campaigns.falsify",
+    "SweepTable": "hybrid.campaigns.table",
+    "Falsification": "hybrid.campaigns.falsify",
 }
 _lazy_getattr, _lazy_dir = lazy_attributes(__name__, _LAZY)
 
