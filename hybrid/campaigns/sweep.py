@@ -219,6 +219,7 @@ def run_campaign(
         fingerprint = _fingerprint(payload.digest, plan, columns, points)
         store = ChunkStore(out, fingerprint, resume=resume)
     rows: dict[int, dict[str, Any]] = dict(store.done) if store is not None else {}
+    resumed = len(rows)
     jobs = [(i, "run", p) for i, p in enumerate(points) if i not in rows]
     tracker = Tracker("sweep", total=len(points), unit="runs", report=progress)
     counts = {"violations": 0, "failed": 0}
@@ -247,7 +248,13 @@ def run_campaign(
         store.flush()
     tracker.finish(len(rows), **counts)
     table = SweepTable(
-        columns, list(rows.values()), names, requirements, complete=complete, total=len(points)
+        columns,
+        list(rows.values()),
+        names,
+        requirements,
+        complete=complete,
+        total=len(points),
+        resumed=resumed,
     )
     if complete and out is not None and store is not None:
         table.write(out)

@@ -61,7 +61,8 @@ class SweepTable:
     """Rows of a campaign (``rows``: one dict per run, by run number).
 
     ``complete`` is False when the campaign stopped early (Ctrl-C); the rows
-    are then those finished, and a resumed campaign adds the rest.
+    are then those finished, and a resumed campaign adds the rest. ``resumed``
+    counts the rows a resumed campaign found done.
     """
 
     def __init__(
@@ -73,6 +74,7 @@ class SweepTable:
         *,
         complete: bool = True,
         total: int | None = None,
+        resumed: int = 0,
     ) -> None:
         self.columns = list(columns)
         self.rows = sorted((dict(r) for r in rows), key=lambda r: int(r["run"]))
@@ -80,6 +82,8 @@ class SweepTable:
         self.requirements = list(requirements)
         self.complete = complete
         self.total = len(self.rows) if total is None else total
+        self.resumed = resumed
+        """Rows read back from an earlier, interrupted run of the campaign (not run again)."""
 
     def __len__(self) -> int:
         return len(self.rows)

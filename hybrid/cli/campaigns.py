@@ -155,6 +155,12 @@ def run_sweep(args: argparse.Namespace) -> int:
         )
     if line is not None:
         line.clear()
+    if table.resumed:
+        print(
+            f"{args.file}: resumed: {table.resumed} of {table.total} runs were done; "
+            f"ran {len(table) - table.resumed}",
+            file=sys.stderr,
+        )
     if not table.complete:
         print(
             f"{args.file}: interrupted: {len(table)} of {table.total} runs done, kept in "

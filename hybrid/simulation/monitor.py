@@ -219,8 +219,11 @@ class Monitor:
             tr.best_band = band(x)
 
     def _push(self, tr: _Track, sample: Sample) -> None:
-        t, value, x, _ = sample
-        self._observe(tr, t, value, x)
+        value = sample[1]
+        tr.seen = True
+        if value < tr.best:
+            tr.best = value
+            tr.best_band = band(sample[2])
         piece = tr.piece
         if len(piece) == 1 and tr.started:
             tr.started = False
@@ -230,12 +233,12 @@ class Monitor:
             left, mid = piece
             if mid[1] <= left[1] and mid[1] <= value and (mid[1] < left[1] or mid[1] < value):
                 self._refine(tr, left, mid, sample)
-        if tr.always and tr.violated_at is None and value < -band(x):
+        if tr.always and tr.violated_at is None and value < 0.0 and value < -band(sample[2]):
             if piece:
                 before = piece[-1]
                 tr.violated_at = self._crossing(tr, before, sample, sample[3])
             else:
-                tr.violated_at = t
+                tr.violated_at = sample[0]
         if len(piece) == 2:
             piece.pop(0)
         piece.append(sample)
@@ -330,7 +333,7 @@ def _minimise(phi: Any, left: Sample, mid: Sample | None, right: Sample) -> tupl
         if not (vb < va and vb < vc) or not ta < tb < tc:
             return (ta, va) if va <= vc else (tc, vc)
     fine = minimize_scalar(
-        phi, bracket=(ta, tb, tc), method="brent", options={"xtol": 1e-14, "maxiter": 200}
+        phi, bracket=(ta, tb, tc), method="brent", options={"xtol": 1e-12, "maxiter": 200}
     )
     t_fine, v_fine = float(fine.x), float(fine.fun)
     if ta <= t_fine <= tc and v_fine < vb:
