@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -70,6 +71,7 @@ def sweep(
     samples: int | None = None,
     seed: int = 0,
     sampler: str = "lhs",
+    points: Sequence[Mapping[str, float]] | None = None,
     parameters: Mapping[str, float] | None = None,
     inputs: Mapping[str, str] | None = None,
     summaries: Sequence[str] = (),
@@ -106,6 +108,9 @@ def sweep(
         The seed of the samples: the same seed, the same points.
     sampler : {"lhs", "sobol", "random"}
         Latin hypercube, scrambled Sobol or uniform samples.
+    points : sequence of mappings, optional
+        Explicit points instead of a grid or samples, each giving a value to the same
+        names (a design made elsewhere, a list of cases).
     parameters : mapping, optional
         Parameter overrides held in every run.
     inputs : mapping, optional
@@ -156,6 +161,14 @@ def sweep(
     Settings(t_end=t_end, **{k: v for k, v in solver.items() if v is not None})
     if parameters:
         model = model.with_parameters(dict(parameters))
+    if points is not None:
+        if grid or vary or samples is not None:
+            raise UsageError("give points, or a grid and/or samples, not both")
+        names, listed = _listed(points)
+        check_names(model, names)
+        return _finish(model, t_end, listed, names, solver, summaries, inputs, run_timeout,
+                       backend, executor_for(workers, scheduler, batch), out, resume, progress,
+                       handle_sigint)  # fmt: skip
     grid_axes = _axes(grid, grid=True)
     if samples is not None:
         vary_axes = _axes(vary, grid=False) or [
@@ -170,7 +183,29 @@ def sweep(
     check_names(model, names)
     if not names:
         raise UsageError("nothing to vary: give a grid (--grid NAME=LO:HI:N) or samples")
-    points = combine(grid_points(grid_axes), sampled)
+    made = combine(grid_points(grid_axes), sampled)
+    executor = executor_for(workers, scheduler, batch)
+    return _finish(model, t_end, made, names, solver, summaries, inputs, run_timeout, backend,
+                   executor, out, resume, progress, handle_sigint)  # fmt: skip
+
+
+def _finish(
+    model: Automaton | System,
+    t_end: float,
+    points: Sequence[Point],
+    names: Sequence[str],
+    solver: Mapping[str, Any],
+    summaries: Sequence[str],
+    inputs: Mapping[str, str] | None,
+    run_timeout: float | None,
+    backend: str,
+    executor: Executor,
+    out: str | Path | None,
+    resume: bool,
+    progress: Reporter | None,
+    handle_sigint: bool,
+) -> SweepTable:
+    """Check the run settings, then run the campaign of ``points``."""
     wanted = [Summary.parse(s) for s in summaries]
     for s in wanted:
         s.check(model)
@@ -185,7 +220,6 @@ def sweep(
         timeout=run_timeout,
         backend=backend,
     )
-    executor = executor_for(workers, scheduler, batch)
     return run_campaign(model, points, names, plan, executor, out, resume, progress, handle_sigint)
 
 
@@ -299,6 +333,22 @@ def _axes(given: Any, *, grid: bool) -> list[Axis]:
                 axes.append(Axis.of(str(name), float(low), float(high)))
         return axes
     return list(given)
+
+
+def _listed(points: Sequence[Mapping[str, float]]) -> tuple[list[str], list[Point]]:
+    """The names and points of an explicit list (every point gives the same names)."""
+    if isinstance(points, Mapping) or not points:
+        raise UsageError("points must be a non-empty list of {name: value} mappings")
+    names = [str(n) for n in points[0]]
+    listed: list[Point] = []
+    for k, point in enumerate(points):
+        if not isinstance(point, Mapping) or sorted(map(str, point)) != sorted(names):
+            raise UsageError(f"point {k} must give a value to each of {', '.join(names)}")
+        values = {n: float(point[n]) for n in names}
+        if not all(map(math.isfinite, values.values())):
+            raise UsageError(f"point {k}: values must be finite numbers, got {values}")
+        listed.append(values)
+    return names, listed
 
 
 def _check_inputs(
