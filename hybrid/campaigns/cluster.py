@@ -57,7 +57,7 @@ def _client(scheduler: Any) -> tuple[Any, bool]:
         )
     try:
         return Client(scheduler, timeout="20s"), True  # type: ignore[no-untyped-call]
-    except (OSError, TimeoutError) as exc:
+    except Exception as exc:  # distributed raises OSError, TimeoutError, ValueError...
         raise UsageError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
 
 

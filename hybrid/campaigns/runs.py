@@ -39,6 +39,7 @@ Examples
 from __future__ import annotations
 
 import math
+import threading
 import time
 from collections import OrderedDict
 from collections.abc import Mapping, Sequence
@@ -169,6 +170,7 @@ _VARIANTS: OrderedDict[tuple[int, tuple[tuple[str, float], ...]], tuple[Any, Sys
     OrderedDict()
 )
 _VARIANT_CACHE = 16
+_VARIANTS_LOCK = threading.Lock()
 
 
 def model_variant(model: Automaton | System, parameters: Mapping[str, float]) -> System:
@@ -178,14 +180,16 @@ def model_variant(model: Automaton | System, parameters: Mapping[str, float]) ->
     differ only in initial values or inputs reuse one compiled model.
     """
     key = (id(model), tuple(sorted(parameters.items())))
-    hit = _VARIANTS.get(key)
-    if hit is not None and hit[0] is model:
-        _VARIANTS.move_to_end(key)
-        return hit[1]
+    with _VARIANTS_LOCK:
+        hit = _VARIANTS.get(key)
+        if hit is not None and hit[0] is model:
+            _VARIANTS.move_to_end(key)
+            return hit[1]
     system = as_system(model.with_parameters(dict(parameters)) if parameters else model)
-    _VARIANTS[key] = (model, system)
-    if len(_VARIANTS) > _VARIANT_CACHE:
-        _VARIANTS.popitem(last=False)
+    with _VARIANTS_LOCK:
+        _VARIANTS[key] = (model, system)
+        if len(_VARIANTS) > _VARIANT_CACHE:
+            _VARIANTS.popitem(last=False)
     return system
 
 

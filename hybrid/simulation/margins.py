@@ -28,6 +28,7 @@ Examples
 
 from __future__ import annotations
 
+import threading
 import weakref
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -160,6 +161,7 @@ def _signals_read(expr: ir.Expr, signals: Any) -> list[str]:
     return sorted(seen)
 
 
+_LOCK = threading.Lock()
 _TABLES: weakref.WeakKeyDictionary[CompiledModel, MarginTable | None] = weakref.WeakKeyDictionary()
 
 
@@ -169,9 +171,10 @@ def margin_table(compiled: CompiledModel) -> MarginTable | None:
     The simulator reuses a compiled model across runs of the same model in a
     thread; its requirements' margins are compiled once with it.
     """
-    if compiled in _TABLES:
-        return _TABLES[compiled]
-    watched = watched_requirements(compiled.system)
-    table = MarginTable(compiled, watched) if watched else None
-    _TABLES[compiled] = table
-    return table
+    with _LOCK:
+        if compiled in _TABLES:
+            return _TABLES[compiled]
+        watched = watched_requirements(compiled.system)
+        table = MarginTable(compiled, watched) if watched else None
+        _TABLES[compiled] = table
+        return table
