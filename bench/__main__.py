@@ -52,6 +52,11 @@ def main(argv: list[str] | None = None) -> int:
     components = scaling_components.run(3 if quick else 7)
     print("many components", json.dumps(components))
     report["components"] = components
+    from bench import sweep_throughput
+
+    campaigns = sweep_throughput.run(2 if quick else 3)
+    print("campaigns", json.dumps(campaigns))
+    report["campaigns"] = campaigns
     scaling = spec_scaling.run()
     for row in scaling["rows"]:
         print(scaling["name"], row)

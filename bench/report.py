@@ -77,11 +77,37 @@ def render(report: dict[str, Any]) -> str:
             "",
         ]
     lines += _components(report.get("components"))
+    lines += _campaigns(report.get("campaigns"))
     lines += ["Peers:", ""]
     for name, info in report["peers"].items():
         state = "available" if info["available"] else "not available"
         lines.append(f"- **{name}**: {state}. {info['reason']}")
     return "\n".join(lines)
+
+
+def _campaigns(c: dict[str, Any] | None) -> list[str]:
+    """Sweep throughput (bench/sweep_throughput.py), when the run has it."""
+    if not c:
+        return []
+    return [
+        f"Campaigns ({c['runs']} runs of the bouncing ball, {c['run_ms']:.1f} ms each in the "
+        f"serial loop; load average {c['load_before'][0]:.2f} before, "
+        f"{c['load_after'][0]:.2f} after, {c['cpus']} CPUs):",
+        "",
+        "| executor | runs/s | against the loop |",
+        "|---|---|---|",
+        f"| hand-written loop of `hybrid.simulate` | {c['serial_runs_per_s']:.1f} | 1 |",
+        f"| sweep, 1 worker | {c['workers_1_runs_per_s']:.1f} | overhead per run "
+        f"{c['overhead_per_run_1_worker']:+.1%} |",
+        f"| sweep, 2 workers | {c['workers_2_runs_per_s']:.1f} | speed-up "
+        f"{c['speedup_2_workers']:.2f} |",
+        f"| Dask LocalCluster, 2 workers | {c['dask_2_runs_per_s']:.1f} | overhead per run "
+        f"(1 worker) {c['dask_overhead_per_run_ms']:.2f} ms |",
+        "",
+        f"Monitoring one requirement on an oscillating run: {c['requirement_monitor_ratio']:.2f} "
+        "times the run without it.",
+        "",
+    ]
 
 
 def _components(c: dict[str, Any] | None) -> list[str]:

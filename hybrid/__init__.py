@@ -26,6 +26,9 @@ from hybrid.version import __version__
 if TYPE_CHECKING:
     from hybrid.analysis.api import check
     from hybrid.analysis.findings import Report
+    from hybrid.campaigns.falsify import Falsification, falsify
+    from hybrid.campaigns.sweep import sweep
+    from hybrid.campaigns.table import SweepTable
     from hybrid.simulation.engine import simulate
     from hybrid.simulation.native.many import Ensemble, simulate_many
     from hybrid.simulation.result import Jump, Run, Termination
@@ -33,6 +36,7 @@ if TYPE_CHECKING:
 __all__ = [
     "Automaton",
     "Ensemble",
+    "Falsification",
     "HybridError",
     "Jump",
     "Position",
@@ -41,16 +45,19 @@ __all__ = [
     "Run",
     "SimulationError",
     "SpecError",
+    "SweepTable",
     "System",
     "Termination",
     "UsageError",
     "__version__",
     "check",
     "compose",
+    "falsify",
     "load",
     "load_text",
     "simulate",
     "simulate_many",
+    "sweep",
 ]
 
 # The simulator (scipy) and the analysis (networkx) load on first use, so that
@@ -64,6 +71,10 @@ _LAZY = {
     "Ensemble": "hybrid.simulation.native.many",
     "Report": "hybrid.analysis.findings",
     "check": "hybrid.analysis.api",
+    "sweep": "hybrid.campaigns.sweep",
+    "falsify": "hybrid.campaigns.falsify",
+    "SweepTable": "hybrid.campaigns.table",
+    "Falsification": "hybrid.campaigns.falsify",
 }
 _lazy_getattr, _lazy_dir = lazy_attributes(__name__, _LAZY)
 

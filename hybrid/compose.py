@@ -26,7 +26,7 @@ from hybrid.errors import Position, SpecError, did_you_mean
 from hybrid.expr import ir
 from hybrid.expr.dependencies import find_dependency_cycle
 from hybrid.expr.functions import Function
-from hybrid.model import Automaton, Properties, Range, StateVar
+from hybrid.model import Automaton, Properties, Range, Requirement, StateVar
 
 __all__ = [
     "Component",
@@ -61,6 +61,8 @@ class System:
     file: str = "<spec>"
     position: Position = field(default_factory=lambda: Position("<spec>"))
     single: bool = False
+    requirements: tuple[Requirement, ...] = ()
+    """The system file's own requirements (locations qualified); components keep theirs."""
 
     # --- facts of the composition, computed once -----------------------------------------
 

@@ -17,7 +17,16 @@ from hybrid.errors import Position, SpecError, did_you_mean
 from hybrid.expr import ir
 from hybrid.expr.functions import Function
 
-__all__ = ["Automaton", "Edge", "Forbidden", "Location", "Properties", "Range", "StateVar"]
+__all__ = [
+    "Automaton",
+    "Edge",
+    "Forbidden",
+    "Location",
+    "Properties",
+    "Range",
+    "Requirement",
+    "StateVar",
+]
 
 
 def _frozen(mapping: Mapping[str, object] | None = None) -> Mapping[str, object]:
@@ -157,6 +166,27 @@ class Properties:
 
 
 @dataclass(frozen=True)
+class Requirement:
+    """A requirement on every simulated trajectory (monitored; it never changes the run).
+
+    ``kind`` is ``always`` (the predicate holds at every point in scope) or
+    ``eventually`` (at some point in scope). The scope is the run, cut to the
+    time window ``within`` (absolute times, ends included) and, with
+    ``location``, to the time spent there (qualified ``comp.loc`` in a system
+    file's own requirements). Semantics: docs/semantics.md, "Requirements".
+    """
+
+    name: str
+    kind: str
+    predicate: ir.Expr
+    source: str
+    within: tuple[float, float] | None = None
+    location: str | None = None
+    position: Position = field(default_factory=lambda: Position("<spec>"))
+    predicate_position: Position = field(default_factory=lambda: Position("<spec>"))
+
+
+@dataclass(frozen=True)
 class Automaton:
     """A hybrid automaton, frozen.
 
@@ -206,6 +236,8 @@ class Automaton:
     """Initial sets that override the variables' own (``initial.state: {x: [lo, hi]}``)."""
     ranges: Mapping[str, Range] = field(default_factory=dict)
     """The declared range of each bounded input (``inputs: {u: {range: [lo, hi]}}``)."""
+    requirements: tuple[Requirement, ...] = ()
+    """Requirements on its trajectories (``requirements:``), in file order."""
 
     def __post_init__(self) -> None:
         if not self.initial_locations or self.initial_locations[0] != self.initial_location:

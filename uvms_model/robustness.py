@@ -8,8 +8,11 @@ Two studies, both from the specs:
 * :func:`robustness_map`: a grid over two parameters, the outcome of each point
   classified by :func:`classify`; :func:`write_map_figure` draws it.
 
-The grid is run by :func:`_run_points`, a plain loop: the one place to hand over to a
-campaign runner (``hybrid sweep``) once the toolkit has one.
+Both are campaigns of :func:`hybrid.sweep` (:func:`_sweep_outcomes`): the points are
+run in worker processes, each row read back as an :class:`Outcome` (the switches are
+jumps of the automaton's three switching edges, ``min |gamma|`` and the top speed are
+summaries on the 0.1 s grid, and ``dexterity`` is the robustness of mission 2's
+requirement ``always: gamma >= 0.5``, the exact minimum of ``|gamma|`` less 0.5).
 
 Run ``python -m uvms_model.robustness [OUT_DIR]`` to write the map of mission 2
 (``uvms_robustness_map.png``) and print the one-at-a-time table.
@@ -23,15 +26,22 @@ Examples
 
 from __future__ import annotations
 
+import math
 import sys
 from collections.abc import Iterable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
-from functools import partial
 from pathlib import Path
+from typing import Any
 
 import hybrid
-from uvms_model.missions import INITIAL_POSTURE, OWN_PARAMETERS, run_mission, specs_dir
+from uvms_model.missions import (
+    INITIAL_POSTURE,
+    OWN_PARAMETERS,
+    UVMS_EDGES,
+    derived_start,
+    run_mission,
+    specs_dir,
+)
 
 __all__ = [
     "OUTCOME_DT",
@@ -67,6 +77,8 @@ class Outcome:
     switches: int
     min_abs_gamma: float
     max_vehicle_speed: float
+    dexterity: float = math.nan
+    """Robustness of mission 2's requirement ``always: gamma >= 0.5`` (NaN without it)."""
 
 
 def classify(outcome: Outcome) -> str:
@@ -202,17 +214,25 @@ def one_at_a_time(
     """
     base = dict(base or {})
     model = hybrid.load(specs_dir() / f"{mission}.yaml", parameters=base)
-    points: list[tuple[str, dict[str, float], dict[str, float]]] = []
+    nominal = {name: _nominal(model, name) for name in parameters}
+    nominal.update({f"init.{q}": _initial(model, q) for q in posture})
+    labels: list[str] = []
+    points: list[dict[str, float]] = []
     for name in parameters:
-        value = _nominal(model, name)
         for f in (1.0 - factor, 1.0 + factor):
-            points.append((f"{name} x{f:g}", {**base, name: value * f}, {}))
+            labels.append(f"{name} x{f:g}")
+            points.append({**nominal, name: nominal[name] * f})
     for state in posture:
-        value = _initial(model, state)
         for step in (-POSTURE_STEP, POSTURE_STEP):
-            points.append((f"{state} {step:+g} rad", dict(base), {state: value + step}))
-    outcomes = _run_points([(mission, p, i) for _, p, i in points], rtol, atol, workers)
-    return [Variant(label, o) for (label, _, _), o in zip(points, outcomes, strict=True)]
+            labels.append(f"{state} {step:+g} rad")
+            points.append({**nominal, f"init.{state}": nominal[f"init.{state}"] + step})
+    # the path starts at the end effector of the initial posture: its three parameters
+    # follow a posture step (as run_mission does)
+    for point in points:
+        initial = {k[len("init.") :]: v for k, v in point.items() if k.startswith("init.")}
+        point.update(derived_start(model, initial))
+    outcomes = _sweep_outcomes(model, mission, points, rtol, atol, workers)
+    return [Variant(label, o) for label, o in zip(labels, outcomes, strict=True)]
 
 
 @dataclass(frozen=True)
@@ -263,31 +283,47 @@ def robustness_map(
     xs, ys = tuple(float(v) for v in x_values), tuple(float(v) for v in y_values)
     model = hybrid.load(specs_dir() / f"{mission}.yaml")
     nominal = (_nominal(model, x_name), _nominal(model, y_name))
-    points: list[Point] = [(mission, {x_name: x, y_name: y}, {}) for y in ys for x in xs]
-    flat = _run_points(points, rtol, atol, workers)
+    points = [{y_name: y, x_name: x} for y in ys for x in xs]  # y slowest: rows of the map
+    flat = _sweep_outcomes(model, mission, points, rtol, atol, workers)
     rows = tuple(tuple(flat[i * len(xs) : (i + 1) * len(xs)]) for i in range(len(ys)))
     return RobustnessMap(mission, x_name, xs, y_name, ys, rows, nominal)
 
 
-Point = tuple[str, dict[str, float], dict[str, float]]
-"""``(mission, parameter overrides, initial-state overrides)``."""
+def _sweep_outcomes(
+    model: hybrid.Automaton | hybrid.System,
+    mission: str,
+    points: Sequence[Mapping[str, float]],
+    rtol: float,
+    atol: float,
+    workers: int,
+) -> list[Outcome]:
+    """Run ``points`` of ``mission`` as one :func:`hybrid.sweep`; an outcome per point, in order."""
+    switching = [f"uvms.{edge}" for edge in UVMS_EDGES]
+    table = hybrid.sweep(
+        model,
+        t_end=60.0,
+        points=points,
+        summaries=[*(f"jumps:{e}" for e in switching), "min:gamma", "max:vehicle_speed"],
+        rtol=rtol,
+        atol=atol,
+        dt=OUTCOME_DT,
+        workers=workers if workers > 1 else 0,
+    )
+    return [_outcome(mission, row, switching) for row in table.rows]
 
 
-def _run_point(point: Point, rtol: float, atol: float) -> Outcome:
-    mission, params, initial = point
-    return outcome_of(mission, params, initial, rtol=rtol, atol=atol)
-
-
-def _run_points(points: Sequence[Point], rtol: float, atol: float, workers: int) -> list[Outcome]:
-    """Run every point, in order: the campaign loop.
-
-    A plain loop (or a process pool); the one piece to replace by ``hybrid sweep``.
-    """
-    run = partial(_run_point, rtol=rtol, atol=atol)
-    if workers <= 1:
-        return [run(p) for p in points]
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        return list(pool.map(run, points))
+def _outcome(mission: str, row: Mapping[str, Any], switching: Sequence[str]) -> Outcome:
+    if row["cause"] in ("error", "timeout"):
+        raise RuntimeError(f"{mission} at {row}: {row['message']}")
+    robustness = row.get("dexterity.robustness")
+    return Outcome(
+        mission,
+        str(row["cause"]),
+        int(sum(row[f"jumps:{e}"] for e in switching)),
+        float(row["min:gamma"]),
+        float(row["max:vehicle_speed"]),
+        math.nan if robustness is None else float(robustness),
+    )
 
 
 def write_map_figure(result: RobustnessMap, path: Path) -> Path:

@@ -317,6 +317,7 @@ def _expressions(a: Automaton) -> list[ir.Expr]:
         exprs += [*loc.flow.values(), *loc.signals.values(), loc.invariant]
     for edge in a.edges:
         exprs += [edge.guard, *edge.reset.values()]
+    exprs += [r.predicate for r in a.requirements]
     return exprs
 
 

@@ -14,7 +14,13 @@ rule                              severity  reason
 ``zero-time-cycle``               warning   a Zeno candidate; may be intended
 ``unused-declaration``            warning   usually a typo or leftover
 ``analysis-incomplete``           note      the product was too large to explore whole
+``requirement-violated``          error     a run of ``hybrid sweep`` violates a requirement
+``sweep-run-failed``              error     a run of ``hybrid sweep`` raised or timed out
+``requirement-held``              note      a requirement holds in every run of a sweep
 ================================  ========  ============================================
+
+The last three are reported by ``hybrid sweep --format ...`` (:data:`CAMPAIGN_RULES`),
+never by ``hybrid check``.
 
 ``hybrid check`` exits 1 on any error finding, and with ``--strict`` on any
 warning too; notes never fail a run.
@@ -37,7 +43,7 @@ from typing import Any
 
 from hybrid.errors import Position
 
-__all__ = ["RULES", "SEVERITIES", "Finding", "Report", "Rule", "WitnessStep"]
+__all__ = ["CAMPAIGN_RULES", "RULES", "SEVERITIES", "Finding", "Report", "Rule", "WitnessStep"]
 
 SEVERITIES = ("error", "warning", "note")
 
@@ -112,6 +118,27 @@ RULES: dict[str, Rule] = {
             "whole reachable product are not reported.",
         ),
         Rule(
+            "requirement-violated",
+            "error",
+            "Requirement violated in a sweep",
+            "A run of the sweep violates a requirement under `requirements:`; the message "
+            "names the varied values of a violating run (the one of lowest robustness).",
+        ),
+        Rule(
+            "sweep-run-failed",
+            "error",
+            "Run of a sweep failed",
+            "A run of the sweep raised an error or exceeded the run timeout; the message "
+            "names its varied values and the error.",
+        ),
+        Rule(
+            "requirement-held",
+            "note",
+            "Requirement held in a sweep",
+            "Every run of the sweep satisfies the requirement; the message gives the lowest "
+            "robustness and where it was found.",
+        ),
+        Rule(
             "invalid-spec",
             "error",
             "Spec cannot be loaded",
@@ -119,6 +146,9 @@ RULES: dict[str, Rule] = {
         ),
     )
 }
+
+CAMPAIGN_RULES = ("requirement-violated", "sweep-run-failed", "requirement-held")
+"""Rules of ``hybrid sweep`` findings (no ``hybrid check`` report has them)."""
 
 WitnessStep = tuple[str | None, str]  # (transition taken, mode reached); first: (None, initial)
 

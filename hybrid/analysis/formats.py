@@ -30,7 +30,7 @@ from pathlib import PurePath
 from typing import Any
 from urllib.parse import quote
 
-from hybrid.analysis.findings import RULES, Finding, Report
+from hybrid.analysis.findings import CAMPAIGN_RULES, RULES, Finding, Report
 from hybrid.version import __version__
 
 __all__ = ["FORMATS", "SARIF_SCHEMA", "relative", "write"]
@@ -145,8 +145,11 @@ def junit(reports: Sequence[Report], strict: bool = False) -> str:
                 ET.SubElement(case, "system-out").text = f.text()
         if not any(f.rule == "invalid-spec" for f in report.findings):
             hit = {f.rule for f in report.findings}
+            campaign = any(f.rule in CAMPAIGN_RULES for f in report.findings)
             for rule in RULES:
                 if rule not in hit and rule not in ("invalid-spec", "analysis-incomplete"):
+                    if campaign or rule in CAMPAIGN_RULES:  # a sweep's or a check's rules only
+                        continue
                     ET.SubElement(suite, "testcase", classname=report.file, name=rule)
                     tests += 1
         suite.set("tests", str(tests))

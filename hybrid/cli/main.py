@@ -1,4 +1,4 @@
-"""The ``hybrid`` command line: validate, check, simulate, graph, schema.
+"""The ``hybrid`` command line: validate, check, simulate, graph, schema, sweep, falsify.
 
 Exit codes: 0 success; 1 findings (check) or a run that ended before t-end
 (simulate); 2 an invalid spec or invalid usage. Errors go to stderr as
@@ -168,6 +168,10 @@ def build_parser() -> argparse.ArgumentParser:
     from hybrid.cli.interchange import add_interchange_commands
 
     add_interchange_commands(sub)
+    from hybrid.cli.campaigns import add_campaign_commands
+
+    types = {"positive": _positive, "count": _count, "param": _param, "assignment": _assignment}
+    add_campaign_commands(sub, types)
     return parser
 
 
@@ -199,6 +203,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             from hybrid.cli.simulate import run_simulate
 
             return run_simulate(args)
+        if args.command in ("sweep", "falsify"):
+            from hybrid.cli.campaigns import run_falsify, run_sweep
+
+            return run_sweep(args) if args.command == "sweep" else run_falsify(args)
         if args.command in ("import", "export"):
             from hybrid.cli.interchange import run_export, run_import
 

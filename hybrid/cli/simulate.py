@@ -22,9 +22,9 @@ from hybrid.model import Automaton
 from hybrid.progress import TerminalLine, terminal_reporter
 from hybrid.simulation.engine import simulate
 from hybrid.simulation.interrupts import ABANDON_HINT, Interrupts
-from hybrid.simulation.result import Run
+from hybrid.simulation.result import RequirementResult, Run
 
-__all__ = ["run_simulate"]
+__all__ = ["run_simulate", "violation_text"]
 
 OUTPUT_FLAGS = ("out", "events", "plot")
 
@@ -89,12 +89,27 @@ def run_simulate(args: argparse.Namespace) -> int:
         f"{args.file}: {term.cause} at t={term.t:.9g} j={term.j}"
         f" ({len(run.jumps)} jumps, {len(run)} points)"
     )
-    if term.cause == "t_end":
+    violated = [r for r in run.requirements.values() if not r.holds]
+    if term.cause == "t_end" and not violated:
         print(summary)
         return EXIT_OK
     print(summary, file=sys.stderr)
-    print(f"{args.file}: t={term.t:.9g} j={term.j}: {term.cause}: {term.message}", file=sys.stderr)
+    if term.cause != "t_end":
+        print(
+            f"{args.file}: t={term.t:.9g} j={term.j}: {term.cause}: {term.message}",
+            file=sys.stderr,
+        )
+    for r in violated:
+        print(f"{args.file}: {violation_text(r)}", file=sys.stderr)
     return EXIT_FINDINGS
+
+
+def violation_text(result: RequirementResult) -> str:
+    """One line on a requirement a run violates: where, by how much, or why it is unknown."""
+    if result.message:
+        return f"requirement '{result.name}' {result.message}"
+    at = "" if result.violated_at is None else f" at t={result.violated_at:.9g}"
+    return f"requirement '{result.name}' violated{at} (robustness {result.robustness:.6g})"
 
 
 def _notifier(line: TerminalLine | None) -> Callable[[str], None]:

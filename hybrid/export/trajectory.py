@@ -78,11 +78,12 @@ def write_npz(run: Run, path: str | Path, progress: Reporter | None = None) -> N
 
 
 def events_document(run: Run) -> dict[str, Any]:
-    """The events JSON document: termination and every jump."""
+    """The events JSON document: termination, every jump, and each requirement's result."""
     return {
         "model": run.model,
         "termination": run.termination.as_dict(),
         "jumps": [jump.as_dict() for jump in run.jumps],
+        "requirements": {name: r.as_dict() for name, r in run.requirements.items()},
         "settings": run.settings,
     }
 

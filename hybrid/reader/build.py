@@ -31,6 +31,7 @@ from hybrid.model import Automaton, Edge, Location
 from hybrid.reader.characters import ascii_only
 from hybrid.reader.messages import closest
 from hybrid.reader.problems import Problems
+from hybrid.reader.requirements import build_requirements
 from hybrid.reader.schema import AutomatonSpec
 from hybrid.reader.sets import (
     build_initial,
@@ -113,6 +114,8 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
     if spec.checks is not None:
         properties = replace(properties, ignore=tuple(spec.checks.ignore))
     ranges = input_ranges(spec, problems)
+    locs = list(spec.locations)
+    requirements = build_requirements(spec.requirements, positions, scope, locs, problems.items)
 
     if problems.items:
         raise SpecError.many(problems.items)
@@ -144,6 +147,7 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
             for k, path, at_key in input_entries(spec)
         },
         label_positions={k: positions.value(("labels", i)) for i, k in enumerate(spec.labels)},
+        requirements=requirements,
     )
 
 

@@ -33,6 +33,7 @@ __all__ = [
     "InputSpec",
     "LocationSpec",
     "PropertiesSpec",
+    "RequirementSpec",
     "StateVarSpec",
     "SystemSpec",
 ]
@@ -244,6 +245,27 @@ class PropertiesSpec(_Strict):
     forbidden: list[ForbiddenSpec] = Field(default_factory=list)
 
 
+class RequirementSpec(_Strict):
+    """A requirement every simulated trajectory is monitored for (docs/semantics.md)."""
+
+    name: Name
+    always: Expression | None = Field(
+        None, description="A condition that must hold at every point in scope."
+    )
+    eventually: Expression | None = Field(
+        None, description="A condition that must hold at some point in scope."
+    )
+    within: tuple[Number, Number] | None = Field(
+        None, description="[start, end]: only this window of time t (ends included)."
+    )
+    location: QualifiedName | None = Field(
+        None,
+        alias="in",
+        description="Only while in this location (comp.loc in a system file).",
+    )
+    description: str = ""
+
+
 RULE_IDS = (
     "unreachable-location",
     "sink-location",
@@ -297,6 +319,7 @@ class AutomatonSpec(_Strict):
     initial: InitialSpec | None = None
     edges: list[EdgeSpec] = Field(default_factory=list)
     properties: PropertiesSpec | None = None
+    requirements: list[RequirementSpec] = Field(default_factory=list)
     checks: ChecksSpec | None = None
     uses: list[Name] = Field(default_factory=list)
 
@@ -321,4 +344,5 @@ class SystemSpec(_Strict):
     description: str = ""
     components: list[ComponentSpec] = Field(min_length=1)
     properties: PropertiesSpec | None = None
+    requirements: list[RequirementSpec] = Field(default_factory=list)
     checks: ChecksSpec | None = None

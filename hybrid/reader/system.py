@@ -19,6 +19,7 @@ from hybrid.errors import SpecError
 from hybrid.expr.parse import Scope
 from hybrid.model import Automaton, Range
 from hybrid.reader.problems import Problems
+from hybrid.reader.requirements import build_requirements
 from hybrid.reader.schema import ComponentSpec, SystemSpec
 from hybrid.reader.sets import build_properties, initial_locations, start_value
 from hybrid.reader.yamlpos import PositionMap
@@ -78,10 +79,19 @@ def build_system(
     )
     if spec.checks is not None:
         properties = replace(properties, ignore=tuple(spec.checks.ignore))
+    requirements = build_requirements(
+        spec.requirements, positions, _scope(system), qualified, problems.items
+    )
     if problems.items:
         raise SpecError.many(problems.items)
     system = System(
-        spec.system, tuple(parts), properties, spec.description, positions.file, positions.value(())
+        spec.system,
+        tuple(parts),
+        properties,
+        spec.description,
+        positions.file,
+        positions.value(()),
+        requirements=requirements,
     )
     check_system(system)
     return system

@@ -25,6 +25,9 @@ from hybrid.simulation.apart import independent_groups, simulate_apart
 from hybrid.simulation.compiled import CompiledModel
 from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.loop import EventLoop
+from hybrid.simulation.margins import margin_table
+from hybrid.simulation.monitor import Monitor
+from hybrid.simulation.monitor_apart import cut_results, join_groups, with_group_requirements
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import MAX_JUMPS_PER_INSTANT, Settings, finite_number
 from hybrid.simulation.start import describe_start, held_inputs
@@ -154,27 +157,45 @@ def simulate(
     # a solution that blows up overflows inside the solver's linear algebra; the run
     # sees the non-finite state and ends with a message, so numpy's warnings are noise
     with sigint_watch(handle_sigint) as interrupts, np.errstate(all="ignore"):
-        if isinstance(model, System) and len(groups := independent_groups(model)) > 1:
+        if isinstance(model, System) and len(groups := _groups(model)) > 1:
             # components that share no label and read no signal of each other: simulated
             # apart and merged in hybrid time, never as a product
+            parts: list[tuple[Run, CompiledModel]] = []
+            whole = model
 
             def run_group(
                 sub: System, start: np.ndarray, how: Settings
             ) -> tuple[Run, CompiledModel]:
                 mine = {k: v for k, v in (inputs or {}).items() if k in sub.free_inputs}
-                part = _compiled(sub, mine)
+                part = _compiled(with_group_requirements(whole, sub), mine)
                 loop = EventLoop(part, how, interrupts, None)
-                return loop.recorder.run(sub.name, loop.run(how.t_start, start)), part
+                loop.recorder.monitor = _monitor(part, how)
+                parts.append((loop.recorder.run(sub.name, loop.run(how.t_start, start)), part))
+                return parts[-1]
 
             run = simulate_apart(model, groups, x0, settings, run_group)
+            run.requirements = cut_results(parts, run, settings)
         else:
             loop = EventLoop(compiled, settings, interrupts, _updater(tracker))
+            loop.recorder.monitor = _monitor(compiled, settings)
             run = loop.recorder.run(model.name, loop.run(settings.t_start, x0))
     run.settings["start"] = start
     termination = run.termination
     if tracker is not None:
         tracker.finish(termination.t, jumps=len(run.jumps), points=len(run))
     return run
+
+
+def _groups(model: System) -> list[tuple[int, ...]]:
+    """The groups simulated apart: independent components, joined where a requirement spans them."""
+    groups = independent_groups(model)
+    return join_groups(model, groups) if len(groups) > 1 and model.requirements else groups
+
+
+def _monitor(compiled: CompiledModel, settings: Settings) -> Monitor | None:
+    """A requirement monitor for one run of ``compiled`` (None if it has no requirement)."""
+    table = margin_table(compiled)
+    return None if table is None else Monitor(table, settings)
 
 
 def _updater(tracker: Tracker | None) -> Callable[[float, int, int], None] | None:

@@ -80,7 +80,7 @@ class EventLoop:
         j = 0
         if not _finite(x):
             return Termination("nonfinite", t, j, "initial state is not finite", location=mode.name)
-        self.recorder.points(mode, j, np.array([t]), x.reshape(1, -1))
+        self.recorder.start(mode, t, x)
         zeno = ZenoDetector()
         same_instant, last_jump_t, stalls = 0, math.nan, 0
         max_per_instant = settings.max_jumps_per_instant

@@ -17,6 +17,7 @@ from scipy.integrate import OdeSolution
 from hybrid.simulation.compiled import CompiledMode, CompiledModel, CompiledTransition
 from hybrid.simulation.dense import StepCurve
 from hybrid.simulation.layout import run_layout
+from hybrid.simulation.monitor import Monitor
 from hybrid.simulation.result import Jump, Run, Termination
 from hybrid.simulation.settings import Settings
 
@@ -56,6 +57,9 @@ class StayRecord:
         if self.dense:
             self.step_ends.append(curve.t1)
             self.interpolants.append(curve.dense_output())
+        monitor = self.recorder.monitor
+        if monitor is not None:
+            monitor.segment(self.mode, curve, stop)
 
     def _grid(self, after: float, until: float, inclusive: bool) -> np.ndarray:
         dt = self.dt
@@ -96,6 +100,14 @@ class Recorder:
         self.segments: list[tuple[int, float, float, Any]] = []
         self.count = 0
         """Points stored so far."""
+        self.monitor: Monitor | None = None
+        """The requirement monitor, if the model has requirements: it sees every point and step."""
+
+    def start(self, mode: CompiledMode, t: float, x: np.ndarray) -> None:
+        """Store the initial point of the run (hybrid time 0)."""
+        self.points(mode, 0, np.array([t]), x.reshape(1, -1))
+        if self.monitor is not None:
+            self.monitor.point(mode, t, x)
 
     def points(self, mode: CompiledMode, j: int, ts: np.ndarray, xs: np.ndarray) -> None:
         """Store points ``ts`` (n,) with states ``xs`` (n, d) in ``mode`` at hybrid time ``j``."""
@@ -138,6 +150,8 @@ class Recorder:
             )
         )
         self.points(target, j + 1, np.array([t]), after.reshape(1, -1))
+        if self.monitor is not None:
+            self.monitor.point(target, t, after)
 
     def run(self, name: str, termination: Termination) -> Run:
         """The :class:`Run` of everything recorded."""
@@ -164,4 +178,5 @@ class Recorder:
             settings=self.settings.as_dict(),
             segments=self.segments,
             **run_layout(self.compiled.system),
+            requirements={} if self.monitor is None else self.monitor.results(termination.t),
         )

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CAUSES", "PLOT_BACKEND", "Jump", "Run", "Termination"]
+__all__ = ["CAUSES", "PLOT_BACKEND", "Jump", "RequirementResult", "Run", "Termination"]
 
 CAUSES = ("t_end", "max_jumps", "zeno", "blocked", "nonfinite", "solver_failure", "interrupted")
 """Every way a run can end; only ``t_end`` is a normal end."""
@@ -91,6 +91,37 @@ class Termination:
         }
 
 
+@dataclass(frozen=True)
+class RequirementResult:
+    """What the monitor found of one requirement on one run (docs/semantics.md, "Requirements").
+
+    ``robustness`` is the usual quantitative semantics of signal temporal logic:
+    for ``always`` the smallest margin by which the condition holds over the
+    scope (negative where it fails), for ``eventually`` the largest; ``inf``
+    (``always``) or ``-inf`` (``eventually``) when no point of the run is in
+    scope. ``violated_at`` is the first time it fails (``always``: the exact
+    crossing; ``eventually``: where its scope closed), None when it holds.
+    ``message`` says why it could not be evaluated, when it could not.
+    """
+
+    name: str
+    holds: bool
+    robustness: float
+    violated_at: float | None = None
+    message: str = ""
+
+    def as_dict(self) -> dict[str, Any]:
+        """``{"holds", "robustness", "violated_at"}`` (and ``"message"`` when there is one)."""
+        found: dict[str, Any] = {
+            "holds": self.holds,
+            "robustness": self.robustness,
+            "violated_at": self.violated_at,
+        }
+        if self.message:
+            found["message"] = self.message
+        return found
+
+
 @dataclass
 class Run:
     """A hybrid trajectory: one entry per stored point, two points per jump.
@@ -116,6 +147,8 @@ class Run:
     """The ``unit:`` of each state variable that declares one (axis labels of plots)."""
     components: tuple[tuple[str, tuple[str, ...]], ...] = ()
     """In a system: each component's name and its columns; empty for an automaton."""
+    requirements: Mapping[str, RequirementResult] = field(default_factory=dict)
+    """Each requirement of the model, by name, as monitored on this run."""
 
     def __getitem__(self, name: str) -> NDArray[np.float64]:
         if name in self.state_names:

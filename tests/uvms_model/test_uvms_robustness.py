@@ -100,6 +100,11 @@ def test_map_grid_and_figure(tmp_path: Path) -> None:
     assert grid.nominal == (0.27, 0.95)
     assert len(grid.outcomes) == 1 and len(grid.outcomes[0]) == 2
     assert all(classify(o) == "paper" for o in grid.outcomes[0])
+    for o in grid.outcomes[0]:
+        # the requirement's robustness is the exact minimum of |gamma| less 0.5; the
+        # summary reads it on the 0.1 s grid (a parabola of curvature ~1 /s^2 there)
+        assert o.dexterity <= o.min_abs_gamma - 0.5 + 1e-12
+        assert o.dexterity == pytest.approx(o.min_abs_gamma - 0.5, abs=2e-3)
     path = write_map_figure(grid, tmp_path / "map.png")
     height, width, _ = matplotlib.image.imread(path).shape
     assert width >= 600 and height >= 400

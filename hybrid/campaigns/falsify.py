@@ -1,0 +1,365 @@
+"""``hybrid.falsify``: search the varied ranges for a run that violates a requirement.
+
+Falsification minimises the requirement's robustness over the box of the
+varied ranges, within a budget of simulations, in two phases on the same
+executors as a sweep:
+
+1. **Global.** ``global_share`` of the budget goes to a seeded space-filling
+   design of the box (a Latin hypercube by default, or scrambled Sobol:
+   ``scipy.stats.qmc``), run in rounds of :data:`ROUND` points. After each
+   round, the lowest-numbered violating point, if any, ends the search.
+2. **Local.** The rest of the budget is shared by ``starts`` bounded
+   Nelder-Mead searches (:mod:`~hybrid.campaigns.search`) from the lowest
+   robustness points of the global phase, run side by side (one job each); each
+   stops at its first violation.
+
+The result is the counterexample (the violating point of the lowest-numbered
+phase and start) or, when none is found, the point of lowest robustness, with
+its run simulated again here (``result.run``: the trajectory and events to
+look at). The search depends only on the seed, the budget and the model, not
+on the executor or the number of workers.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from hybrid.campaigns.executors import Executor
+from hybrid.campaigns.payload import pack
+from hybrid.campaigns.runs import RunPlan, failed_row, model_variant, requirement_columns
+from hybrid.campaigns.search import objective
+from hybrid.campaigns.space import SAMPLERS, Axis, unit_samples
+from hybrid.campaigns.sweep import SOLVER_OPTIONS, executor_for, hard_limit
+from hybrid.campaigns.targets import Constant, check_names, free_inputs, split
+from hybrid.compose import System
+from hybrid.errors import UsageError
+from hybrid.model import Automaton
+from hybrid.progress import Reporter, Tracker
+from hybrid.simulation.engine import simulate
+from hybrid.simulation.interrupts import sigint_watch
+from hybrid.simulation.result import Run
+from hybrid.simulation.settings import Settings
+
+__all__ = ["ROUND", "Falsification", "falsify"]
+
+ROUND = 16
+"""Points of the global phase run between two looks for a violation."""
+
+
+@dataclass
+class Falsification:
+    """What a falsification found.
+
+    ``found`` says whether a run violates ``requirement``; ``values`` is that
+    run's point (or, when none was found, the point of lowest robustness), with
+    its ``robustness``; ``run`` is its run, simulated again. ``history`` holds
+    every evaluation in order (``phase``: ``global`` or ``local <k>``).
+    """
+
+    requirement: str
+    found: bool
+    values: dict[str, float]
+    robustness: float
+    evaluations: int
+    budget: int
+    seed: int
+    run: Run | None = None
+    history: list[dict[str, Any]] = field(default_factory=list)
+    complete: bool = True
+
+    @property
+    def violated_at(self) -> float | None:
+        """When the counterexample's run first violates the requirement."""
+        if self.run is None or self.requirement not in self.run.requirements:
+            return None
+        return self.run.requirements[self.requirement].violated_at
+
+    def as_dict(self) -> dict[str, Any]:
+        """The JSON document ``hybrid falsify`` writes (``falsification.json``)."""
+        return {
+            "requirement": self.requirement,
+            "found": self.found,
+            "values": self.values,
+            "robustness": self.robustness,
+            "violated_at": self.violated_at,
+            "evaluations": self.evaluations,
+            "budget": self.budget,
+            "seed": self.seed,
+            "complete": self.complete,
+            "history": self.history,
+        }
+
+    def __repr__(self) -> str:
+        what = "counterexample" if self.found else "no violation; lowest robustness"
+        shown = ", ".join(f"{k}={v:.6g}" for k, v in self.values.items())
+        return (
+            f"<Falsification of {self.requirement}: {what} {self.robustness:.6g} at {shown} "
+            f"({self.evaluations} of {self.budget} runs)>"
+        )
+
+
+def falsify(
+    model: Automaton | System,
+    requirement: str,
+    vary: Mapping[str, tuple[float, float]] | Sequence[Axis],
+    *,
+    t_end: float,
+    budget: int = 100,
+    seed: int = 0,
+    sampler: str = "lhs",
+    global_share: float = 0.5,
+    starts: int = 2,
+    parameters: Mapping[str, float] | None = None,
+    inputs: Mapping[str, str] | None = None,
+    workers: int | None = None,
+    scheduler: Any = None,
+    run_timeout: float | None = None,
+    progress: Reporter | None = None,
+    handle_sigint: bool = True,
+    backend: str = "scipy",
+    **solver: Any,
+) -> Falsification:
+    """Search ``vary`` for a run of ``model`` that violates ``requirement``.
+
+    Parameters
+    ----------
+    model : Automaton or System
+        From :func:`hybrid.load`.
+    requirement : str
+        The requirement's name (``comp.name`` for a component's, in a system).
+    vary : mapping or sequence of Axis
+        ``{name: (low, high)}``: parameters, ``init.x``, ``input.u``.
+    t_end : float
+        End time of every run.
+    budget : int
+        Simulations at most, both phases together.
+    seed : int
+        Seed of the global phase (everything else is deterministic).
+    sampler : {"lhs", "sobol", "random"}
+        The design of the global phase.
+    global_share : float
+        Share of the budget for the global phase, in (0, 1].
+    starts : int
+        Local searches, from the best points of the global phase.
+    parameters, inputs, workers, scheduler, run_timeout, progress, handle_sigint, backend
+        As for :func:`hybrid.sweep`.
+    **solver
+        ``rtol``, ``atol``, ``max_step``... as :func:`hybrid.simulate` takes them.
+
+    Returns
+    -------
+    Falsification
+        ``found``, ``values``, ``robustness``, ``run`` (the run at ``values``).
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> heater = hybrid.load_text('''
+    ... automaton: heater
+    ... parameters: {k: 0.1}
+    ... state: {x: {initial: 20.0}}
+    ... locations: {cooling: {flow: {x: -k*x}}}
+    ... requirements: [{name: warm, always: "x >= 15"}]
+    ... ''')
+    >>> result = hybrid.falsify(heater, "warm", {"k": (0.0, 0.1)}, t_end=5.0, budget=20,
+    ...                         seed=1, workers=0)
+    >>> result.found, result.values["k"] > 0.0575, result.robustness < 0
+    (True, True, True)
+    """
+    unknown = sorted(set(solver) - set(SOLVER_OPTIONS))
+    if unknown:
+        raise UsageError(f"falsify() got an unexpected keyword '{unknown[0]}'")
+    Settings(t_end=t_end, **{k: v for k, v in solver.items() if v is not None})
+    if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
+        raise UsageError(f"budget must be a whole number >= 1, got {budget!r}")
+    if not 0.0 < global_share <= 1.0:
+        raise UsageError(f"global_share must be in (0, 1], got {global_share}")
+    if sampler not in SAMPLERS:
+        raise UsageError(f"unknown sampler '{sampler}' (choose from {', '.join(SAMPLERS)})")
+    if parameters:
+        model = model.with_parameters(dict(parameters))
+    axes = (
+        [Axis.of(str(n), float(lo), float(hi)) for n, (lo, hi) in vary.items()]
+        if isinstance(vary, Mapping)
+        else list(vary)
+    )
+    if not axes:
+        raise UsageError("nothing to vary: give --vary NAME=LO:HI")
+    names = [a.name for a in axes]
+    check_names(model, names)
+    if f"{requirement}.holds" not in requirement_columns(model):
+        known = [c[: -len(".holds")] for c in requirement_columns(model)[::3]]
+        raise UsageError(
+            f"no requirement '{requirement}' in {model.name} "
+            f"(requirements: {', '.join(known) or 'none'})"
+        )
+    missing = [
+        n for n in free_inputs(model) if n not in (inputs or {}) and f"input.{n}" not in names
+    ]
+    if missing:
+        raise UsageError(f"input '{missing[0]}' needs a value: vary it or give it")
+    plan = RunPlan(
+        t_end=float(t_end),
+        solver={k: v for k, v in solver.items() if v is not None},
+        inputs=tuple(sorted((inputs or {}).items())),
+        timeout=run_timeout,
+        backend=backend,
+    )
+    executor = executor_for(workers, scheduler)
+    search = _Search(model, requirement, axes, plan, budget, seed, sampler, global_share, starts)
+    with sigint_watch(handle_sigint) as interrupts, executor:
+        executor.start(pack(model), plan)
+        search.run(executor, lambda: interrupts.requested, progress)
+    return search.result()
+
+
+class _Search:
+    """The two phases of one falsification (see the module docstring)."""
+
+    def __init__(
+        self,
+        model: Automaton | System,
+        requirement: str,
+        axes: Sequence[Axis],
+        plan: RunPlan,
+        budget: int,
+        seed: int,
+        sampler: str,
+        global_share: float,
+        starts: int,
+    ) -> None:
+        self.model, self.requirement, self.axes, self.plan = model, requirement, axes, plan
+        self.budget, self.seed, self.sampler = budget, seed, sampler
+        self.n_global = max(1, min(budget, round(budget * global_share)))
+        self.starts = max(1, starts)
+        self.history: list[dict[str, Any]] = []
+        self.found: dict[str, Any] | None = None
+        self.complete = True
+
+    def values_of(self, unit: Sequence[float]) -> dict[str, float]:
+        return {
+            a.name: a.low + float(u) * (a.high - a.low)
+            for a, u in zip(self.axes, unit, strict=True)
+        }
+
+    def run(self, executor: Executor, stop: Any, progress: Reporter | None) -> None:
+        tracker = Tracker("falsify", total=self.budget, unit="runs", report=progress)
+        units = unit_samples(len(self.axes), self.n_global, self.seed, self.sampler)
+        points = [self.values_of(u) for u in units]
+        rows: dict[int, dict[str, Any]] = {}
+
+        def failed(job: tuple[int, str, Any], cause: str, message: str) -> dict[str, Any]:
+            return {"run": job[0], **job[2], **failed_row(self.model, self.plan, cause, message)}
+
+        def keep(index: int, row: dict[str, Any]) -> None:
+            rows[index] = row
+            tracker.update(len(self.history) + len(rows), violations=int(self.found is not None))
+
+        limit = hard_limit(self.plan.timeout)
+        for start in range(0, len(points), ROUND):
+            jobs = [(i, "run", points[i]) for i in range(start, min(len(points), start + ROUND))]
+            if not executor.run(jobs, keep, failed, stop, limit):
+                self.complete = False
+                break
+            for i, _, values in jobs:
+                robustness, violated = objective(rows[i], self.requirement)
+                self.history.append(
+                    {**values, "robustness": robustness, "violated": violated, "phase": "global"}
+                )
+                if violated and self.found is None:
+                    self.found = self.history[-1]
+            if self.found is not None:
+                break
+        left = self.budget - len(self.history)
+        if self.found is None and self.complete and left > 0:
+            self._local(executor, stop, left, tracker)
+        tracker.finish(len(self.history), violations=int(self.found is not None))
+
+    def _local(self, executor: Executor, stop: Any, left: int, tracker: Tracker) -> None:
+        ranked = sorted(range(len(self.history)), key=lambda i: (self.history[i]["robustness"], i))
+        seeds = ranked[: min(self.starts, left)]
+        shares = [
+            left // len(seeds) + (1 if k < left % len(seeds) else 0) for k in range(len(seeds))
+        ]
+        jobs = []
+        for k, (i, share) in enumerate(zip(seeds, shares, strict=True)):
+            point = self.history[i]
+            unit = [
+                (point[a.name] - a.low) / (a.high - a.low) if a.high > a.low else 0.0
+                for a in self.axes
+            ]
+            task = {
+                "names": [a.name for a in self.axes],
+                "lows": [a.low for a in self.axes],
+                "highs": [a.high for a in self.axes],
+                "start": unit,
+                "budget": share,
+                "requirement": self.requirement,
+                "step": 0.1,
+            }
+            jobs.append((k, "search", task))
+        results: dict[int, dict[str, Any]] = {}
+
+        def keep(index: int, result: dict[str, Any]) -> None:
+            results[index] = result
+
+        def failed(job: tuple[int, str, Any], cause: str, message: str) -> dict[str, Any]:
+            return {
+                "found": False,
+                "values": None,
+                "robustness": math.inf,
+                "evaluations": 0,
+                "history": [],
+            }
+
+        if not executor.run(jobs, keep, failed, stop, None):
+            self.complete = False
+        for k in sorted(results):
+            for entry in results[k]["history"]:
+                self.history.append({**entry, "phase": f"local {k}"})
+                if entry["violated"] and self.found is None:
+                    self.found = self.history[-1]
+        tracker.update(len(self.history), violations=int(self.found is not None))
+
+    def result(self) -> Falsification:
+        names = [a.name for a in self.axes]
+        if self.found is not None:
+            chosen = self.found
+        elif self.history:
+            chosen = min(self.history, key=lambda h: h["robustness"])
+        else:
+            chosen = {**self.values_of([0.0] * len(self.axes)), "robustness": math.inf}
+        values = {n: float(chosen[n]) for n in names}
+        run = None
+        if self.history:
+            over = split(values)
+            from hybrid.simulation.inputs import ExpressionInput
+
+            inputs: dict[str, Any] = {n: ExpressionInput(n, s) for n, s in self.plan.inputs}
+            inputs.update({n: Constant(v) for n, v in over.inputs.items()})
+            try:
+                run = simulate(
+                    model_variant(self.model, over.parameters),
+                    t_end=self.plan.t_end,
+                    initial=over.initial or None,
+                    inputs=inputs or None,
+                    handle_sigint=False,
+                    **self.plan.solver,
+                )
+            except Exception:  # the run failed in the search too: no trajectory to show
+                run = None
+        return Falsification(
+            self.requirement,
+            self.found is not None,
+            values,
+            float(chosen["robustness"]),
+            len(self.history),
+            self.budget,
+            self.seed,
+            run,
+            self.history,
+            self.complete,
+        )

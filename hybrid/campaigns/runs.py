@@ -1,0 +1,272 @@
+"""One run of a campaign: a point's values applied, simulated, and summed up in a row.
+
+:func:`run_point` is what every executor calls, in a worker or in this process:
+it applies the point (parameters, initial values, constant inputs), simulates
+with the campaign's :class:`RunPlan`, and returns the row: the varied values,
+how the run ended (``cause``, ``t``, ``j``), its number of ``jumps`` and
+``zeno_time``, each requirement's ``holds``/``robustness``/``violated_at``, and
+the summaries asked for. A run that raises is a row with cause ``error`` and
+the message; a run longer than the plan's ``timeout`` is a row with cause
+``timeout``. Nothing a run does ends the campaign.
+
+The plan's ``backend`` is passed to :func:`hybrid.simulate` as it is (``scipy``,
+the default, is not passed, so today's engine runs as it always has); an
+ensemble backend plugs in at :func:`run_points`, which gets a worker's whole
+batch.
+
+Summaries (``KIND:NAME``) read the stored points of the run (``dt`` makes them
+denser; a requirement's robustness is the exact extreme):
+
+=============  ==================================================================
+``max:x``      the largest value of state variable or signal ``x``
+``min:x``      the smallest
+``last:x``     the value at the end of the run
+``mean:x``     the time average (trapezoids over the stored points)
+``jumps:E``    the number of jumps of edge ``E``, or of component ``E``'s edges
+``jump_t:K``   the time of the ``K``-th jump (1 is the first); NaN if fewer
+=============  ==================================================================
+
+Examples
+--------
+>>> import hybrid
+>>> ball = hybrid.load("specs/bouncing_ball.yaml")
+>>> plan = RunPlan(t_end=3.0, summaries=(Summary.parse("jump_t:1"), Summary.parse("max:v")))
+>>> row = run_point(ball, 0, {"e": 0.5}, plan)
+>>> row["run"], row["e"], row["cause"], row["jumps"], round(row["jump_t:1"], 6)
+(0, 0.5, 't_end', 2, 1.427843)
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections import OrderedDict
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from hybrid.campaigns.targets import Constant, split
+from hybrid.compose import System, as_system
+from hybrid.errors import HybridError, UsageError
+from hybrid.model import Automaton
+from hybrid.simulation.engine import simulate
+from hybrid.simulation.margins import watched_requirements
+from hybrid.simulation.result import Run
+
+__all__ = [
+    "OUTCOME_COLUMNS",
+    "SUMMARY_KINDS",
+    "RunPlan",
+    "RunTimeout",
+    "Summary",
+    "failed_row",
+    "model_variant",
+    "requirement_columns",
+    "run_point",
+    "run_points",
+]
+
+OUTCOME_COLUMNS = ("cause", "t", "j", "jumps", "zeno_time", "message")
+"""How each run ended, after the run number and the varied values."""
+
+SUMMARY_KINDS = ("max", "min", "last", "mean", "jumps", "jump_t")
+REQUIREMENT_FIELDS = ("holds", "robustness", "violated_at")
+
+
+class RunTimeout(Exception):
+    """A run went on longer than the campaign's ``run_timeout``."""
+
+
+@dataclass(frozen=True)
+class Summary:
+    """A number read off each run: ``KIND:NAME`` (see the module docstring)."""
+
+    kind: str
+    name: str
+
+    @classmethod
+    def parse(cls, text: str) -> Summary:
+        kind, sep, name = text.partition(":")
+        if not sep or kind not in SUMMARY_KINDS or not name:
+            raise UsageError(
+                f"summary '{text}': expected KIND:NAME with KIND one of {', '.join(SUMMARY_KINDS)}"
+            )
+        if kind == "jump_t" and not (name.isdigit() and int(name) >= 1):
+            raise UsageError(f"summary '{text}': jump_t needs a jump number >= 1")
+        return cls(kind, name)
+
+    @property
+    def column(self) -> str:
+        return f"{self.kind}:{self.name}"
+
+    def check(self, model: Automaton | System) -> None:
+        """A :class:`UsageError` if ``model`` has nothing of that name."""
+        system = as_system(model)
+        if self.kind in ("max", "min", "last", "mean"):
+            known = [*system.state_names, *system.signal_columns]
+            if self.name not in known:
+                raise UsageError(
+                    f"summary '{self.column}': no state variable or signal '{self.name}' "
+                    f"(columns: {', '.join(known)})"
+                )
+        elif self.kind == "jumps":
+            edges = {
+                system.qualified(i, e.name)
+                for i, c in enumerate(system.components)
+                for e in c.automaton.edges
+            }
+            if self.name not in edges and self.name not in {c.name for c in system.components}:
+                raise UsageError(f"summary '{self.column}': no edge or component '{self.name}'")
+
+    def of(self, run: Run) -> float:
+        """The summary's value on ``run``."""
+        if self.kind == "jumps":
+            prefix = f"{self.name}."
+            return float(
+                sum(1 for j in run.jumps if j.edge == self.name or j.edge.startswith(prefix))
+            )
+        if self.kind == "jump_t":
+            k = int(self.name)
+            return float(run.jumps[k - 1].t) if len(run.jumps) >= k else math.nan
+        values = run[self.name]
+        if values.size == 0:
+            return math.nan
+        if self.kind == "max":
+            return float(np.max(values))
+        if self.kind == "min":
+            return float(np.min(values))
+        if self.kind == "last":
+            return float(values[-1])
+        span = float(run.t[-1] - run.t[0])
+        if span <= 0.0:
+            return float(values[-1])
+        return float(np.sum(np.diff(run.t) * (values[1:] + values[:-1]) / 2.0) / span)
+
+
+@dataclass(frozen=True)
+class RunPlan:
+    """Everything a run of the campaign needs besides its point (sent to every worker once)."""
+
+    t_end: float
+    solver: Mapping[str, Any] = field(default_factory=dict)
+    """Keyword arguments of :func:`hybrid.simulate` (``rtol``, ``atol``, ``max_step``...)."""
+    summaries: tuple[Summary, ...] = ()
+    inputs: tuple[tuple[str, str], ...] = ()
+    """Free inputs held by an expression of ``t`` in every run (``--input NAME=EXPR``)."""
+    timeout: float | None = None
+    backend: str = "scipy"
+
+
+def requirement_columns(model: Automaton | System) -> list[str]:
+    """``name.holds``, ``name.robustness``, ``name.violated_at`` per requirement, in order."""
+    names = [w.name for w in watched_requirements(as_system(model))]
+    return [f"{n}.{f}" for n in names for f in REQUIREMENT_FIELDS]
+
+
+_VARIANTS: OrderedDict[tuple[int, tuple[tuple[str, float], ...]], tuple[Any, System]] = (
+    OrderedDict()
+)
+_VARIANT_CACHE = 16
+_VARIANTS_LOCK = threading.Lock()
+
+
+def model_variant(model: Automaton | System, parameters: Mapping[str, float]) -> System:
+    """``model`` with ``parameters``, as a system, the same object for the same values.
+
+    The simulator keeps a compiled model per model object (and thread), so runs that
+    differ only in initial values or inputs reuse one compiled model.
+    """
+    key = (id(model), tuple(sorted(parameters.items())))
+    with _VARIANTS_LOCK:
+        hit = _VARIANTS.get(key)
+        if hit is not None and hit[0] is model:
+            _VARIANTS.move_to_end(key)
+            return hit[1]
+    system = as_system(model.with_parameters(dict(parameters)) if parameters else model)
+    with _VARIANTS_LOCK:
+        _VARIANTS[key] = (model, system)
+        if len(_VARIANTS) > _VARIANT_CACHE:
+            _VARIANTS.popitem(last=False)
+    return system
+
+
+def run_point(
+    model: Automaton | System, index: int, point: Mapping[str, float], plan: RunPlan
+) -> dict[str, Any]:
+    """The row of run ``index`` at ``point`` (see the module docstring)."""
+    row: dict[str, Any] = {"run": index, **point}
+    over = split(point)
+    deadline = None if plan.timeout is None else time.monotonic() + plan.timeout
+    try:
+        target = model_variant(model, over.parameters)
+        inputs: dict[str, Any] = {}
+        if plan.inputs:
+            from hybrid.simulation.inputs import ExpressionInput
+
+            inputs.update({n: ExpressionInput(n, s) for n, s in plan.inputs})
+        inputs.update({n: Constant(v) for n, v in over.inputs.items()})
+        extra: dict[str, Any] = {} if plan.backend == "scipy" else {"backend": plan.backend}
+        run = simulate(
+            target,
+            t_end=plan.t_end,
+            initial=over.initial or None,
+            inputs=inputs or None,
+            handle_sigint=False,
+            progress=None if deadline is None else _watchdog(deadline, plan.timeout),
+            **plan.solver,
+            **extra,
+        )
+    except RunTimeout as exc:
+        return {**row, **failed_row(model, plan, "timeout", str(exc))}
+    except HybridError as exc:
+        return {**row, **failed_row(model, plan, "error", str(exc))}
+    except Exception as exc:  # a bug must not end the campaign: the row says what happened
+        return {
+            **row,
+            **failed_row(model, plan, "error", f"internal error: {type(exc).__name__}: {exc}"),
+        }
+    end = run.termination
+    row.update(
+        cause=end.cause,
+        t=float(end.t),
+        j=int(end.j),
+        jumps=len(run.jumps),
+        zeno_time=end.zeno_time,
+        message="" if end.cause == "t_end" else end.message,
+    )
+    for name, result in run.requirements.items():
+        row[f"{name}.holds"] = result.holds
+        row[f"{name}.robustness"] = result.robustness
+        row[f"{name}.violated_at"] = result.violated_at
+    for summary in plan.summaries:
+        row[summary.column] = summary.of(run)
+    return row
+
+
+def run_points(
+    model: Automaton | System, batch: Sequence[tuple[int, Mapping[str, float]]], plan: RunPlan
+) -> list[dict[str, Any]]:
+    """The rows of a batch of ``(index, point)``: where an ensemble backend would plug in."""
+    return [run_point(model, index, point, plan) for index, point in batch]
+
+
+def failed_row(
+    model: Automaton | System, plan: RunPlan, cause: str, message: str
+) -> dict[str, Any]:
+    """The outcome columns of a run that did not finish (``error``, ``timeout``)."""
+    row: dict[str, Any] = dict.fromkeys(OUTCOME_COLUMNS)
+    row.update(cause=cause, message=message)
+    row.update(dict.fromkeys(requirement_columns(model)))
+    row.update({s.column: None for s in plan.summaries})
+    return row
+
+
+def _watchdog(deadline: float, limit: float | None) -> Any:
+    def check(status: object) -> None:
+        if time.monotonic() > deadline:
+            raise RunTimeout(f"the run took longer than the run timeout of {limit:g} s")
+
+    return check

@@ -1,0 +1,186 @@
+"""What a campaign varies, and the points it runs: grids, seeded samples, and their names.
+
+A varied name is one of
+
+- a parameter: ``name`` (``comp.name`` in a system, or ``name`` where only one
+  component has it);
+- an initial value: ``init.x`` for state variable ``x``;
+- a free input held constant over the run: ``input.u`` (an automaton's ``inputs``).
+
+A **grid** is the product of its axes, each ``LO:HI:N`` (``N`` values from ``LO``
+to ``HI``, ends included), the first axis slowest. **Samples** are ``N`` points
+of the box of ranges ``LO:HI``, drawn from a seed: a Latin hypercube (default),
+a scrambled Sobol sequence or plain uniform draws (``scipy.stats.qmc`` and
+``numpy.random.Generator``), so the same seed gives the same points anywhere.
+Grid and samples combine: every grid point with every sample.
+
+:func:`declared_ranges` is where a spec's own declared sets come in (interval
+initial sets ``x: {initial: [lo, hi]}`` and bounded inputs ``u: {range: [lo,
+hi]}``): the ranges a sample may take when no range is given on the command line.
+
+Examples
+--------
+>>> grid = [Axis.parse("e=0.5:0.9:3"), Axis.parse("init.h=1:2:2")]
+>>> [tuple(round(v, 9) for v in p.values()) for p in grid_points(grid)]
+[(0.5, 1.0), (0.5, 2.0), (0.7, 1.0), (0.7, 2.0), (0.9, 1.0), (0.9, 2.0)]
+>>> points = sample_points([Axis.parse("e=0:1", grid=False)], 4, seed=1)
+>>> sorted(int(p["e"] * 4) for p in points)   # a Latin hypercube: one point per quarter
+[0, 1, 2, 3]
+>>> points == sample_points([Axis.parse("e=0:1", grid=False)], 4, seed=1)
+True
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from hybrid.errors import UsageError
+
+__all__ = [
+    "SAMPLERS",
+    "Axis",
+    "Point",
+    "combine",
+    "declared_ranges",
+    "grid_points",
+    "sample_points",
+]
+
+Point = dict[str, float]
+"""Values of the varied names for one run, in the order of the axes."""
+
+SAMPLERS = ("lhs", "sobol", "random")
+"""How samples are drawn: Latin hypercube, scrambled Sobol, uniform."""
+
+MAX_POINTS = 10_000_000
+"""A campaign larger than this is refused before anything runs."""
+
+
+@dataclass(frozen=True)
+class Axis:
+    """A varied name and its values: a grid of ``count`` values, or a range to sample."""
+
+    name: str
+    low: float
+    high: float
+    count: int | None = None
+    given: tuple[float, ...] | None = None
+    """Explicit grid values, in their order (instead of ``count`` evenly spaced)."""
+
+    @classmethod
+    def parse(cls, text: str, *, grid: bool = True) -> Axis:
+        """``NAME=LO:HI:N`` (``grid``) or ``NAME=LO:HI`` (a range), with one clear error."""
+        name, sep, rest = text.partition("=")
+        name = name.strip()
+        shape = "NAME=LO:HI:N" if grid else "NAME=LO:HI"
+        parts = rest.split(":")
+        if not sep or not name or len(parts) != (3 if grid else 2):
+            raise UsageError(f"expected {shape}, got '{text}'")
+        try:
+            low, high = float(parts[0]), float(parts[1])
+        except ValueError:
+            raise UsageError(f"'{text}': LO and HI must be numbers") from None
+        count = None
+        if grid:
+            try:
+                count = int(parts[2])
+            except ValueError:
+                raise UsageError(f"'{text}': N must be a whole number") from None
+        return cls.of(name, low, high, count)
+
+    @classmethod
+    def listed(cls, name: str, values: Sequence[float]) -> Axis:
+        """A grid axis of explicit values (finite numbers), in the order given."""
+        seq = tuple(float(v) for v in values)
+        if not seq:
+            raise UsageError(f"{name}: the grid has no values")
+        if not all(map(math.isfinite, seq)):
+            raise UsageError(f"{name}: grid values must be finite numbers, got {list(seq)}")
+        return cls(name, min(seq), max(seq), len(seq), seq)
+
+    @classmethod
+    def of(cls, name: str, low: float, high: float, count: int | None = None) -> Axis:
+        """An axis with its bounds checked (finite, ``low <= high``, ``count >= 1``)."""
+        if not (math.isfinite(low) and math.isfinite(high)):
+            raise UsageError(f"{name}: the range must be finite, got [{low}, {high}]")
+        if low > high:
+            raise UsageError(f"{name}: the range [{low}, {high}] is empty (LO > HI)")
+        if count is not None and count < 1:
+            raise UsageError(f"{name}: N must be >= 1, got {count}")
+        return cls(name, float(low), float(high), count)
+
+    def values(self) -> list[float]:
+        """The grid values (``count`` of them, ends included; one value: ``low``)."""
+        if self.given is not None:
+            return list(self.given)
+        n = self.count or 1
+        if n == 1:
+            return [self.low]
+        return [float(v) for v in np.linspace(self.low, self.high, n)]
+
+
+def grid_points(axes: Sequence[Axis]) -> list[Point]:
+    """Every combination of the axes' values, the first axis slowest."""
+    if not axes:
+        return [{}]
+    size = math.prod(a.count or 1 for a in axes)
+    if size > MAX_POINTS:
+        raise UsageError(f"the grid has {size} points, over the limit of {MAX_POINTS}")
+    names = [a.name for a in axes]
+    return [
+        dict(zip(names, combo, strict=True))
+        for combo in itertools.product(*(a.values() for a in axes))
+    ]
+
+
+def sample_points(axes: Sequence[Axis], n: int, seed: int, sampler: str = "lhs") -> list[Point]:
+    """``n`` points of the box of ``axes``' ranges, drawn from ``seed`` (the same anywhere)."""
+    if sampler not in SAMPLERS:
+        raise UsageError(f"unknown sampler '{sampler}' (choose from {', '.join(SAMPLERS)})")
+    if n < 1 or n > MAX_POINTS:
+        raise UsageError(f"the number of samples must be from 1 to {MAX_POINTS}, got {n}")
+    if not axes:
+        raise UsageError("samples need ranges to draw from: give --vary NAME=LO:HI")
+    unit = unit_samples(len(axes), n, seed, sampler)
+    low = np.array([a.low for a in axes])
+    span = np.array([a.high - a.low for a in axes])
+    scaled = low + unit * span
+    names = [a.name for a in axes]
+    return [dict(zip(names, map(float, row), strict=True)) for row in scaled]
+
+
+def unit_samples(d: int, n: int, seed: int, sampler: str = "lhs") -> np.ndarray:
+    """``n`` points of the unit cube ``[0, 1)^d``, one row each, from ``seed``."""
+    from scipy.stats import qmc
+
+    rng = np.random.default_rng(seed)
+    if sampler == "lhs":
+        return np.asarray(qmc.LatinHypercube(d=d, seed=rng).random(n))
+    if sampler == "sobol":
+        engine = qmc.Sobol(d=d, scramble=True, seed=rng)
+        return np.asarray(engine.random_base2(max(0, math.ceil(math.log2(n)))))[:n]
+    return rng.random((n, d))
+
+
+def combine(grid: Sequence[Point], samples: Sequence[Point] | None) -> list[Point]:
+    """Every grid point with every sample (the grid alone without samples)."""
+    if samples is None:
+        return [dict(p) for p in grid]
+    return [{**g, **s} for g in grid for s in samples]
+
+
+def declared_ranges(model: Any) -> Mapping[str, tuple[float, float]]:
+    """The ranges a spec declares itself, by varied name (``init.x``, ``input.u``).
+
+    Today's specs declare none, so this is empty. With interval initial sets
+    (``x: {initial: [lo, hi]}``) and bounded inputs (``u: {range: [lo, hi]}``)
+    it returns ``{"init.x": (lo, hi), "input.u": (lo, hi)}``, and a sweep with
+    ``--sample N`` and no ``--vary`` samples within them.
+    """
+    return {}

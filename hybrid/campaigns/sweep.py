@@ -1,0 +1,399 @@
+"""``hybrid.sweep``: many runs of one model over a grid or seeded samples, on any executor.
+
+The points are made here, in run order (:mod:`~hybrid.campaigns.space`), and
+never depend on the executor; each run's row comes back whenever it finishes
+and is kept by run number (:mod:`~hybrid.campaigns.store` writes it to disk in
+chunks when the campaign has an ``out`` file), so the table is the same with
+one worker, many, or a Dask cluster. Ctrl-C stops the campaign cleanly: the
+rows finished are kept (on disk with ``out``), the table says it is
+incomplete, and ``resume=True`` runs only the rest.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from hybrid.campaigns.executors import Executor, InProcess, LocalPool, default_workers
+from hybrid.campaigns.payload import pack
+from hybrid.campaigns.runs import (
+    OUTCOME_COLUMNS,
+    RunPlan,
+    Summary,
+    failed_row,
+    requirement_columns,
+)
+from hybrid.campaigns.space import (
+    Axis,
+    Point,
+    combine,
+    declared_ranges,
+    grid_points,
+    sample_points,
+)
+from hybrid.campaigns.store import ChunkStore
+from hybrid.campaigns.table import FAILED, SweepTable
+from hybrid.campaigns.targets import INPUT, check_names, free_inputs
+from hybrid.compose import System, as_system
+from hybrid.errors import UsageError
+from hybrid.model import Automaton
+from hybrid.progress import Reporter, Tracker
+from hybrid.simulation.interrupts import sigint_watch
+from hybrid.simulation.margins import watched_requirements
+from hybrid.simulation.settings import Settings
+
+__all__ = ["SOLVER_OPTIONS", "executor_for", "hard_limit", "sweep"]
+
+SOLVER_OPTIONS = (
+    "rtol",
+    "atol",
+    "max_step",
+    "method",
+    "max_jumps",
+    "dt",
+    "zeno",
+    "max_jumps_per_instant",
+    "t_start",
+)
+"""The keywords of :func:`hybrid.simulate` a campaign passes to every run."""
+
+
+def sweep(
+    model: Automaton | System,
+    t_end: float,
+    *,
+    grid: Mapping[str, Sequence[float]] | Sequence[Axis] | None = None,
+    vary: Mapping[str, tuple[float, float]] | Sequence[Axis] | None = None,
+    samples: int | None = None,
+    seed: int = 0,
+    sampler: str = "lhs",
+    points: Sequence[Mapping[str, float]] | None = None,
+    parameters: Mapping[str, float] | None = None,
+    inputs: Mapping[str, str] | None = None,
+    summaries: Sequence[str] = (),
+    workers: int | None = None,
+    scheduler: Any = None,
+    run_timeout: float | None = None,
+    out: str | Path | None = None,
+    resume: bool = False,
+    progress: Reporter | None = None,
+    handle_sigint: bool = True,
+    backend: str = "scipy",
+    batch: int | None = None,
+    **solver: Any,
+) -> SweepTable:
+    """Simulate ``model`` at every point of a grid and/or of seeded samples; one row per run.
+
+    Parameters
+    ----------
+    model : Automaton or System
+        From :func:`hybrid.load`.
+    t_end : float
+        End time of every run.
+    grid : mapping or sequence of Axis, optional
+        ``{name: values}``: every combination of the values is run, the first
+        name slowest. A name is a parameter (``comp.name`` in a system),
+        ``init.x`` (the initial value of ``x``) or ``input.u`` (a free input held
+        at that value).
+    vary : mapping or sequence of Axis, optional
+        ``{name: (low, high)}``: the ranges ``samples`` are drawn from.
+    samples : int, optional
+        Draw this many points of the ``vary`` box from ``seed`` (each combined
+        with every grid point).
+    seed : int
+        The seed of the samples: the same seed, the same points.
+    sampler : {"lhs", "sobol", "random"}
+        Latin hypercube, scrambled Sobol or uniform samples.
+    points : sequence of mappings, optional
+        Explicit points instead of a grid or samples, each giving a value to the same
+        names (a design made elsewhere, a list of cases).
+    parameters : mapping, optional
+        Parameter overrides held in every run.
+    inputs : mapping, optional
+        Free inputs held by an expression of ``t`` in every run (``{"u": "sin(t)"}``).
+    summaries : sequence of str
+        ``KIND:NAME`` columns read off each run: ``max:x``, ``min:x``, ``last:x``,
+        ``mean:x``, ``jumps:EDGE``, ``jump_t:K`` (:mod:`hybrid.campaigns.runs`).
+    workers : int, optional
+        Local worker processes (default: every core; 0: in this process).
+    scheduler : dask.distributed.Client or str, optional
+        Run on a Dask cluster instead (a client, or a scheduler's address).
+    run_timeout : float, optional
+        Seconds a run may take; a longer one is a row with cause ``timeout``.
+    out : str or Path, optional
+        Write the table there (``.csv`` or ``.parquet``); finished rows are kept
+        in ``<out>.parts/`` meanwhile, so an interrupted campaign can resume.
+    resume : bool
+        Finish the campaign whose rows are in ``<out>.parts/``: run only the rest.
+    progress : callable, optional
+        Receives a :class:`hybrid.progress.Status` (runs done, violations, failed).
+    handle_sigint : bool
+        Turn Ctrl-C into a clean stop (rows kept, ``table.complete`` False).
+    backend : str
+        Passed to :func:`hybrid.simulate` (``"scipy"``: the default engine).
+    batch : int, optional
+        Runs per batch sent to a worker (default: chosen from the counts).
+    **solver
+        ``rtol``, ``atol``, ``max_step``, ``method``, ``max_jumps``, ``dt``...
+        as :func:`hybrid.simulate` takes them.
+
+    Returns
+    -------
+    SweepTable
+        ``.rows`` (one dict per run, in run order), ``.to_pandas()``, ``.write(path)``.
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+    >>> table = hybrid.sweep(ball, t_end=2.0, grid={"e": [0.5, 0.9]}, workers=0,
+    ...                      summaries=["jump_t:1"])
+    >>> [(row["e"], row["cause"], row["jumps"]) for row in table.rows]
+    [(0.5, 't_end', 1), (0.9, 't_end', 1)]
+    """
+    unknown = sorted(set(solver) - set(SOLVER_OPTIONS))
+    if unknown:
+        raise UsageError(f"sweep() got an unexpected keyword '{unknown[0]}'")
+    Settings(t_end=t_end, **{k: v for k, v in solver.items() if v is not None})
+    if parameters:
+        model = model.with_parameters(dict(parameters))
+    if points is not None:
+        if grid or vary or samples is not None:
+            raise UsageError("give points, or a grid and/or samples, not both")
+        names, listed = _listed(points)
+        check_names(model, names)
+        return _finish(model, t_end, listed, names, solver, summaries, inputs, run_timeout,
+                       backend, executor_for(workers, scheduler, batch), out, resume, progress,
+                       handle_sigint)  # fmt: skip
+    grid_axes = _axes(grid, grid=True)
+    if samples is not None:
+        vary_axes = _axes(vary, grid=False) or [
+            Axis.of(name, lo, hi) for name, (lo, hi) in declared_ranges(model).items()
+        ]
+        sampled: list[Point] | None = sample_points(vary_axes, samples, seed, sampler)
+    else:
+        if vary:
+            raise UsageError("ranges to vary need a number of samples (--sample N)")
+        vary_axes, sampled = [], None
+    names = [a.name for a in grid_axes] + [a.name for a in vary_axes]
+    check_names(model, names)
+    if not names:
+        raise UsageError("nothing to vary: give a grid (--grid NAME=LO:HI:N) or samples")
+    made = combine(grid_points(grid_axes), sampled)
+    executor = executor_for(workers, scheduler, batch)
+    return _finish(model, t_end, made, names, solver, summaries, inputs, run_timeout, backend,
+                   executor, out, resume, progress, handle_sigint)  # fmt: skip
+
+
+def _finish(
+    model: Automaton | System,
+    t_end: float,
+    points: Sequence[Point],
+    names: Sequence[str],
+    solver: Mapping[str, Any],
+    summaries: Sequence[str],
+    inputs: Mapping[str, str] | None,
+    run_timeout: float | None,
+    backend: str,
+    executor: Executor,
+    out: str | Path | None,
+    resume: bool,
+    progress: Reporter | None,
+    handle_sigint: bool,
+) -> SweepTable:
+    """Check the run settings, then run the campaign of ``points``."""
+    wanted = [Summary.parse(s) for s in summaries]
+    for s in wanted:
+        s.check(model)
+    _check_inputs(model, names, inputs or {})
+    if run_timeout is not None and not (run_timeout > 0):
+        raise UsageError(f"run_timeout must be > 0 seconds, got {run_timeout}")
+    plan = RunPlan(
+        t_end=float(t_end),
+        solver={k: v for k, v in solver.items() if v is not None},
+        summaries=tuple(wanted),
+        inputs=tuple(sorted((inputs or {}).items())),
+        timeout=run_timeout,
+        backend=backend,
+    )
+    return run_campaign(model, points, names, plan, executor, out, resume, progress, handle_sigint)
+
+
+def run_campaign(
+    model: Automaton | System,
+    points: Sequence[Point],
+    names: Sequence[str],
+    plan: RunPlan,
+    executor: Executor,
+    out: str | Path | None,
+    resume: bool,
+    progress: Reporter | None,
+    handle_sigint: bool,
+) -> SweepTable:
+    """Run ``points`` on ``executor``; the table (written to ``out`` when complete)."""
+    payload = pack(model)
+    requirements = [w.name for w in watched_requirements(as_system(model))]
+    columns = [
+        "run",
+        *names,
+        *OUTCOME_COLUMNS,
+        *requirement_columns(model),
+        *(s.column for s in plan.summaries),
+    ]
+    if out is not None and Path(out).suffix.lower() not in (".csv", ".parquet"):
+        raise UsageError(f"results go to a .csv or .parquet file, got '{out}'")
+    store = None
+    if out is not None:
+        if not Path(out).resolve().parent.is_dir():
+            raise UsageError(f"the folder of '{out}' does not exist")
+        fingerprint = _fingerprint(payload.digest, plan, columns, points)
+        store = ChunkStore(out, fingerprint, resume=resume)
+    rows: dict[int, dict[str, Any]] = dict(store.done) if store is not None else {}
+    resumed = len(rows)
+    jobs = [(i, "run", p) for i, p in enumerate(points) if i not in rows]
+    tracker = Tracker("sweep", total=len(points), unit="runs", report=progress)
+    counts = {"violations": 0, "failed": 0}
+    for row in rows.values():
+        _count(row, requirements, counts)
+
+    def on_result(index: int, row: dict[str, Any]) -> None:
+        rows[index] = row
+        _count(row, requirements, counts)
+        if store is not None:
+            store.add(row)
+        tracker.update(len(rows), **counts)
+
+    def failed(job: tuple[int, str, Any], cause: str, message: str) -> dict[str, Any]:
+        return {"run": job[0], **job[2], **failed_row(model, plan, cause, message)}
+
+    with sigint_watch(handle_sigint) as interrupts, executor:
+        if jobs:
+            executor.start(payload, plan)
+            complete = executor.run(
+                jobs, on_result, failed, lambda: interrupts.requested, hard_limit(plan.timeout)
+            )
+        else:
+            complete = True
+    if store is not None:
+        store.flush()
+    tracker.finish(len(rows), **counts)
+    table = SweepTable(
+        columns,
+        list(rows.values()),
+        names,
+        requirements,
+        complete=complete,
+        total=len(points),
+        resumed=resumed,
+    )
+    if complete and out is not None and store is not None:
+        table.write(out)
+        store.remove()
+    return table
+
+
+def executor_for(workers: int | None, scheduler: Any, batch: int | None = None) -> Executor:
+    """The executor of the arguments: Dask with a scheduler, else local processes (0: here)."""
+    if batch is not None and (isinstance(batch, bool) or not isinstance(batch, int) or batch < 1):
+        raise UsageError(f"batch must be a whole number >= 1, got {batch!r}")
+    if scheduler is not None:
+        if workers is not None:
+            raise UsageError("give workers (local processes) or a scheduler (Dask), not both")
+        from hybrid.campaigns.cluster import DaskPool
+
+        return DaskPool(scheduler, batch=batch)
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)):
+        raise UsageError(f"workers must be a whole number, got {workers!r}")
+    if workers is not None and workers < 0:
+        raise UsageError(f"workers must be >= 0, got {workers}")
+    if workers == 0:
+        return InProcess()
+    return LocalPool(workers or default_workers(), batch=batch)
+
+
+def hard_limit(timeout: float | None) -> float | None:
+    """How long a local worker may stay silent on one run before it is stopped."""
+    return None if timeout is None else 1.5 * timeout + 2.0
+
+
+def _axes(given: Any, *, grid: bool) -> list[Axis]:
+    if not given:
+        return []
+    if isinstance(given, Mapping):
+        axes = []
+        for name, values in given.items():
+            if grid:
+                axes.append(Axis.listed(str(name), values))
+            else:
+                low, high = values
+                axes.append(Axis.of(str(name), float(low), float(high)))
+        return axes
+    return list(given)
+
+
+def _listed(points: Sequence[Mapping[str, float]]) -> tuple[list[str], list[Point]]:
+    """The names and points of an explicit list (every point gives the same names)."""
+    if isinstance(points, Mapping) or not points:
+        raise UsageError("points must be a non-empty list of {name: value} mappings")
+    names = [str(n) for n in points[0]]
+    listed: list[Point] = []
+    for k, point in enumerate(points):
+        if not isinstance(point, Mapping) or sorted(map(str, point)) != sorted(names):
+            raise UsageError(f"point {k} must give a value to each of {', '.join(names)}")
+        values = {n: float(point[n]) for n in names}
+        if not all(map(math.isfinite, values.values())):
+            raise UsageError(f"point {k}: values must be finite numbers, got {values}")
+        listed.append(values)
+    return names, listed
+
+
+def _check_inputs(
+    model: Automaton | System, names: Sequence[str], inputs: Mapping[str, str]
+) -> None:
+    declared = free_inputs(model)
+    for name in inputs:
+        if name not in declared:
+            raise UsageError(
+                f"'{name}' is not a free input of {model.name} (inputs: {', '.join(declared) or 'none'})"
+            )
+        if f"{INPUT}{name}" in names:
+            raise UsageError(f"input '{name}' is both varied and given")
+    given = set(inputs) | {n[len(INPUT) :] for n in names if n.startswith(INPUT)}
+    missing = [n for n in declared if n not in given]
+    if missing:
+        raise UsageError(
+            f"input '{missing[0]}' needs a value in every run: vary it (input.{missing[0]}) "
+            f"or give it (--input {missing[0]}=EXPR)"
+        )
+    from hybrid.simulation.inputs import ExpressionInput
+
+    for name, source in inputs.items():
+        ExpressionInput(name, source)  # a bad expression is refused here, once
+
+
+def _count(row: dict[str, Any], requirements: Sequence[str], counts: dict[str, int]) -> None:
+    if row.get("cause") in FAILED:
+        counts["failed"] += 1
+    if any(row.get(f"{r}.holds") is False for r in requirements):
+        counts["violations"] += 1
+
+
+def _fingerprint(
+    digest: str, plan: RunPlan, columns: Sequence[str], points: Sequence[Point]
+) -> str:
+    text = json.dumps(
+        {
+            "model": digest,
+            "t_end": plan.t_end,
+            "solver": sorted((k, repr(v)) for k, v in plan.solver.items()),
+            "inputs": plan.inputs,
+            "backend": plan.backend,
+            "columns": list(columns),
+            "points": [[(k, repr(v)) for k, v in p.items()] for p in points],
+        }
+    )
+    return hashlib.sha256(text.encode()).hexdigest()

@@ -1,0 +1,71 @@
+"""What runs inside a worker: jobs against the model it unpacked once.
+
+A **job** is ``(index, task, argument)``: ``task`` names a function of this
+package (``"run"``: one run at a point, :func:`hybrid.campaigns.runs.run_point`;
+``"search"``: a local search of falsification,
+:func:`hybrid.campaigns.search.local_search`), so a job pickles as a few names
+and numbers. :func:`execute` runs a batch of jobs anywhere (this process, a
+local worker process, a Dask worker); :func:`serve` is the loop of a local
+worker process, which ignores Ctrl-C (the campaign's own process decides when
+to stop) and answers each job as soon as it is done.
+
+Examples
+--------
+>>> import hybrid
+>>> from hybrid.campaigns.payload import pack
+>>> from hybrid.campaigns.runs import RunPlan
+>>> payload = pack(hybrid.load("specs/bouncing_ball.yaml"))
+>>> [(i, row["cause"]) for i, row in execute(payload, RunPlan(t_end=1.0), [(0, "run", {"e": 0.5})])]
+[(0, 't_end')]
+"""
+
+from __future__ import annotations
+
+import signal
+from collections.abc import Sequence
+from multiprocessing.connection import Connection
+from typing import Any
+
+import numpy as np
+
+from hybrid.campaigns.payload import Payload, unpack
+from hybrid.campaigns.runs import RunPlan, run_point
+
+__all__ = ["Job", "execute", "serve"]
+
+Job = tuple[int, str, Any]
+"""``(index, task, argument)``."""
+
+
+def _task(name: str) -> Any:
+    if name == "run":
+        return run_point
+    if name == "search":
+        from hybrid.campaigns.search import local_search
+
+        return local_search
+    raise ValueError(f"unknown task {name!r}")
+
+
+def execute(payload: Payload, plan: RunPlan, jobs: Sequence[Job]) -> list[tuple[int, Any]]:
+    """Run ``jobs`` here; their results, in order (the batch function of a Dask task)."""
+    model = unpack(payload)
+    with np.errstate(all="ignore"):
+        return [(index, _task(task)(model, index, arg, plan)) for index, task, arg in jobs]
+
+
+def serve(conn: Connection, payload: Payload, plan: RunPlan) -> None:
+    """A local worker process: receive batches of jobs, send back each result when done."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    model = unpack(payload)
+    try:
+        while True:
+            batch = conn.recv()
+            if batch is None:
+                return
+            for index, task, arg in batch:
+                with np.errstate(all="ignore"):
+                    result = _task(task)(model, index, arg, plan)
+                conn.send((index, result))
+    except (EOFError, BrokenPipeError, KeyboardInterrupt):
+        return

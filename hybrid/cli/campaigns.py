@@ -1,0 +1,270 @@
+"""``hybrid sweep`` and ``hybrid falsify``: campaigns of many runs from the command line.
+
+``sweep`` writes the table (``--out results.csv|results.parquet``) and prints a
+summary, or with ``--format github|junit|sarif|json|text`` the findings of
+:mod:`hybrid.campaigns.findings` (as ``hybrid check`` prints its own). Exit 0
+when every run ran and no requirement was violated, 1 when a run raised or
+timed out or a requirement was violated (or Ctrl-C stopped the campaign: the
+rows finished are kept for ``--resume``), 2 for an invalid spec or usage.
+
+``falsify`` searches the varied ranges for a violation of one requirement and
+writes ``falsification.json`` (the values, robustness, every evaluation), and
+the trajectory (``trajectory.csv``) and events (``events.json``) of the
+counterexample, or of the lowest-robustness run when none was found, into
+``--out DIR``. Exit 1 when it finds a violation, 0 when none within the budget.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+from hybrid.cli.exits import EXIT_FINDINGS, EXIT_OK
+from hybrid.errors import UsageError
+from hybrid.progress import TerminalLine, terminal_reporter
+from hybrid.simulation.interrupts import Interrupts
+
+__all__ = ["add_campaign_commands", "run_falsify", "run_sweep"]
+
+REPORT_FORMATS = ("summary", "text", "json", "github", "junit", "sarif")
+
+
+def add_campaign_commands(
+    sub: argparse._SubParsersAction,  # type: ignore[type-arg]
+    types: Mapping[str, Callable[[str], Any]],
+) -> None:
+    """Add ``sweep`` and ``falsify``; ``types`` are the parser's argument types by name."""
+    from hybrid.campaigns.space import SAMPLERS
+
+    p = sub.add_parser("sweep", help="run a spec over a grid or samples of parameters")
+    p.add_argument("file", metavar="FILE", help="spec or system file")
+    p.add_argument("--t-end", type=types["positive"], required=True, help="end time of each run")
+    p.add_argument("--grid", action="append", default=[], metavar="NAME=LO:HI:N",
+                   help="N values from LO to HI (a parameter, init.x or input.u); repeatable")  # fmt: skip
+    p.add_argument("--vary", action="append", default=[], metavar="NAME=LO:HI",
+                   help="a range to draw --sample points from; repeatable")  # fmt: skip
+    p.add_argument("--sample", type=types["count"], default=None, metavar="N",
+                   help="N seeded samples of the --vary ranges")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, help="seed of the samples (default 0)")
+    p.add_argument("--sampler", choices=SAMPLERS, default="lhs", help="how samples are drawn")
+    p.add_argument("--summary", action="append", default=[], metavar="KIND:NAME",
+                   help="a column per run: max:x, min:x, last:x, mean:x, jumps:EDGE, jump_t:K")  # fmt: skip
+    _common(p, types)
+    p.add_argument("--out", required=True, help="results file (.csv or .parquet)")
+    p.add_argument("--resume", action="store_true", help="finish an interrupted campaign")
+    p.add_argument("--format", choices=REPORT_FORMATS, default="summary",
+                   help="print a summary (default) or findings as `hybrid check` does")  # fmt: skip
+
+    p = sub.add_parser("falsify", help="search parameter ranges for a requirement's violation")
+    p.add_argument("file", metavar="FILE", help="spec or system file")
+    p.add_argument("--t-end", type=types["positive"], required=True, help="end time of each run")
+    p.add_argument("--requirement", required=True, metavar="NAME", help="the requirement")
+    p.add_argument("--vary", action="append", default=[], required=True, metavar="NAME=LO:HI",
+                   help="a range to search (a parameter, init.x or input.u); repeatable")  # fmt: skip
+    p.add_argument("--budget", type=types["count"], default=100, help="simulations at most")
+    p.add_argument("--seed", type=int, default=0, help="seed of the global phase (default 0)")
+    p.add_argument("--sampler", choices=SAMPLERS, default="lhs", help="the global design")
+    _common(p, types)
+    p.add_argument("--out", metavar="DIR", help="write the counterexample here")
+
+
+def _common(p: argparse.ArgumentParser, types: Mapping[str, Callable[[str], Any]]) -> None:
+    from hybrid.simulation.settings import METHODS
+
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=types["count"], default=None,
+                       help="local worker processes (default: every core; 0: in this process)")  # fmt: skip
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="run on a Dask cluster: the scheduler's address (tcp://host:8786)")  # fmt: skip
+    p.add_argument("--run-timeout", type=types["positive"], default=None, metavar="SECONDS",
+                   help="a run longer than this is a row with cause timeout")  # fmt: skip
+    p.add_argument("--param", type=types["param"], action="append", default=[],
+                   metavar="NAME=VALUE", help="hold a parameter at a value")  # fmt: skip
+    p.add_argument("--input", type=types["assignment"], action="append", default=[],
+                   metavar="NAME=EXPR", help="drive a free input with an expression of t")  # fmt: skip
+    p.add_argument("--max-jumps", type=types["count"], default=10_000, help="jumps per run at most")
+    p.add_argument("--rtol", type=types["positive"], default=1e-6, help="relative tolerance")
+    p.add_argument("--atol", type=types["positive"], default=1e-9, help="absolute tolerance")
+    p.add_argument("--max-step", type=types["positive"], default=None, help="largest solver step")
+    p.add_argument("--method", default=METHODS[0], choices=METHODS, help="solve_ivp method")
+    p.add_argument("--dt", type=types["positive"], default=None, help="store points on a grid")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+
+
+def _solver(args: argparse.Namespace) -> dict[str, Any]:
+    return {
+        "max_jumps": args.max_jumps,
+        "rtol": args.rtol,
+        "atol": args.atol,
+        "max_step": args.max_step,
+        "method": args.method,
+        "dt": args.dt,
+    }
+
+
+def _notifier(line: TerminalLine | None) -> Callable[[str], None]:
+    def notify(text: str) -> None:
+        if line is not None:
+            line.message(f"hybrid: {text}")
+        else:
+            print(f"hybrid: {text}", file=sys.stderr, flush=True)
+
+    return notify
+
+
+def run_sweep(args: argparse.Namespace) -> int:
+    """The ``sweep`` command; returns the exit code."""
+    from hybrid.analysis.formats import write
+    from hybrid.campaigns.findings import sweep_findings, values_text
+    from hybrid.campaigns.space import Axis
+    from hybrid.campaigns.store import parts_dir
+    from hybrid.campaigns.sweep import sweep
+    from hybrid.reader.loader import load
+
+    if args.sample is None and args.vary:
+        raise UsageError("--vary gives ranges to sample: add --sample N")
+    grid = [Axis.parse(text, grid=True) for text in args.grid]
+    vary = [Axis.parse(text, grid=False) for text in args.vary]
+    line = terminal_reporter(args.quiet)
+    interrupts = Interrupts(notify=_notifier(line))
+    with interrupts.installed():
+        model = load(args.file)
+        table = sweep(
+            model,
+            args.t_end,
+            grid=grid,
+            vary=vary or None,
+            samples=args.sample,
+            seed=args.seed,
+            sampler=args.sampler,
+            parameters=dict(args.param) or None,
+            inputs=dict(args.input) or None,
+            summaries=args.summary,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            run_timeout=args.run_timeout,
+            out=args.out,
+            resume=args.resume,
+            progress=line,
+            **_solver(args),
+        )
+    if line is not None:
+        line.clear()
+    if table.resumed:
+        print(
+            f"{args.file}: resumed: {table.resumed} of {table.total} runs were done; "
+            f"ran {len(table) - table.resumed}",
+            file=sys.stderr,
+        )
+    if not table.complete:
+        print(
+            f"{args.file}: interrupted: {len(table)} of {table.total} runs done, kept in "
+            f"{parts_dir(Path(args.out))}/; the same command with --resume runs only the rest",
+            file=sys.stderr,
+        )
+        return EXIT_FINDINGS
+    reports = sweep_findings(model, table)
+    failed = table.failed()
+    violated = any(f.rule == "requirement-violated" for r in reports for f in r.findings)
+    if args.format == "summary":
+        causes: dict[str, int] = {}
+        for row in table.rows:
+            causes[str(row["cause"])] = causes.get(str(row["cause"]), 0) + 1
+        shown = ", ".join(f"{n} {c}" for c, n in sorted(causes.items()))
+        print(f"{args.file}: {len(table)} runs ({shown}); results in {args.out}")
+        for report in reports:
+            for f in report.findings:
+                print(f"  {f.text()}")
+        for row in failed[:5]:
+            print(
+                f"  run {row['run']} ({values_text(row, table.varied)}): {row['cause']}: "
+                f"{row.get('message') or ''}",
+                file=sys.stderr,
+            )
+    else:
+        print(write(args.format, reports))
+    return EXIT_FINDINGS if failed or violated else EXIT_OK
+
+
+def run_falsify(args: argparse.Namespace) -> int:
+    """The ``falsify`` command; returns the exit code."""
+    from hybrid.campaigns.falsify import falsify
+    from hybrid.campaigns.findings import values_text
+    from hybrid.campaigns.space import Axis
+    from hybrid.reader.loader import load
+
+    vary = [Axis.parse(text, grid=False) for text in args.vary]
+    out = Path(args.out) if args.out else None
+    if out is not None and out.exists() and not out.is_dir():
+        raise UsageError(f"--out: '{out}' exists and is not a directory")
+    line = terminal_reporter(args.quiet)
+    interrupts = Interrupts(notify=_notifier(line))
+    with interrupts.installed():
+        model = load(args.file)
+        result = falsify(
+            model,
+            args.requirement,
+            vary,
+            t_end=args.t_end,
+            budget=args.budget,
+            seed=args.seed,
+            sampler=args.sampler,
+            parameters=dict(args.param) or None,
+            inputs=dict(args.input) or None,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            run_timeout=args.run_timeout,
+            progress=line,
+            **_solver(args),
+        )
+    if line is not None:
+        line.clear()
+    if out is not None:
+        _write_result(result, out)
+    shown = values_text(result.values, list(result.values))
+    where = f" into {out}" if out is not None else ""
+    if result.found:
+        at = result.violated_at
+        when = "" if at is None else f", violated at t={at:.9g}"
+        print(
+            f"{args.file}: requirement '{args.requirement}' violated at {shown} (robustness "
+            f"{result.robustness:.6g}{when}) after {result.evaluations} runs; written{where}"
+        )
+        return EXIT_FINDINGS
+    stopped = "" if result.complete else " (interrupted)"
+    print(
+        f"{args.file}: no violation of '{args.requirement}' in {result.evaluations} runs"
+        f"{stopped}; lowest robustness {result.robustness:.6g} at {shown}"
+    )
+    return EXIT_OK if result.complete else EXIT_FINDINGS
+
+
+def _write_result(result: Any, out: Path) -> None:
+    from hybrid.export.atomic import atomic_write
+    from hybrid.export.trajectory import write_csv, write_events
+
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(f"cannot create the directory {out}: {exc.strerror or exc}") from None
+    document = _finite(result.as_dict())
+    with atomic_write(out / "falsification.json") as handle:
+        handle.write((json.dumps(document, indent=2) + "\n").encode("utf-8"))
+    if result.run is not None:
+        write_csv(result.run, out / "trajectory.csv")
+        write_events(result.run, out / "events.json")
+
+
+def _finite(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite(v) for v in value]
+    return value

@@ -1,0 +1,355 @@
+"""The requirement monitor: robustness and the first violation, found inside every step.
+
+The monitor watches a run as the recorder stores it: every point that is not
+inside a stay (the initial point, each post-jump point) and every accepted
+solver step of each stay, as the solver's interpolant over the part of the
+step that belongs to the trajectory. It never changes the run. For each
+requirement in scope (its ``in:`` location, cut to its ``within`` window) it
+evaluates the requirement's margin (:mod:`~hybrid.simulation.margins`) the way
+the search for events evaluates the watch (:mod:`~hybrid.simulation.crossing`):
+
+1. **Samples.** The part ``[a, b]`` of a step is cut into
+   ``m = parts(b - a, spacing)`` equal parts (the same rule and spacing as the
+   search for events); the margin is evaluated at every sample, the ends
+   included, on the interpolant (the step end on the solver's own state).
+2. **Extremes.** A sample that is a local minimum of the sampled values (of the
+   margin for ``always``, of its negative for ``eventually``), and the first
+   and last samples of a stretch in scope when the values fall towards them,
+   are refined by bounded Brent minimisation between their neighbours, unless
+   the dip cannot reach below the smallest value seen (its depth is bounded by
+   twice the differences to the neighbours). The robustness is the smallest
+   value found, so an extreme that falls on a sample, a jump or the end of the
+   run is exact.
+3. **Violation** (``always``). The first sample, or refined minimum, whose
+   margin is below minus the band of :func:`~hybrid.simulation.crossing.band`
+   is a violation; its time is the zero of the margin between the sample
+   before (where the margin was positive) and it, located by Brent's method to
+   about machine precision: the exact crossing, as for a guard.
+
+What it cannot see is what the search for events cannot: a dip that lies
+between two samples and leaves no local minimum in the sampled values.
+``max_step`` bounds the parts.
+
+Examples
+--------
+>>> import hybrid, math
+>>> heater = hybrid.load_text('''
+... automaton: heater
+... state: {x: {initial: 20.0}}
+... locations: {cooling: {flow: {x: -0.1*x}}}
+... requirements:
+...   - {name: warm, always: "x >= 15"}
+...   - {name: mild, always: "x >= 12"}
+... ''')
+>>> run = hybrid.simulate(heater, t_end=5.0, rtol=1e-10, atol=1e-12)
+>>> warm, mild = run.requirements["warm"], run.requirements["mild"]
+>>> warm.holds, abs(warm.robustness - (20 * math.exp(-0.5) - 15)) < 1e-9
+(False, True)
+>>> abs(warm.violated_at - 10 * math.log(20 / 15)) < 1e-7   # x = 15 there
+True
+>>> mild.holds, round(mild.robustness, 6), mild.violated_at
+(True, 0.130613, None)
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+from hybrid.simulation.compiled import CompiledMode
+from hybrid.simulation.crossing import HORIZON_SAMPLES, band, parts
+from hybrid.simulation.dense import StepCurve
+from hybrid.simulation.failures import describe_failure
+from hybrid.simulation.margins import Fn, MarginTable
+from hybrid.simulation.result import RequirementResult
+from hybrid.simulation.settings import Settings
+
+__all__ = ["DIP_REACH", "Monitor"]
+
+DIP_REACH = 2.0
+"""A local minimum is refined unless its value minus this many times the differences
+to its neighbours stays above the smallest value seen (it cannot matter)."""
+
+_EPS = float(np.finfo(float).eps)
+_TOL = 4 * _EPS
+
+Sample = tuple[float, float, Any, Any]
+"""``(t, value, x, curve)``: a sample of a stretch in scope (``curve`` None for a lone point)."""
+
+
+class _Track:
+    """The running result of one requirement."""
+
+    __slots__ = (
+        "always",
+        "best",
+        "best_band",
+        "failed",
+        "fn",
+        "hi",
+        "lo",
+        "piece",
+        "seen",
+        "sign",
+        "started",
+        "violated_at",
+    )
+
+    def __init__(self, kind: str, window: tuple[float, float] | None) -> None:
+        self.always = kind == "always"
+        self.sign = 1.0 if self.always else -1.0
+        self.lo, self.hi = window if window is not None else (-math.inf, math.inf)
+        self.best = math.inf
+        self.best_band = 0.0
+        self.violated_at: float | None = None
+        self.seen = False
+        self.failed: tuple[float, str] | None = None
+        self.piece: list[Sample] = []
+        self.started = False
+        self.fn: Fn | None = None
+
+
+class Monitor:
+    """Monitors the requirements of a :class:`MarginTable` over one run.
+
+    The recorder calls :meth:`point` for each point not inside a stay and
+    :meth:`segment` for each accepted step; :meth:`results` gives the outcome.
+    """
+
+    def __init__(self, table: MarginTable, settings: Settings) -> None:
+        self.table = table
+        self.spacing = (settings.t_end - settings.t_start) / HORIZON_SAMPLES
+        self.tracks = [_Track(w.requirement.kind, w.requirement.within) for w in table.watched]
+
+    # --- what the recorder sees ---------------------------------------------------------
+
+    def point(self, mode: CompiledMode, t: float, x: np.ndarray) -> None:
+        """A point of the run not inside a stay (the start, the point after a jump)."""
+        for k, fn in self.table.of(mode):
+            tr = self.tracks[k]
+            if tr.failed is not None or not tr.lo <= t <= tr.hi:
+                continue
+            self._close(tr)
+            value = self._value(tr, fn, t, x)
+            if value is not None:
+                self._observe(tr, t, value, x)
+                if tr.always and tr.violated_at is None and value < -band(x):
+                    tr.violated_at = t
+
+    def segment(self, mode: CompiledMode, curve: StepCurve, stop: float | None) -> None:
+        """An accepted step of a stay in ``mode``, up to ``stop`` (None: its end)."""
+        entries = self.table.of(mode)
+        if not entries:
+            return
+        ta, tb = curve.t0, (curve.t1 if stop is None else stop)
+        grids: dict[tuple[float, float], tuple[list[float], list[Any]]] = {}
+        for k, fn in entries:
+            tr = self.tracks[k]
+            if tr.failed is not None:
+                continue
+            a, b = max(ta, tr.lo), min(tb, tr.hi)
+            if a > b:
+                continue
+            last = tr.piece[-1] if tr.piece else None
+            if last is None or tr.fn is not fn or last[0] != a:
+                self._close(tr)
+                tr.fn = fn
+                tr.started = True
+                x = curve.at(a)
+                value = self._value(tr, fn, a, x)
+                if value is None:
+                    continue
+                self._push(tr, (a, value, x, curve))
+            if b == a:
+                continue
+            grid = grids.get((a, b))
+            if grid is None:
+                grid = grids[(a, b)] = _grid(curve, a, b, self.spacing)
+            for t, x in zip(*grid, strict=True):
+                value = self._value(tr, fn, t, x)
+                if value is None:
+                    break
+                self._push(tr, (t, value, x, curve))
+
+    def results(self, t_final: float) -> dict[str, RequirementResult]:
+        """Each requirement's result, the run having ended at ``t_final``."""
+        found: dict[str, RequirementResult] = {}
+        for w, tr in zip(self.table.watched, self.tracks, strict=True):
+            self._close(tr)
+            closes = min(tr.hi, t_final)
+            if tr.failed is not None:
+                found[w.name] = RequirementResult(
+                    w.name, False, math.nan, tr.failed[0], f"cannot be evaluated: {tr.failed[1]}"
+                )
+            elif tr.always:
+                robustness = tr.best if tr.seen else math.inf
+                found[w.name] = RequirementResult(
+                    w.name, tr.violated_at is None, robustness, tr.violated_at
+                )
+            else:
+                peak = -tr.best if tr.seen else -math.inf
+                holds = tr.seen and peak >= -tr.best_band
+                found[w.name] = RequirementResult(w.name, holds, peak, None if holds else closes)
+        return found
+
+    # --- one requirement ----------------------------------------------------------------
+
+    def _value(self, tr: _Track, fn: Fn, t: float, x: Any) -> float | None:
+        """``sign * margin`` at ``(t, x)``; None (and the track failed) if it cannot be computed."""
+        value = float(fn(t, x))
+        failure = self.table.failure
+        if failure.error is not None or not math.isfinite(value):
+            if failure.error is not None:
+                why = describe_failure(self.table.compiled, failure).split(" failed: ", 1)[-1]
+            else:
+                why = f"its margin is {value}"
+            tr.failed = (t, f"{why} (at t={t:.9g})")
+            failure.clear()
+            tr.piece = []
+            return None
+        return tr.sign * value
+
+    def _observe(self, tr: _Track, t: float, value: float, x: Any) -> None:
+        tr.seen = True
+        if value < tr.best:
+            tr.best = value
+            tr.best_band = band(x)
+
+    def _push(self, tr: _Track, sample: Sample) -> None:
+        value = sample[1]
+        tr.seen = True
+        if value < tr.best:
+            tr.best = value
+            tr.best_band = band(sample[2])
+        piece = tr.piece
+        if len(piece) == 1 and tr.started:
+            tr.started = False
+            if piece[0][1] < value:
+                self._refine(tr, piece[0], None, sample)  # the stretch starts rising
+        if len(piece) == 2:
+            left, mid = piece
+            if mid[1] <= left[1] and mid[1] <= value and (mid[1] < left[1] or mid[1] < value):
+                self._refine(tr, left, mid, sample)
+        if tr.always and tr.violated_at is None and value < 0.0 and value < -band(sample[2]):
+            if piece:
+                before = piece[-1]
+                tr.violated_at = self._crossing(tr, before, sample, sample[3])
+            else:
+                tr.violated_at = sample[0]
+        if len(piece) == 2:
+            piece.pop(0)
+        piece.append(sample)
+
+    def _close(self, tr: _Track) -> None:
+        """End the open stretch: refine its last part if the values fall towards its end."""
+        piece = tr.piece
+        if len(piece) == 2 and piece[1][1] < piece[0][1] and piece[1][3] is not None:
+            self._refine(tr, piece[0], None, piece[1])
+        tr.piece = []
+        tr.started = False
+
+    def _refine(self, tr: _Track, left: Sample, mid: Sample | None, right: Sample) -> None:
+        """Minimise between ``left`` and ``right`` (around ``mid``, or over one part)."""
+        fn = tr.fn
+        if fn is None:
+            return
+        values = [left[1], right[1]] if mid is None else [left[1], mid[1], right[1]]
+        low = min(values)
+        reach = sum(abs(v - low) for v in values)
+        if low - DIP_REACH * reach > tr.best:
+            return
+        split = mid[0] if mid is not None else right[0]
+        before = (mid if mid is not None else right)[3]
+        after = right[3]
+        sign, failure = tr.sign, self.table.failure
+
+        def phi(t: float) -> float:
+            curve = before if t <= split else after
+            return sign * float(fn(t, curve.at(t)))
+
+        t_min, v_min = _minimise(phi, left, mid, right)
+        if failure.error is not None:
+            failure.clear()  # at a point between samples: only the samples count for failures
+            return
+        if not math.isfinite(v_min):
+            return
+        x_min = (before if t_min <= split else after).at(t_min)
+        self._observe(tr, t_min, v_min, x_min)
+        if tr.always and tr.violated_at is None and v_min < -band(x_min):
+            tr.violated_at = self._crossing(tr, left, (t_min, v_min, x_min, after), before, phi)
+
+    def _crossing(
+        self, tr: _Track, before: Sample, after: Sample, curve: Any, phi: Any = None
+    ) -> float:
+        """Where the margin crosses 0 between ``before`` (>= 0 side) and ``after`` (< 0)."""
+        ta, va = before[0], before[1]
+        tb, vb = after[0], after[1]
+        if not va > 0.0:
+            return ta
+        fn = tr.fn
+        if phi is None:
+            assert fn is not None
+            sign = tr.sign
+
+            def phi(t: float) -> float:
+                return sign * float(fn(t, curve.at(t)))
+
+        def bracketed(t: float) -> float:
+            if t == ta:
+                return va
+            if t == tb:
+                return vb
+            value: float = phi(t)
+            return value
+
+        try:
+            root: float = brentq(bracketed, ta, tb, xtol=_TOL, rtol=_TOL)
+        except (ValueError, RuntimeError):
+            return tb
+        self.table.failure.clear()
+        return root
+
+
+def _minimise(phi: Any, left: Sample, mid: Sample | None, right: Sample) -> tuple[float, float]:
+    """The smallest value of ``phi`` between ``left`` and ``right`` (times and values known).
+
+    Brent's method on a bracket ``a < b < c`` with ``phi(b)`` below both ends, to
+    about 1e-11 in time, so that a minimum at a kink (a compound condition, an
+    ``abs``) is found as well as a smooth one. Without such a bracket (a part at
+    the start or end of a stretch, a tie) a bounded search looks for a point that
+    makes one first.
+    """
+    ta, va, tc, vc = left[0], left[1], right[0], right[1]
+    if mid is not None and mid[1] < va and mid[1] < vc:
+        tb, vb = mid[0], mid[1]
+    else:
+        coarse = minimize_scalar(
+            phi, bounds=(ta, tc), method="bounded", options={"xatol": 1e-10 * (tc - ta)}
+        )
+        tb, vb = float(coarse.x), float(coarse.fun)
+        if not (vb < va and vb < vc) or not ta < tb < tc:
+            return (ta, va) if va <= vc else (tc, vc)
+    fine = minimize_scalar(
+        phi, bracket=(ta, tb, tc), method="brent", options={"xtol": 1e-12, "maxiter": 200}
+    )
+    t_fine, v_fine = float(fine.x), float(fine.fun)
+    if ta <= t_fine <= tc and v_fine < vb:
+        return t_fine, v_fine
+    return tb, vb
+
+
+def _grid(curve: StepCurve, a: float, b: float, spacing: float) -> tuple[list[float], list[Any]]:
+    """The samples after ``a`` up to ``b`` (included) of the part ``[a, b]`` of ``curve``'s step."""
+    m = parts(b - a, spacing)
+    if a == curve.t0 and b == curve.t1:
+        times = [a + (b - a) * k / m for k in range(1, m)]
+        rows: list[Any] = list(curve.parts(m)) if m > 1 else []
+    else:
+        times = [a + (b - a) * k / m for k in range(1, m)]
+        rows = list(curve.many(np.array(times))) if times else []
+    times.append(b)
+    rows.append(curve.x1 if b == curve.t1 else curve.at(b))
+    return times, rows
