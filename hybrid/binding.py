@@ -16,7 +16,8 @@ clash, a reserved name), for the reader to place; :func:`rename` applies a
 valid one. :func:`input_problems` checks what each input of a system reads: the
 signal or state variable of exactly one other component, or nothing (a *free*
 input of the system, which then needs a range, the same in every component
-that reads it).
+that reads it). :func:`signal_cycle_problems` finds signals defined through each
+other across components, in a combination of locations the components can be in.
 
 Examples
 --------
@@ -37,7 +38,9 @@ Examples
 
 from __future__ import annotations
 
+import itertools
 import keyword
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from difflib import get_close_matches
@@ -46,11 +49,12 @@ from typing import TypeVar
 
 from hybrid.errors import Position
 from hybrid.expr import ir
+from hybrid.expr.dependencies import find_dependency_cycle
 from hybrid.expr.functions import BUILTINS
 from hybrid.expr.transform import rename_names
 from hybrid.model import Automaton
 
-__all__ = ["input_problems", "rename", "rename_problems"]
+__all__ = ["input_problems", "rename", "rename_problems", "signal_cycle_problems"]
 
 T = TypeVar("T")
 
@@ -239,3 +243,100 @@ def input_problems(components: Sequence[tuple[str, Automaton]]) -> list[tuple[Po
                         )
                     )
     return problems
+
+
+COMBINATIONS_CHECKED = 4096
+"""Above this many combinations of location-specific definitions, the union is checked."""
+
+
+def signal_cycle_problems(
+    components: Sequence[tuple[str, Automaton]],
+) -> list[tuple[Position, str]]:
+    """Signals of several components defined through each other, where that can happen.
+
+    A signal's definition in force depends on its component's location, and an
+    input is a use of the signal of the same name that another component defines.
+    A cycle is reported only if some combination of locations (one per component)
+    puts all of its definitions in force at once; beyond
+    :data:`COMBINATIONS_CHECKED` combinations, a cycle through the union of the
+    definitions is reported (saying so).
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> a = hybrid.load_text('''
+    ... automaton: a
+    ... inputs: [v]
+    ... signals: {s: "0"}
+    ... locations: {on: {signals: {s: v + 1}}, off: {}}
+    ... ''')
+    >>> b = hybrid.load_text('''
+    ... automaton: b
+    ... inputs: [s]
+    ... signals: {v: "2 * s"}
+    ... locations: {l: {}}
+    ... ''')
+    >>> [m for _, m in signal_cycle_problems([("a", a), ("b", b)])]
+    ['signals of the components form a circular definition when a is in on: s -> v -> s']
+    """
+    common: dict[str, set[str]] = {}
+    where: dict[str, Position] = {}
+    variants: list[tuple[str, list[tuple[str, dict[str, set[str]]]]]] = []
+    for cname, a in components:
+        for name in a.signal_names:
+            common[name] = ir.names_in(a.signals[name])
+            where[name] = a.signal_positions.get(name, a.position)
+        mine = _location_variants(a)
+        if mine:
+            variants.append((cname, mine))
+    union = {n: set(d) for n, d in common.items()}
+    for _, mine in variants:
+        for _, local in mine:
+            for n, d in local.items():
+                union[n] |= d
+    cycle = find_dependency_cycle(union)
+    if cycle is None:
+        return []
+    if not variants:
+        return [(where[cycle[0]], _cycle_message(cycle, ""))]
+    if math.prod(len(m) for _, m in variants) > COMBINATIONS_CHECKED:
+        return [(where[cycle[0]], _cycle_message(cycle, " (in some location of each)"))]
+    for combination in itertools.product(*(m for _, m in variants)):
+        deps = dict(common)
+        for _, local in combination:
+            deps.update(local)
+        cycle = find_dependency_cycle(deps)
+        if cycle is not None:
+            chosen = [
+                f"{cname} is in {lname}"
+                for (cname, _), (lname, _) in zip(variants, combination, strict=True)
+                if lname
+            ]
+            context = f" when {' and '.join(chosen)}" if chosen else ""
+            return [(where[cycle[0]], _cycle_message(cycle, context))]
+    return []
+
+
+def _location_variants(a: Automaton) -> list[tuple[str, dict[str, set[str]]]]:
+    """The distinct sets of location-specific signal dependencies of ``a``, each with
+    the first location that has it (``""`` for the file's own definitions)."""
+    seen: set[tuple[tuple[str, tuple[str, ...]], ...]] = set()
+    mine: list[tuple[str, dict[str, set[str]]]] = []
+    plain = False
+    for lname, loc in a.locations.items():
+        local = {n: ir.names_in(e) for n, e in loc.signals.items() if n in a.signal_names}
+        key = tuple(sorted((n, tuple(sorted(d))) for n, d in local.items()))
+        if not local:
+            plain = True
+        elif key not in seen:
+            seen.add(key)
+            mine.append((lname, local))
+    if mine and plain:
+        mine.append(("", {}))
+    return mine
+
+
+def _cycle_message(cycle: list[str], context: str) -> str:
+    return f"signals of the components form a circular definition{context}: " + " -> ".join(
+        [*cycle, cycle[0]]
+    )

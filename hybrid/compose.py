@@ -21,10 +21,8 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 from types import MappingProxyType
 
-from hybrid.binding import input_problems
+from hybrid.binding import input_problems, signal_cycle_problems
 from hybrid.errors import Position, SpecError, did_you_mean
-from hybrid.expr import ir
-from hybrid.expr.dependencies import find_dependency_cycle
 from hybrid.expr.functions import Function
 from hybrid.model import Automaton, Properties, Range, Requirement, StateVar
 
@@ -324,36 +322,7 @@ def check_system(system: System) -> None:
                 )
             else:
                 owner[name] = (c.name, kind, pos)
-    _check_signal_cycles(system, problems)
+    problems.extend(signal_cycle_problems([(c.name, c.automaton) for c in system.components]))
     problems.extend(input_problems([(c.name, c.automaton) for c in system.components]))
     if problems:
         raise SpecError.many(problems)
-
-
-def _check_signal_cycles(system: System, problems: list[tuple[Position, str]]) -> None:
-    """Signals defined through each other across components (any location's definitions).
-
-    An input counts as a use of the signal of the same name, which another
-    component defines.
-    """
-    deps: dict[str, set[str]] = {}
-    where: dict[str, Position] = {}
-    for c in system.components:
-        a = c.automaton
-        for name in a.signal_names:
-            definitions = [a.signals[name]]
-            for loc in a.locations.values():
-                local = loc.signals.get(name)
-                if local is not None:
-                    definitions.append(local)
-            deps[name] = set().union(*(ir.names_in(d) for d in definitions))
-            where[name] = a.signal_positions.get(name, a.position)
-    cycle = find_dependency_cycle(deps)
-    if cycle:
-        problems.append(
-            (
-                where[cycle[0]],
-                "signals of the components form a circular definition: "
-                + " -> ".join([*cycle, cycle[0]]),
-            )
-        )
