@@ -31,10 +31,10 @@ from hybrid.campaigns.executors import Executor
 from hybrid.campaigns.payload import pack
 from hybrid.campaigns.runs import RunPlan, failed_row, model_variant, requirement_columns
 from hybrid.campaigns.search import objective
-from hybrid.campaigns.space import SAMPLERS, Axis, unit_samples
+from hybrid.campaigns.space import SAMPLERS, Axis, ranges_axes, unit_samples
 from hybrid.campaigns.sweep import SOLVER_OPTIONS, executor_for, hard_limit
 from hybrid.campaigns.targets import Constant, check_names, free_inputs, split
-from hybrid.compose import System
+from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.progress import Reporter, Tracker
@@ -104,7 +104,7 @@ class Falsification:
 def falsify(
     model: Automaton | System,
     requirement: str,
-    vary: Mapping[str, tuple[float, float]] | Sequence[Axis],
+    vary: Mapping[str, tuple[float, float] | None] | Sequence[Axis | str] | None = None,
     *,
     t_end: float,
     budget: int = 100,
@@ -130,8 +130,11 @@ def falsify(
         From :func:`hybrid.load`.
     requirement : str
         The requirement's name (``comp.name`` for a component's, in a system).
-    vary : mapping or sequence of Axis
-        ``{name: (low, high)}``: parameters, ``init.x``, ``input.u``.
+    vary : mapping or sequence of Axis or str, optional
+        ``{name: (low, high)}``: parameters, ``init.x``, ``input.u``. An ``init.x``
+        or ``input.u`` with the range ``None`` (or a bare name in a sequence) is
+        searched over the range its spec declares; not given: every range the
+        spec declares (initial sets and input ranges, as :func:`hybrid.sweep`).
     t_end : float
         End time of every run.
     budget : int
@@ -181,13 +184,12 @@ def falsify(
         raise UsageError(f"unknown sampler '{sampler}' (choose from {', '.join(SAMPLERS)})")
     if parameters:
         model = model.with_parameters(dict(parameters))
-    axes = (
-        [Axis.of(str(n), float(lo), float(hi)) for n, (lo, hi) in vary.items()]
-        if isinstance(vary, Mapping)
-        else list(vary)
-    )
+    axes = ranges_axes(model, vary)
     if not axes:
-        raise UsageError("nothing to vary: give --vary NAME=LO:HI")
+        raise UsageError(
+            "nothing to vary: give --vary NAME=LO:HI (the spec declares no initial set or "
+            "input range)"
+        )
     names = [a.name for a in axes]
     check_names(model, names)
     if f"{requirement}.holds" not in requirement_columns(model):
@@ -196,8 +198,11 @@ def falsify(
             f"no requirement '{requirement}' in {model.name} "
             f"(requirements: {', '.join(known) or 'none'})"
         )
+    ranged = as_system(model).input_ranges()  # held at its nominal value when not varied
     missing = [
-        n for n in free_inputs(model) if n not in (inputs or {}) and f"input.{n}" not in names
+        n
+        for n in free_inputs(model)
+        if n not in (inputs or {}) and f"input.{n}" not in names and n not in ranged
     ]
     if missing:
         raise UsageError(f"input '{missing[0]}' needs a value: vary it or give it")
