@@ -259,9 +259,12 @@ class _Search:
         def failed(job: tuple[int, str, Any], cause: str, message: str) -> dict[str, Any]:
             return {"run": job[0], **job[2], **failed_row(self.model, self.plan, cause, message)}
 
+        violations = [0]
+
         def keep(index: int, row: dict[str, Any]) -> None:
-            rows[index] = row
-            tracker.update(len(self.history) + len(rows), violations=int(self.found is not None))
+            rows[index] = row  # every run of the global phase so far
+            violations[0] += objective(row, self.requirement)[1]
+            tracker.update(len(rows), violations=violations[0])
 
         limit = hard_limit(self.plan.timeout)
         for start in range(0, len(points), ROUND):
@@ -281,7 +284,7 @@ class _Search:
         left = self.budget - len(self.history)
         if self.found is None and self.complete and left > 0:
             self._local(executor, stop, left, tracker)
-        tracker.finish(len(self.history), violations=int(self.found is not None))
+        tracker.finish(len(self.history), violations=self.violations())
 
     def _local(self, executor: Executor, stop: Any, left: int, tracker: Tracker) -> None:
         ranked = sorted(range(len(self.history)), key=lambda i: (self.history[i]["robustness"], i))
@@ -327,7 +330,11 @@ class _Search:
                 self.history.append({**entry, "phase": f"local {k}"})
                 if entry["violated"] and self.found is None:
                     self.found = self.history[-1]
-        tracker.update(len(self.history), violations=int(self.found is not None))
+        tracker.update(len(self.history), violations=self.violations())
+
+    def violations(self) -> int:
+        """The runs so far that violate the requirement."""
+        return sum(1 for h in self.history if h["violated"])
 
     def result(self) -> Falsification:
         names = [a.name for a in self.axes]
