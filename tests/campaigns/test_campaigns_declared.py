@@ -142,3 +142,14 @@ def test_the_commands_take_bare_names(tmp_path: Path, monkeypatch: pytest.Monkey
     assert code == 1
     found = json.loads(Path("cex/falsification.json").read_text())
     assert found["found"] and found["values"]["init.x"] + T * found["values"]["input.u"] < 0
+
+
+def test_a_system_s_free_input_and_initial_set_are_varied_too(drift: hybrid.Automaton) -> None:
+    clock = hybrid.load_text("automaton: clock\nstate: {c: {initial: 0.0}}\nlocations: {l: {flow: {c: 1}}}\n")
+    system = hybrid.compose(drift, clock)
+    assert declared_ranges(system) == {"init.x": X0, "input.u": U}
+    table = hybrid.sweep(system, t_end=T, samples=4, seed=2, workers=0)
+    assert table.varied == ["init.x", "input.u"]
+    for row in table.rows:
+        expected = _robustness(row["init.x"], row["input.u"])
+        assert row["drift.positive.robustness"] == pytest.approx(expected, abs=1e-6)
