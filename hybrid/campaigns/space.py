@@ -18,7 +18,9 @@ Grid and samples combine: every grid point with every sample.
 initial sets ``x: {initial: [lo, hi]}`` and bounded inputs ``u: {range: [lo,
 hi]}``): samples are drawn from them when no range is given (``--sample N``
 alone), or for the names given without one (``--vary init.x``,
-``vary={"init.x": None}``); :func:`declared_axis` makes the axis of one name.
+``vary={"init.x": None}``), and a grid spans them with a count alone
+(``--grid init.x=5``, ``grid={"init.x": 5}``); :func:`declared_axis` makes the
+axis of one name.
 
 Examples
 --------
@@ -53,7 +55,9 @@ __all__ = [
     "combine",
     "declared_axis",
     "declared_ranges",
+    "grid_axes",
     "grid_points",
+    "parse_grid",
     "parse_range",
     "ranges_axes",
     "sample_points",
@@ -222,8 +226,10 @@ def declared_ranges(model: Automaton | System) -> dict[str, tuple[float, float]]
     return found
 
 
-def declared_axis(model: Automaton | System, name: str) -> Axis:
+def declared_axis(model: Automaton | System, name: str, count: int | None = None) -> Axis:
     """The axis of ``name`` over the range the spec declares for it (a clear error if none).
+
+    With ``count``, a grid axis of ``count`` values across that range, ends included.
 
     Examples
     --------
@@ -236,24 +242,73 @@ def declared_axis(model: Automaton | System, name: str) -> Axis:
     """
     check_names(model, [name])
     system = as_system(model)
+    shape = "LO:HI" if count is None else "LO:HI:N"
     if name.startswith(INITIAL):
         var = name[len(INITIAL) :]
         r = system.initial_set()[var]
         if r.is_point:
             raise UsageError(
                 f"{name}: {model.name} declares one initial value of {var} ({r.lo:g}), not a "
-                f"set: give a range, {name}=LO:HI"
+                f"set: give a range, {name}={shape}"
             )
-        return Axis.of(name, r.lo, r.hi)
+        return Axis.of(name, r.lo, r.hi, count)
     if name.startswith(INPUT):
         var = name[len(INPUT) :]
         found = system.input_ranges().get(var)
         if found is None or found.is_point:
             raise UsageError(
-                f"{name}: {model.name} declares no range for input {var}: give one, {name}=LO:HI"
+                f"{name}: {model.name} declares no range for input {var}: give one, {name}={shape}"
             )
-        return Axis.of(name, found.lo, found.hi)
-    raise UsageError(f"{name}: a parameter has no declared range: give one, {name}=LO:HI")
+        return Axis.of(name, found.lo, found.hi, count)
+    raise UsageError(f"{name}: a parameter has no declared range: give one, {name}={shape}")
+
+
+def grid_axes(
+    model: Automaton | System,
+    given: Mapping[str, Sequence[float] | int] | Sequence[Axis | tuple[str, int]] | None,
+) -> list[Axis]:
+    """The axes of ``grid``: ``{name: values}``, Axis, or a count of values (``{name: N}``,
+    ``(name, N)``) across the range the spec declares for an ``init.x`` or ``input.u``."""
+    if not given:
+        return []
+    axes: list[Axis] = []
+    if isinstance(given, Mapping):
+        for name, values in given.items():
+            if isinstance(values, int):  # a count (a bool is refused by _count)
+                axes.append(declared_axis(model, str(name), _count(str(name), values)))
+            else:
+                axes.append(Axis.listed(str(name), values))
+        return axes
+    for item in given:
+        if isinstance(item, Axis):
+            axes.append(item)
+        else:
+            name, count = item
+            axes.append(declared_axis(model, str(name), _count(str(name), count)))
+    return axes
+
+
+def _count(name: str, count: int) -> int:
+    if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+        raise UsageError(f"{name}: N must be a whole number >= 1, got {count!r}")
+    return count
+
+
+def parse_grid(text: str) -> Axis | tuple[str, int]:
+    """``NAME=LO:HI:N`` (an Axis), or ``NAME=N``: ``N`` values across the declared range.
+
+    Examples
+    --------
+    >>> parse_grid("init.x=5"), parse_grid("e=0.5:0.9:3").count
+    (('init.x', 5), 3)
+    """
+    name, sep, rest = text.partition("=")
+    if sep and name.strip() and ":" not in rest:
+        try:
+            return name.strip(), int(rest)
+        except ValueError:
+            raise UsageError(f"expected NAME=LO:HI:N or NAME=N, got '{text}'") from None
+    return Axis.parse(text, grid=True)
 
 
 def ranges_axes(

@@ -31,6 +31,7 @@ from hybrid.campaigns.space import (
     Axis,
     Point,
     combine,
+    grid_axes,
     grid_points,
     ranges_axes,
     sample_points,
@@ -66,7 +67,7 @@ def sweep(
     model: Automaton | System,
     t_end: float,
     *,
-    grid: Mapping[str, Sequence[float]] | Sequence[Axis] | None = None,
+    grid: Mapping[str, Sequence[float] | int] | Sequence[Axis | tuple[str, int]] | None = None,
     vary: Mapping[str, tuple[float, float] | None] | Sequence[Axis | str] | None = None,
     samples: int | None = None,
     seed: int = 0,
@@ -98,7 +99,8 @@ def sweep(
         ``{name: values}``: every combination of the values is run, the first
         name slowest. A name is a parameter (``comp.name`` in a system),
         ``init.x`` (the initial value of ``x``) or ``input.u`` (a free input held
-        at that value).
+        at that value). A count instead of values (``{"init.x": 5}``) spreads that
+        many values across the set the spec declares (ends included).
     vary : mapping or sequence of Axis or str, optional
         ``{name: (low, high)}``: the ranges ``samples`` are drawn from. An
         ``init.x`` or ``input.u`` with the range ``None`` (or a bare name in a
@@ -173,20 +175,20 @@ def sweep(
         return _finish(model, t_end, listed, names, solver, summaries, inputs, run_timeout,
                        backend, executor_for(workers, scheduler, batch), out, resume, progress,
                        handle_sigint)  # fmt: skip
-    grid_axes = _grid_axes(grid)
+    on_grid = grid_axes(model, grid)
     if samples is not None:
-        gridded = {a.name for a in grid_axes}
+        gridded = {a.name for a in on_grid}
         vary_axes = [a for a in ranges_axes(model, vary) if vary or a.name not in gridded]
         sampled: list[Point] | None = sample_points(vary_axes, samples, seed, sampler)
     else:
         if vary:
             raise UsageError("ranges to vary need a number of samples (--sample N)")
         vary_axes, sampled = [], None
-    names = [a.name for a in grid_axes] + [a.name for a in vary_axes]
+    names = [a.name for a in on_grid] + [a.name for a in vary_axes]
     check_names(model, names)
     if not names:
         raise UsageError("nothing to vary: give a grid (--grid NAME=LO:HI:N) or samples")
-    made = combine(grid_points(grid_axes), sampled)
+    made = combine(grid_points(on_grid), sampled)
     executor = executor_for(workers, scheduler, batch)
     return _finish(model, t_end, made, names, solver, summaries, inputs, run_timeout, backend,
                    executor, out, resume, progress, handle_sigint)  # fmt: skip
@@ -321,14 +323,6 @@ def executor_for(workers: int | None, scheduler: Any, batch: int | None = None) 
 def hard_limit(timeout: float | None) -> float | None:
     """How long a local worker may stay silent on one run before it is stopped."""
     return None if timeout is None else 1.5 * timeout + 2.0
-
-
-def _grid_axes(given: Any) -> list[Axis]:
-    if not given:
-        return []
-    if isinstance(given, Mapping):
-        return [Axis.listed(str(name), values) for name, values in given.items()]
-    return list(given)
 
 
 def _listed(points: Sequence[Mapping[str, float]]) -> tuple[list[str], list[Point]]:

@@ -45,7 +45,8 @@ def add_campaign_commands(
     p.add_argument("file", metavar="FILE", help="spec or system file")
     p.add_argument("--t-end", type=types["positive"], required=True, help="end time of each run")
     p.add_argument("--grid", action="append", default=[], metavar="NAME=LO:HI:N",
-                   help="N values from LO to HI (a parameter, init.x or input.u); repeatable")  # fmt: skip
+                   help="N values from LO to HI (a parameter, init.x or input.u; NAME=N: across "
+                        "the declared set of init.x or input.u); repeatable")  # fmt: skip
     p.add_argument("--vary", action="append", default=[], metavar="NAME=LO:HI",
                    help="a range to draw --sample points from (a bare init.x or input.u: its "
                         "declared range; none: every declared range); repeatable")  # fmt: skip
@@ -123,14 +124,14 @@ def run_sweep(args: argparse.Namespace) -> int:
     """The ``sweep`` command; returns the exit code."""
     from hybrid.analysis.formats import write
     from hybrid.campaigns.findings import sweep_findings, values_text
-    from hybrid.campaigns.space import Axis, parse_range
+    from hybrid.campaigns.space import parse_grid, parse_range
     from hybrid.campaigns.store import parts_dir
     from hybrid.campaigns.sweep import sweep
     from hybrid.reader.loader import load
 
     if args.sample is None and args.vary:
         raise UsageError("--vary gives ranges to sample: add --sample N")
-    grid = [Axis.parse(text, grid=True) for text in args.grid]
+    grid = [parse_grid(text) for text in args.grid]
     vary = [parse_range(text) for text in args.vary]
     line = terminal_reporter(args.quiet)
     interrupts = Interrupts(notify=_notifier(line))

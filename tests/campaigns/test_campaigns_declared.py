@@ -153,3 +153,34 @@ def test_a_system_s_free_input_and_initial_set_are_varied_too(drift: hybrid.Auto
     for row in table.rows:
         expected = _robustness(row["init.x"], row["input.u"])
         assert row["drift.positive.robustness"] == pytest.approx(expected, abs=1e-6)
+
+
+def test_a_grid_count_spans_the_declared_set(drift: hybrid.Automaton) -> None:
+    table = hybrid.sweep(drift, t_end=T, grid={"init.x": 3, "input.u": 5}, workers=0)
+    assert [(r["init.x"], r["input.u"]) for r in table.rows] == [
+        (x0, u) for x0 in (1.0, 2.0, 3.0) for u in (-1.0, -0.5, 0.0, 0.5, 1.0)
+    ]
+    for row in table.rows:
+        assert row["positive.robustness"] == pytest.approx(
+            _robustness(row["init.x"], row["input.u"]), abs=1e-9
+        )
+    with pytest.raises(UsageError, match=r"give a range, init.y=LO:HI:N"):
+        hybrid.sweep(drift, t_end=T, grid={"init.y": 3}, workers=0)
+    with pytest.raises(UsageError, match="N must be a whole number >= 1"):
+        hybrid.sweep(drift, t_end=T, grid={"init.x": 0}, workers=0)
+
+
+def test_the_command_takes_a_grid_count(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    Path("drift.yaml").write_text(DRIFT)
+    common = ["--t-end", str(T), "--workers", "0", "--quiet"]
+    code = main_in_process("sweep", "drift.yaml", "--grid", "input.u=3", "--grid", "init.x=1:3:2",
+                           *common, "--out", "g.csv")  # fmt: skip
+    assert code == 1  # u = -1 from x0 = 1 goes below 0
+    with open("g.csv", newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [(float(r["input.u"]), float(r["init.x"])) for r in rows] == [
+        (u, x0) for u in (-1.0, 0.0, 1.0) for x0 in (1.0, 3.0)
+    ]
+    assert main_in_process("sweep", "drift.yaml", "--grid", "init.x=many", *common,
+                           "--out", "h.csv") == 2  # fmt: skip
