@@ -89,7 +89,7 @@ def _campaigns(c: dict[str, Any] | None) -> list[str]:
     """Sweep throughput (bench/sweep_throughput.py), when the run has it."""
     if not c:
         return []
-    return [
+    lines = [
         f"Campaigns ({c['runs']} runs of the bouncing ball, {c['run_ms']:.1f} ms each in the "
         f"serial loop; load average {c['load_before'][0]:.2f} before, "
         f"{c['load_after'][0]:.2f} after, {c['cpus']} CPUs):",
@@ -104,6 +104,16 @@ def _campaigns(c: dict[str, Any] | None) -> list[str]:
         f"| Dask LocalCluster, 2 workers | {c['dask_2_runs_per_s']:.1f} | overhead per run "
         f"(1 worker) {c['dask_overhead_per_run_ms']:.2f} ms |",
         "",
+    ]
+    if "parallelism_control" in c:
+        lines += [
+            f"Parallelism control (pure Python on two processes against one after the other, "
+            f"in the same repeats; 2.0 on two free cores): {c['parallelism_control']:.2f}; "
+            f"the speed-up of two workers over it: {c['speedup_2_workers_of_available']:.2f}.",
+            "",
+        ]
+    return [
+        *lines,
         f"Monitoring one requirement on an oscillating run: {c['requirement_monitor_ratio']:.2f} "
         "times the run without it.",
         "",

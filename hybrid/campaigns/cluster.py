@@ -5,7 +5,9 @@ user made (a ``LocalCluster``, ``dask-jobqueue`` on a batch system, a Kubernetes
 operator...) or the address of a running scheduler (``tcp://host:8786``). The
 model is scattered to every worker once; jobs go as batches, one Dask task per
 batch (a task costs about a millisecond of scheduling: a batch of runs keeps
-that small against the runs); each worker unpacks the model once per process
+that small against the runs), smaller towards the end
+(:func:`~hybrid.campaigns.executors.guided_size`, at least :data:`MIN_DASK_BATCH`
+runs) so that the last tasks finish together; each worker unpacks the model once per process
 and reuses its compiled model. Results come back as tasks finish and are
 ordered by the campaign, so the table is the one a laptop gives.
 
@@ -23,12 +25,11 @@ Examples
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Sequence
 from typing import Any
 
-from hybrid.campaigns.executors import Executor, Failed, OnResult, Stop, _failed
+from hybrid.campaigns.executors import Executor, Failed, OnResult, Stop, _failed, guided_size
 from hybrid.campaigns.payload import Payload
 from hybrid.campaigns.runs import RunPlan
 from hybrid.campaigns.worker import Job, execute
@@ -37,6 +38,8 @@ from hybrid.version import install_hint
 
 __all__ = ["DaskPool"]
 
+MIN_DASK_BATCH = 4
+"""Runs per Dask task at least (by default): a task costs about a millisecond."""
 POLL_DASK = 0.02
 """Seconds between looks at the tasks (and at Ctrl-C) while none has finished."""
 
@@ -82,8 +85,14 @@ class DaskPool(Executor):
         should_stop: Stop = lambda: False,
         limit: float | None = None,
     ) -> bool:
-        size = self.batch or max(1, min(256, math.ceil(len(jobs) / (4 * self.workers))))
-        batches = [list(jobs[k : k + size]) for k in range(0, len(jobs), size)]
+        batches: list[list[Job]] = []
+        k = 0
+        while k < len(jobs):
+            size = self.batch or max(
+                MIN_DASK_BATCH, guided_size(len(jobs) - k, self.workers, cap=256)
+            )
+            batches.append(list(jobs[k : k + size]))
+            k += size
         futures = {
             self.client.submit(execute, self.payload, self.plan, batch, pure=False): batch
             for batch in batches

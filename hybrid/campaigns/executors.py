@@ -12,7 +12,9 @@ depend on the executor, the number of workers or the order of completion.
   guarded by ``if __name__ == "__main__"``: the worker's code is all in this
   package). Each unpacks the model once and keeps it, so the
   simulator's compiled models are reused across its runs. Jobs go out in
-  batches (two in flight per worker) and come back one by one. A worker that
+  batches (two in flight per worker), smaller as the jobs run out
+  (:func:`guided_size`: no worker is left with a long batch at the end while
+  the others wait), and come back one by one. A worker that
   has not answered for ``limit`` seconds is stopped (a hard timeout: the job
   in progress becomes ``failed(index, "timeout", ...)``) and replaced; one that
   dies does the same with cause ``error``. The rest of its batches are run by
@@ -39,7 +41,6 @@ True
 from __future__ import annotations
 
 import contextlib
-import math
 import multiprocessing
 import os
 import threading
@@ -56,7 +57,7 @@ from hybrid.campaigns.payload import Payload
 from hybrid.campaigns.runs import RunPlan
 from hybrid.campaigns.worker import Job, execute, serve
 
-__all__ = ["Executor", "InProcess", "LocalPool", "default_workers"]
+__all__ = ["Executor", "InProcess", "LocalPool", "default_workers", "guided_size"]
 
 OnResult = Callable[[int, Any], None]
 Failed = Callable[[Job, str, str], Any]
@@ -73,6 +74,21 @@ def default_workers() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - not on Linux
         return max(1, os.cpu_count() or 1)
+
+
+def guided_size(left: int, workers: int, cap: int = 32) -> int:
+    """Runs in the next batch: a share of the runs ``left``, smaller as they run out.
+
+    A quarter of each worker's share of what is left (at most ``cap``, at least 1):
+    big batches while there is much to do (few messages), single runs at the end,
+    so that no worker is left with a long batch while the others are idle.
+
+    Examples
+    --------
+    >>> [guided_size(n, 2) for n in (1000, 96, 20, 7, 1)]
+    [32, 12, 2, 1, 1]
+    """
+    return max(1, min(cap, left // (4 * workers)))
 
 
 def _failed(job: Job, cause: str, message: str) -> dict[str, Any]:
@@ -182,13 +198,13 @@ class LocalPool(Executor):
         limit: float | None = None,
     ) -> bool:
         queue: deque[Job] = deque(jobs)
-        size = self.batch or max(1, min(32, math.ceil(len(jobs) / (8 * self.workers))))
         while queue or any(w.assigned for w in self.pool):
             if should_stop():
                 self._kill_all()
                 return False
             now = time.monotonic()
             for w in self.pool:
+                size = self.batch or guided_size(len(queue), self.workers)
                 if queue and len(w.assigned) <= size:
                     batch = [queue.popleft() for _ in range(min(size, len(queue)))]
                     if not w.assigned:

@@ -31,10 +31,10 @@ from hybrid.campaigns.executors import Executor
 from hybrid.campaigns.payload import pack
 from hybrid.campaigns.runs import RunPlan, failed_row, model_variant, requirement_columns
 from hybrid.campaigns.search import objective
-from hybrid.campaigns.space import SAMPLERS, Axis, unit_samples
+from hybrid.campaigns.space import SAMPLERS, Axis, ranges_axes, unit_samples
 from hybrid.campaigns.sweep import SOLVER_OPTIONS, executor_for, hard_limit
 from hybrid.campaigns.targets import Constant, check_names, free_inputs, split
-from hybrid.compose import System
+from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.progress import Reporter, Tracker
@@ -104,7 +104,7 @@ class Falsification:
 def falsify(
     model: Automaton | System,
     requirement: str,
-    vary: Mapping[str, tuple[float, float]] | Sequence[Axis],
+    vary: Mapping[str, tuple[float, float] | None] | Sequence[Axis | str] | None = None,
     *,
     t_end: float,
     budget: int = 100,
@@ -130,8 +130,11 @@ def falsify(
         From :func:`hybrid.load`.
     requirement : str
         The requirement's name (``comp.name`` for a component's, in a system).
-    vary : mapping or sequence of Axis
-        ``{name: (low, high)}``: parameters, ``init.x``, ``input.u``.
+    vary : mapping or sequence of Axis or str, optional
+        ``{name: (low, high)}``: parameters, ``init.x``, ``input.u``. An ``init.x``
+        or ``input.u`` with the range ``None`` (or a bare name in a sequence) is
+        searched over the range its spec declares; not given: every range the
+        spec declares (initial sets and input ranges, as :func:`hybrid.sweep`).
     t_end : float
         End time of every run.
     budget : int
@@ -181,13 +184,12 @@ def falsify(
         raise UsageError(f"unknown sampler '{sampler}' (choose from {', '.join(SAMPLERS)})")
     if parameters:
         model = model.with_parameters(dict(parameters))
-    axes = (
-        [Axis.of(str(n), float(lo), float(hi)) for n, (lo, hi) in vary.items()]
-        if isinstance(vary, Mapping)
-        else list(vary)
-    )
+    axes = ranges_axes(model, vary)
     if not axes:
-        raise UsageError("nothing to vary: give --vary NAME=LO:HI")
+        raise UsageError(
+            "nothing to vary: give --vary NAME=LO:HI (the spec declares no initial set or "
+            "input range)"
+        )
     names = [a.name for a in axes]
     check_names(model, names)
     if f"{requirement}.holds" not in requirement_columns(model):
@@ -196,8 +198,11 @@ def falsify(
             f"no requirement '{requirement}' in {model.name} "
             f"(requirements: {', '.join(known) or 'none'})"
         )
+    ranged = as_system(model).input_ranges()  # held at its nominal value when not varied
     missing = [
-        n for n in free_inputs(model) if n not in (inputs or {}) and f"input.{n}" not in names
+        n
+        for n in free_inputs(model)
+        if n not in (inputs or {}) and f"input.{n}" not in names and n not in ranged
     ]
     if missing:
         raise UsageError(f"input '{missing[0]}' needs a value: vary it or give it")
@@ -254,9 +259,12 @@ class _Search:
         def failed(job: tuple[int, str, Any], cause: str, message: str) -> dict[str, Any]:
             return {"run": job[0], **job[2], **failed_row(self.model, self.plan, cause, message)}
 
+        violations = [0]
+
         def keep(index: int, row: dict[str, Any]) -> None:
-            rows[index] = row
-            tracker.update(len(self.history) + len(rows), violations=int(self.found is not None))
+            rows[index] = row  # every run of the global phase so far
+            violations[0] += objective(row, self.requirement)[1]
+            tracker.update(len(rows), violations=violations[0])
 
         limit = hard_limit(self.plan.timeout)
         for start in range(0, len(points), ROUND):
@@ -276,7 +284,7 @@ class _Search:
         left = self.budget - len(self.history)
         if self.found is None and self.complete and left > 0:
             self._local(executor, stop, left, tracker)
-        tracker.finish(len(self.history), violations=int(self.found is not None))
+        tracker.finish(len(self.history), violations=self.violations())
 
     def _local(self, executor: Executor, stop: Any, left: int, tracker: Tracker) -> None:
         ranked = sorted(range(len(self.history)), key=lambda i: (self.history[i]["robustness"], i))
@@ -322,7 +330,11 @@ class _Search:
                 self.history.append({**entry, "phase": f"local {k}"})
                 if entry["violated"] and self.found is None:
                     self.found = self.history[-1]
-        tracker.update(len(self.history), violations=int(self.found is not None))
+        tracker.update(len(self.history), violations=self.violations())
+
+    def violations(self) -> int:
+        """The runs so far that violate the requirement."""
+        return sum(1 for h in self.history if h["violated"])
 
     def result(self) -> Falsification:
         names = [a.name for a in self.axes]

@@ -16,7 +16,11 @@ Grid and samples combine: every grid point with every sample.
 
 :func:`declared_ranges` is where a spec's own declared sets come in (interval
 initial sets ``x: {initial: [lo, hi]}`` and bounded inputs ``u: {range: [lo,
-hi]}``): the ranges a sample may take when no range is given on the command line.
+hi]}``): samples are drawn from them when no range is given (``--sample N``
+alone), or for the names given without one (``--vary init.x``,
+``vary={"init.x": None}``), and a grid spans them with a count alone
+(``--grid init.x=5``, ``grid={"init.x": 5}``); :func:`declared_axis` makes the
+axis of one name.
 
 Examples
 --------
@@ -36,19 +40,26 @@ import itertools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
+from hybrid.campaigns.targets import INITIAL, INPUT, check_names
+from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
+from hybrid.model import Automaton
 
 __all__ = [
     "SAMPLERS",
     "Axis",
     "Point",
     "combine",
+    "declared_axis",
     "declared_ranges",
+    "grid_axes",
     "grid_points",
+    "parse_grid",
+    "parse_range",
+    "ranges_axes",
     "sample_points",
 ]
 
@@ -146,7 +157,10 @@ def sample_points(axes: Sequence[Axis], n: int, seed: int, sampler: str = "lhs")
     if n < 1 or n > MAX_POINTS:
         raise UsageError(f"the number of samples must be from 1 to {MAX_POINTS}, got {n}")
     if not axes:
-        raise UsageError("samples need ranges to draw from: give --vary NAME=LO:HI")
+        raise UsageError(
+            "samples need ranges to draw from: give --vary NAME=LO:HI (the spec declares no "
+            "initial set or input range)"
+        )
     unit = unit_samples(len(axes), n, seed, sampler)
     low = np.array([a.low for a in axes])
     span = np.array([a.high - a.low for a in axes])
@@ -175,12 +189,158 @@ def combine(grid: Sequence[Point], samples: Sequence[Point] | None) -> list[Poin
     return [{**g, **s} for g in grid for s in samples]
 
 
-def declared_ranges(model: Any) -> Mapping[str, tuple[float, float]]:
-    """The ranges a spec declares itself, by varied name (``init.x``, ``input.u``).
+def declared_ranges(model: Automaton | System) -> dict[str, tuple[float, float]]:
+    """The ranges a spec declares itself, by varied name: ``init.x`` and ``input.u``.
 
-    Today's specs declare none, so this is empty. With interval initial sets
-    (``x: {initial: [lo, hi]}``) and bounded inputs (``u: {range: [lo, hi]}``)
-    it returns ``{"init.x": (lo, hi), "input.u": (lo, hi)}``, and a sweep with
-    ``--sample N`` and no ``--vary`` samples within them.
+    Every state variable with an interval initial set (``x: {initial: [lo, hi]}``
+    or ``initial: {state: {x: [lo, hi]}}``) and every free input with a range
+    (``u: {range: [lo, hi]}``), in state order then input order; one-point sets
+    are left out (there is nothing to vary). A sweep with samples and no ranges
+    given samples within them; a falsification with no ranges given searches them.
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> m = hybrid.load_text('''
+    ... automaton: a
+    ... state: {x: {initial: [0, 2]}, y: {initial: 1}}
+    ... inputs: {u: {range: [-1, 1]}}
+    ... locations: {l: {flow: {x: u, y: 0}}}
+    ... ''')
+    >>> declared_ranges(m)
+    {'init.x': (0.0, 2.0), 'input.u': (-1.0, 1.0)}
     """
-    return {}
+    system = as_system(model)
+    found = {
+        f"{INITIAL}{name}": (r.lo, r.hi)
+        for name, r in system.initial_set().items()
+        if not r.is_point
+    }
+    found.update(
+        {
+            f"{INPUT}{name}": (r.lo, r.hi)
+            for name, r in system.input_ranges().items()
+            if not r.is_point
+        }
+    )
+    return found
+
+
+def declared_axis(model: Automaton | System, name: str, count: int | None = None) -> Axis:
+    """The axis of ``name`` over the range the spec declares for it (a clear error if none).
+
+    With ``count``, a grid axis of ``count`` values across that range, ends included.
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+    >>> declared_axis(ball, "init.h")
+    Traceback (most recent call last):
+    ...
+    hybrid.errors.UsageError: init.h: bouncing_ball declares one initial value of h (10), not a set: give a range, init.h=LO:HI
+    """
+    check_names(model, [name])
+    system = as_system(model)
+    shape = "LO:HI" if count is None else "LO:HI:N"
+    if name.startswith(INITIAL):
+        var = name[len(INITIAL) :]
+        r = system.initial_set()[var]
+        if r.is_point:
+            raise UsageError(
+                f"{name}: {model.name} declares one initial value of {var} ({r.lo:g}), not a "
+                f"set: give a range, {name}={shape}"
+            )
+        return Axis.of(name, r.lo, r.hi, count)
+    if name.startswith(INPUT):
+        var = name[len(INPUT) :]
+        found = system.input_ranges().get(var)
+        if found is None or found.is_point:
+            raise UsageError(
+                f"{name}: {model.name} declares no range for input {var}: give one, {name}={shape}"
+            )
+        return Axis.of(name, found.lo, found.hi, count)
+    raise UsageError(f"{name}: a parameter has no declared range: give one, {name}={shape}")
+
+
+def grid_axes(
+    model: Automaton | System,
+    given: Mapping[str, Sequence[float] | int] | Sequence[Axis | tuple[str, int]] | None,
+) -> list[Axis]:
+    """The axes of ``grid``: ``{name: values}``, Axis, or a count of values (``{name: N}``,
+    ``(name, N)``) across the range the spec declares for an ``init.x`` or ``input.u``."""
+    if not given:
+        return []
+    axes: list[Axis] = []
+    if isinstance(given, Mapping):
+        for name, values in given.items():
+            if isinstance(values, int):  # a count (a bool is refused by _count)
+                axes.append(declared_axis(model, str(name), _count(str(name), values)))
+            else:
+                axes.append(Axis.listed(str(name), values))
+        return axes
+    for item in given:
+        if isinstance(item, Axis):
+            axes.append(item)
+        else:
+            name, count = item
+            axes.append(declared_axis(model, str(name), _count(str(name), count)))
+    return axes
+
+
+def _count(name: str, count: int) -> int:
+    if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+        raise UsageError(f"{name}: N must be a whole number >= 1, got {count!r}")
+    return count
+
+
+def parse_grid(text: str) -> Axis | tuple[str, int]:
+    """``NAME=LO:HI:N`` (an Axis), or ``NAME=N``: ``N`` values across the declared range.
+
+    Examples
+    --------
+    >>> parse_grid("init.x=5"), parse_grid("e=0.5:0.9:3").count
+    (('init.x', 5), 3)
+    """
+    name, sep, rest = text.partition("=")
+    if sep and name.strip() and ":" not in rest:
+        try:
+            return name.strip(), int(rest)
+        except ValueError:
+            raise UsageError(f"expected NAME=LO:HI:N or NAME=N, got '{text}'") from None
+    return Axis.parse(text, grid=True)
+
+
+def ranges_axes(
+    model: Automaton | System,
+    given: Mapping[str, tuple[float, float] | None] | Sequence[Axis | str] | None,
+) -> list[Axis]:
+    """The axes of ``vary``: ``{name: (lo, hi)}``, Axis, or a name (or ``None`` range) for
+    the declared range of an ``init.x`` or ``input.u``; nothing given: every declared range."""
+    if not given:
+        return [Axis.of(n, lo, hi) for n, (lo, hi) in declared_ranges(model).items()]
+    items: list[Axis | str] = []
+    if isinstance(given, Mapping):
+        for name, bounds in given.items():
+            if bounds is None:
+                items.append(str(name))
+            else:
+                low, high = bounds
+                items.append(Axis.of(str(name), float(low), float(high)))
+    else:
+        items = list(given)
+    return [declared_axis(model, item) if isinstance(item, str) else item for item in items]
+
+
+def parse_range(text: str) -> Axis | str:
+    """``NAME=LO:HI`` (an Axis), or a bare ``NAME`` (the range its spec declares, resolved later).
+
+    Examples
+    --------
+    >>> parse_range("init.x"), parse_range("k=0:1")
+    ('init.x', Axis(name='k', low=0.0, high=1.0, count=None, given=None))
+    """
+    name = text.strip()
+    if "=" not in name and name and ":" not in name:
+        return name
+    return Axis.parse(text, grid=False)

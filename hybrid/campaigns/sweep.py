@@ -31,8 +31,9 @@ from hybrid.campaigns.space import (
     Axis,
     Point,
     combine,
-    declared_ranges,
+    grid_axes,
     grid_points,
+    ranges_axes,
     sample_points,
 )
 from hybrid.campaigns.store import ChunkStore
@@ -66,8 +67,8 @@ def sweep(
     model: Automaton | System,
     t_end: float,
     *,
-    grid: Mapping[str, Sequence[float]] | Sequence[Axis] | None = None,
-    vary: Mapping[str, tuple[float, float]] | Sequence[Axis] | None = None,
+    grid: Mapping[str, Sequence[float] | int] | Sequence[Axis | tuple[str, int]] | None = None,
+    vary: Mapping[str, tuple[float, float] | None] | Sequence[Axis | str] | None = None,
     samples: int | None = None,
     seed: int = 0,
     sampler: str = "lhs",
@@ -98,9 +99,14 @@ def sweep(
         ``{name: values}``: every combination of the values is run, the first
         name slowest. A name is a parameter (``comp.name`` in a system),
         ``init.x`` (the initial value of ``x``) or ``input.u`` (a free input held
-        at that value).
-    vary : mapping or sequence of Axis, optional
-        ``{name: (low, high)}``: the ranges ``samples`` are drawn from.
+        at that value). A count instead of values (``{"init.x": 5}``) spreads that
+        many values across the set the spec declares (ends included).
+    vary : mapping or sequence of Axis or str, optional
+        ``{name: (low, high)}``: the ranges ``samples`` are drawn from. An
+        ``init.x`` or ``input.u`` with the range ``None`` (or a bare name in a
+        sequence) takes the range its spec declares (``x: {initial: [lo, hi]}``,
+        ``u: {range: [lo, hi]}``). Not given: every range the spec declares
+        (:func:`~hybrid.campaigns.space.declared_ranges`) but the grid's names.
     samples : int, optional
         Draw this many points of the ``vary`` box from ``seed`` (each combined
         with every grid point).
@@ -169,21 +175,20 @@ def sweep(
         return _finish(model, t_end, listed, names, solver, summaries, inputs, run_timeout,
                        backend, executor_for(workers, scheduler, batch), out, resume, progress,
                        handle_sigint)  # fmt: skip
-    grid_axes = _axes(grid, grid=True)
+    on_grid = grid_axes(model, grid)
     if samples is not None:
-        vary_axes = _axes(vary, grid=False) or [
-            Axis.of(name, lo, hi) for name, (lo, hi) in declared_ranges(model).items()
-        ]
+        gridded = {a.name for a in on_grid}
+        vary_axes = [a for a in ranges_axes(model, vary) if vary or a.name not in gridded]
         sampled: list[Point] | None = sample_points(vary_axes, samples, seed, sampler)
     else:
         if vary:
             raise UsageError("ranges to vary need a number of samples (--sample N)")
         vary_axes, sampled = [], None
-    names = [a.name for a in grid_axes] + [a.name for a in vary_axes]
+    names = [a.name for a in on_grid] + [a.name for a in vary_axes]
     check_names(model, names)
     if not names:
         raise UsageError("nothing to vary: give a grid (--grid NAME=LO:HI:N) or samples")
-    made = combine(grid_points(grid_axes), sampled)
+    made = combine(grid_points(on_grid), sampled)
     executor = executor_for(workers, scheduler, batch)
     return _finish(model, t_end, made, names, solver, summaries, inputs, run_timeout, backend,
                    executor, out, resume, progress, handle_sigint)  # fmt: skip
@@ -320,21 +325,6 @@ def hard_limit(timeout: float | None) -> float | None:
     return None if timeout is None else 1.5 * timeout + 2.0
 
 
-def _axes(given: Any, *, grid: bool) -> list[Axis]:
-    if not given:
-        return []
-    if isinstance(given, Mapping):
-        axes = []
-        for name, values in given.items():
-            if grid:
-                axes.append(Axis.listed(str(name), values))
-            else:
-                low, high = values
-                axes.append(Axis.of(str(name), float(low), float(high)))
-        return axes
-    return list(given)
-
-
 def _listed(points: Sequence[Mapping[str, float]]) -> tuple[list[str], list[Point]]:
     """The names and points of an explicit list (every point gives the same names)."""
     if isinstance(points, Mapping) or not points:
@@ -363,7 +353,8 @@ def _check_inputs(
         if f"{INPUT}{name}" in names:
             raise UsageError(f"input '{name}' is both varied and given")
     given = set(inputs) | {n[len(INPUT) :] for n in names if n.startswith(INPUT)}
-    missing = [n for n in declared if n not in given]
+    ranged = as_system(model).input_ranges()  # held at its nominal value when not given
+    missing = [n for n in declared if n not in given and n not in ranged]
     if missing:
         raise UsageError(
             f"input '{missing[0]}' needs a value in every run: vary it (input.{missing[0]}) "

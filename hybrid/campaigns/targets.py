@@ -18,7 +18,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
-from hybrid.compose import System
+from hybrid.compose import System, as_system
 from hybrid.errors import SpecError, UsageError, did_you_mean
 from hybrid.model import Automaton
 
@@ -63,8 +63,8 @@ def split(point: Mapping[str, float]) -> Overrides:
 
 
 def free_inputs(model: Automaton | System) -> tuple[str, ...]:
-    """The inputs a run must be given (an automaton's; a system binds its own)."""
-    return tuple(model.inputs) if isinstance(model, Automaton) else ()
+    """The free inputs of ``model`` (an automaton's, or those a system leaves unbound)."""
+    return tuple(as_system(model).free_inputs)
 
 
 def check_names(model: Automaton | System, names: Iterable[str]) -> None:

@@ -45,9 +45,11 @@ def add_campaign_commands(
     p.add_argument("file", metavar="FILE", help="spec or system file")
     p.add_argument("--t-end", type=types["positive"], required=True, help="end time of each run")
     p.add_argument("--grid", action="append", default=[], metavar="NAME=LO:HI:N",
-                   help="N values from LO to HI (a parameter, init.x or input.u); repeatable")  # fmt: skip
+                   help="N values from LO to HI (a parameter, init.x or input.u; NAME=N: across "
+                        "the declared set of init.x or input.u); repeatable")  # fmt: skip
     p.add_argument("--vary", action="append", default=[], metavar="NAME=LO:HI",
-                   help="a range to draw --sample points from; repeatable")  # fmt: skip
+                   help="a range to draw --sample points from (a bare init.x or input.u: its "
+                        "declared range; none: every declared range); repeatable")  # fmt: skip
     p.add_argument("--sample", type=types["count"], default=None, metavar="N",
                    help="N seeded samples of the --vary ranges")  # fmt: skip
     p.add_argument("--seed", type=int, default=0, help="seed of the samples (default 0)")
@@ -64,8 +66,9 @@ def add_campaign_commands(
     p.add_argument("file", metavar="FILE", help="spec or system file")
     p.add_argument("--t-end", type=types["positive"], required=True, help="end time of each run")
     p.add_argument("--requirement", required=True, metavar="NAME", help="the requirement")
-    p.add_argument("--vary", action="append", default=[], required=True, metavar="NAME=LO:HI",
-                   help="a range to search (a parameter, init.x or input.u); repeatable")  # fmt: skip
+    p.add_argument("--vary", action="append", default=[], metavar="NAME=LO:HI",
+                   help="a range to search (a parameter, init.x or input.u; a bare init.x or "
+                        "input.u: its declared range; none: every declared range); repeatable")  # fmt: skip
     p.add_argument("--budget", type=types["count"], default=100, help="simulations at most")
     p.add_argument("--seed", type=int, default=0, help="seed of the global phase (default 0)")
     p.add_argument("--sampler", choices=SAMPLERS, default="lhs", help="the global design")
@@ -121,15 +124,15 @@ def run_sweep(args: argparse.Namespace) -> int:
     """The ``sweep`` command; returns the exit code."""
     from hybrid.analysis.formats import write
     from hybrid.campaigns.findings import sweep_findings, values_text
-    from hybrid.campaigns.space import Axis
+    from hybrid.campaigns.space import parse_grid, parse_range
     from hybrid.campaigns.store import parts_dir
     from hybrid.campaigns.sweep import sweep
     from hybrid.reader.loader import load
 
     if args.sample is None and args.vary:
         raise UsageError("--vary gives ranges to sample: add --sample N")
-    grid = [Axis.parse(text, grid=True) for text in args.grid]
-    vary = [Axis.parse(text, grid=False) for text in args.vary]
+    grid = [parse_grid(text) for text in args.grid]
+    vary = [parse_range(text) for text in args.vary]
     line = terminal_reporter(args.quiet)
     interrupts = Interrupts(notify=_notifier(line))
     with interrupts.installed():
@@ -195,10 +198,10 @@ def run_falsify(args: argparse.Namespace) -> int:
     """The ``falsify`` command; returns the exit code."""
     from hybrid.campaigns.falsify import falsify
     from hybrid.campaigns.findings import values_text
-    from hybrid.campaigns.space import Axis
+    from hybrid.campaigns.space import parse_range
     from hybrid.reader.loader import load
 
-    vary = [Axis.parse(text, grid=False) for text in args.vary]
+    vary = [parse_range(text) for text in args.vary]
     out = Path(args.out) if args.out else None
     if out is not None and out.exists() and not out.is_dir():
         raise UsageError(f"--out: '{out}' exists and is not a directory")
@@ -209,7 +212,7 @@ def run_falsify(args: argparse.Namespace) -> int:
         result = falsify(
             model,
             args.requirement,
-            vary,
+            vary or None,
             t_end=args.t_end,
             budget=args.budget,
             seed=args.seed,

@@ -31,10 +31,13 @@ state: {x: {initial: 0.0}}
 locations: {on: {flow: {x: cos(w*t)}}}
 requirements: [{name: small, always: "x <= 0.2"}]
 """
-# 500 steps a run (max_step 0.01 over 5 s): 50 to 100 ms; 24 runs on one worker
-# outlast the first chunk (written after a second). x = sin(w t) / w goes above 0.2
-# for w < 5: some runs violate the requirement (exit 1).
-ARGS = ["--t-end", "5", "--grid", "w=1:24:24", "--max-step", "0.01", "--workers", "1"]
+# 1250 steps a run (max_step 0.004 over 5 s): 100 to 200 ms; 24 runs on one worker
+# take 2.5 s or more, well beyond the first chunk (written a second after the first
+# row), so the test has time to stop the campaign half-way (with 500 steps a run, a
+# fast moment of the machine finished the campaign before it could). x = sin(w t) / w
+# goes above 0.2 for w < 5: some runs violate the requirement (exit 1).
+MAX_STEP = 0.004
+ARGS = ["--t-end", "5", "--grid", "w=1:24:24", "--max-step", str(MAX_STEP), "--workers", "1"]
 ARGS += ["--quiet"]
 RUNS = 24
 
@@ -72,7 +75,7 @@ def reference() -> str:
     """The table of the campaign run whole, in this process."""
     table = hybrid.sweep(
         hybrid.load_text(WAVE), t_end=5.0, grid={"w": [float(w) for w in range(1, RUNS + 1)]},
-        max_step=0.01, workers=0,
+        max_step=MAX_STEP, workers=0,
     )  # fmt: skip
     return table.csv_text()
 
