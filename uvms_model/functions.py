@@ -86,8 +86,8 @@ def uvms_ee(
     by: float,
 ) -> tuple[float, float, float]:
     """End-effector pose ``(xe, ye, phie)`` by forward kinematics (:func:`joint_points`)."""
-    *_, ex, ey, t3 = joint_points(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
-    return ex, ey, t3
+    pose = joint_points(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    return pose[6], pose[7], pose[8]
 
 
 def _columns(
@@ -422,6 +422,8 @@ def _mark(
 ) -> Callable[..., Any]:
     fn.hybrid_arity = (arity - optional, arity)  # type: ignore[attr-defined]
     fn.hybrid_outputs = outputs  # type: ignore[attr-defined]
+    # the compiled form, named so that only the compiled backend imports numba
+    fn.hybrid_compiled = f"uvms_model.compiled:{fn.__name__}"  # type: ignore[attr-defined]
     return fn
 
 

@@ -30,19 +30,18 @@ Examples
 from __future__ import annotations
 
 import ast
-import importlib
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
-from hybrid.errors import UsageError
 from hybrid.expr import ir
 from hybrid.expr.rho import guard_to_rho
 from hybrid.simulation.native.buffers import T_MODE_TR, TAB_HEADER, TABLES
 from hybrid.simulation.native.kernel_types import PIECES
+from hybrid.simulation.native.library import importable
 from hybrid.simulation.native.printer import body_lines
 from hybrid.simulation.native.structure import (
     COMPILED_FORM,
@@ -356,7 +355,7 @@ def _header(model: NativeModel) -> tuple[list[str], tuple[str, ...]]:
     ]
     modules = []
     for name, function in model.functions.items():
-        module, qualname = _importable(name, getattr(function.fn, COMPILED_FORM))
+        module, qualname = importable(name, getattr(function.fn, COMPILED_FORM))
         modules.append(module)
         lines += [
             f"from {module} import {qualname} as _imp_{name}",
@@ -364,22 +363,3 @@ def _header(model: NativeModel) -> tuple[list[str], tuple[str, ...]]:
             f"else njit({JIT})(_imp_{name})",
         ]
     return lines, tuple(sorted(set(modules)))
-
-
-def _importable(name: str, impl: Callable[..., object]) -> tuple[str, str]:
-    """``(module, name)`` that import ``impl``, a top-level function or numba dispatcher."""
-    py = getattr(impl, "py_func", impl)
-    module, qualname = getattr(py, "__module__", None), getattr(py, "__qualname__", "")
-    found = None
-    if module and qualname.isidentifier():
-        try:
-            found = getattr(importlib.import_module(module), qualname, None)
-        except ImportError:
-            found = None
-    if found is not impl and getattr(found, "py_func", None) is not py:
-        raise UsageError(
-            f"the compiled form of library function '{name}' must be a top-level function "
-            f"of an importable module (got {impl!r})"
-        )
-    assert module is not None
-    return module, qualname
