@@ -118,7 +118,8 @@ def _unknown_activation_nan(activation: str) -> Callable[[str], float]:
 
 
 def _compiled(fn: Callable[..., Any]) -> Any:
-    return njit(cache=True, nogil=True, error_model="numpy")(fn)
+    # not cached by numba: it would not notice a change of the helpers (the model's cache does)
+    return njit(nogil=True, error_model="numpy")(fn)
 
 
 uvms_ee = _compiled(_functions.uvms_ee)
