@@ -7,16 +7,17 @@ second implementation: the module marks the package's own functions as numba
 compilable (:func:`numba.extending.register_jitable`), so that numba compiles
 the one implementation of each formula when the compiled model calls it. Only
 the error paths differ: where the Python form raises ``ValueError`` (a
-singular ``Ns``, a quintic with ``tf <= t0``), the compiled form returns NaN,
+singular ``Ns``, a quintic with ``tf <= t0``), the compiled form returns NaN
+(the quintic: wherever it reads the law's coefficients),
 which the compiled backend reports as an evaluation failure at that point. The
 compiled ``uvms_path`` does not check its geometry arguments (the Python form
 refuses a bad one): check a model with the scipy backend first.
 
 Examples
 --------
->>> from uvms_model import compiled, functions      # doctest: +SKIP
+>>> from uvms_model import compiled, functions
 >>> compiled.quintic(0.5, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0) == functions.quintic(
-...     0.5, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)            # doctest: +SKIP
+...     0.5, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)      
 True
 """
 
