@@ -17,7 +17,7 @@ Examples
 --------
 >>> from uvms_model import compiled, functions
 >>> compiled.quintic(0.5, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0) == functions.quintic(
-...     0.5, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)      
+...     0.5, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
 True
 """
 

@@ -10,8 +10,8 @@ pointers and a table of integers, so it is compiled once per machine.
 **A model** (:func:`generate`): its function ``model(op, index, t, x*, p*,
 out*)`` (see ``kernel_types``) generated from the expression IR by
 :mod:`~hybrid.simulation.native.printer` as one numba ``cfunc``, with
-:mod:`~hybrid.simulation.native.mathlib` and the per-operation functions
-inlined into it, and the table
+:mod:`~hybrid.simulation.native.mathlib` inlined into it and the
+per-operation functions (``model_rhs``...) compiled apart, and the table
 ``tab`` (which transitions, levels and invariants each mode has, and the form
 numbers of their expressions). One module per model *structure*: parameters
 are slots, so their values are not in it. The source is built from checked
@@ -298,12 +298,15 @@ def generate(model: NativeModel) -> Generated:
         "    return 0.0",
         "",
     ]
-    inlined = (*helpers, *body)
     footer = [
         "",
         "# ---- compiled with numba (cached on disk beside this file) ----",
-        f"for _name in {tuple(inlined)!r}:",
+        f"for _name in {tuple(helpers)!r}:",
         f"    globals()[_name] = njit(inline='always', {JIT})(globals()[_name])",
+        # apart, not inlined into `model`: numba's typing of one huge function costs
+        # more than that of its parts (UVMS mission 2: half the compile time)
+        f"for _name in {tuple(body)!r}:",
+        f"    globals()[_name] = njit({JIT})(globals()[_name])",
         "with warnings.catch_warnings():",
         "    warnings.simplefilter('ignore', NumbaExperimentalFeatureWarning)",
         "    model = cfunc(model_signature(), cache=True, error_model='numpy')(model)",
