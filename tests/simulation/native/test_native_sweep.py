@@ -63,3 +63,10 @@ def test_cli_sweep_backend_compiled(tmp_path: Path) -> None:
     for c, s in zip(rows_c, rows_s, strict=True):
         assert c["cause"] == s["cause"] and c["jumps"] == s["jumps"]
         assert float(c["jump_t:2"]) == pytest.approx(float(s["jump_t:2"]), rel=1e-10, abs=1e-9)
+
+
+def test_sweep_compiled_in_a_worker_process_gives_the_scipy_table(thermostat: hybrid.Automaton) -> None:
+    options = {**OPTIONS, "workers": 1, "batch": 3}  # two batches, each one simulate_many call
+    reference = hybrid.sweep(thermostat, 60.0, grid=GRID, summaries=SUMMARIES, **OPTIONS)
+    compiled = hybrid.sweep(thermostat, 60.0, grid=GRID, summaries=SUMMARIES, backend="compiled", **options)
+    same_tables(compiled, reference)
