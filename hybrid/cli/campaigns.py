@@ -63,7 +63,7 @@ def add_campaign_commands(
     p.add_argument("--out", required=True, help="results file (.csv or .parquet)")
     p.add_argument("--resume", action="store_true", help="finish an interrupted campaign")
     p.add_argument("--format", choices=REPORT_FORMATS, default="summary",
-                   help="print a summary (default) or findings as `hybrid check` does")  # fmt: skip
+                   help="print a summary (default) or findings as hybrid check does")  # fmt: skip
 
     p = sub.add_parser("falsify", help="search parameter ranges for a requirement's violation")
     p.add_argument("file", metavar="FILE", help="spec or system file")

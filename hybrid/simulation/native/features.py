@@ -8,13 +8,14 @@ tests of ``tests/simulation/native`` show each construct).
 Examples
 --------
 >>> import hybrid
+>>> from hybrid.compose import as_system
 >>> tank = hybrid.load_text('''
 ... automaton: tank
 ... inputs: {u: {range: [0.5, 1.5]}}
 ... state: {h: {initial: 2.0}}
 ... locations: {fill: {flow: {h: u}}}
 ... ''')
->>> refuse_unsupported(hybrid.compose.as_system(tank))
+>>> refuse_unsupported(as_system(tank))
 Traceback (most recent call last):
 ...
 hybrid.errors.UsageError: the compiled backend cannot run tank: input 'u' is free (the scipy backend holds it at its nominal value or takes inputs={'u': f}); use backend='scipy', or compose tank with an automaton that defines 'u'
