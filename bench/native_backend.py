@@ -7,7 +7,12 @@ ensemble of 10,000 thermostat runs (``simulate_many``, every core) against a
 serial loop of scipy runs (timed on a sample, per run). Jump times of both are
 compared in the same run. Compile times are measured in fresh processes with
 their own cache directory: the first process on a machine (the kernel and the
-model), a new model once the kernel is cached, and a process that finds both.
+model), a new model once the kernel is cached, and a process that finds both;
+then UVMS mission 2 (its library's compiled forms), first and cached. UVMS
+mission 2 over its 60 s (without its requirements, which the compiled backend
+does not monitor) and a ``hybrid.sweep`` of thermostat runs in this process
+(one ``simulate_many`` call per batch against one scipy run per point) are
+ratios like the others.
 """
 
 from __future__ import annotations
@@ -57,7 +62,61 @@ def run(repeats: int = 9, ensemble_size: int = 10_000) -> list[Comparison]:
         }
         results.append(c)
     results.append(_ensemble(thermo, ensemble_size, max(5, repeats // 3)))
+    results.append(_mission(max(3, repeats // 3)))
+    results.append(_sweep(thermo, 200 if ensemble_size >= 10_000 else 40, max(3, repeats // 3)))
     return results
+
+
+def mission_without_requirements() -> Any:
+    """UVMS mission 2 without its requirements (the compiled backend does not monitor them)."""
+    from dataclasses import replace
+
+    mission = hybrid.load(ROOT / "specs" / "uvms_mission_2.yaml")
+    parts = tuple(replace(c, automaton=replace(c.automaton, requirements=())) for c in mission.components)
+    return replace(mission, requirements=(), components=parts)
+
+
+def _mission(repeats: int) -> Comparison:
+    """UVMS mission 2 over its 60 s (7 jumps, the singular vicinity crossed)."""
+    mission = mission_without_requirements()
+    kwargs = {"t_end": 60.0}
+    c = compare(
+        "compiled backend: UVMS mission 2, 60 s",
+        ("backend='compiled'", lambda: _jumps(mission, "compiled", **kwargs)),
+        ("backend='scipy'", lambda: _jumps(mission, "scipy", **kwargs)),
+        repeats=repeats,
+    )
+    ours, reference = _jumps(mission, "compiled", **kwargs), _jumps(mission, "scipy", **kwargs)
+    c.extra = {
+        "jumps": len(ours),
+        "max_jump_time_difference_s": max(abs(a - b) for a, b in zip(ours, reference, strict=True)),
+    }
+    return c
+
+
+def _sweep(thermo: Any, n: int, repeats: int) -> Comparison:
+    """``hybrid.sweep`` of ``n`` thermostat runs in this process, compiled against scipy, per run."""
+    grid = {"T_high": list(np.linspace(21.0, 23.0, n // 4)), "init.T": [16.0, 17.0, 19.0, 20.0]}
+    kwargs: dict[str, Any] = {"grid": grid, "summaries": ("jump_t:5",), "workers": 0,
+                              "handle_sigint": False, "rtol": RTOL, "atol": ATOL}  # fmt: skip
+    size = len(grid["T_high"]) * 4
+    tables = {}
+
+    def sweep(backend: str) -> None:
+        tables[backend] = hybrid.sweep(thermo, 200.0, backend=backend, **kwargs)
+
+    c = compare(
+        f"compiled backend: hybrid.sweep of {size} thermostat runs (in process)",
+        ("backend='compiled' (simulate_many per batch)", lambda: sweep("compiled")),
+        ("backend='scipy'", lambda: sweep("scipy")),
+        repeats=repeats,
+    )
+    difference = max(
+        abs(a["jump_t:5"] - b["jump_t:5"])
+        for a, b in zip(tables["compiled"].rows, tables["scipy"].rows, strict=True)
+    )
+    c.extra = {"runs": size, "max_jump_t5_difference_s": difference}
+    return c
 
 
 def _ensemble(thermo: Any, n: int, repeats: int) -> Comparison:
@@ -115,6 +174,10 @@ from hybrid.simulation.native.engine import compiled_native, kernel
 kernel()
 t3 = time.perf_counter()
 model = hybrid.load({spec!r})
+if getattr(model, "components", None):  # requirements are monitored by the scipy backend only
+    from dataclasses import replace
+    model = replace(model, requirements=(), components=tuple(
+        replace(c, automaton=replace(c.automaton, requirements=())) for c in model.components))
 compiled_native(model)
 t4 = time.perf_counter()
 hybrid.simulate(model, t_end=1.0, backend="compiled", handle_sigint=False)
@@ -143,7 +206,12 @@ def compile_times() -> dict[str, float]:
         first = probe("thermostat.yaml", cache)
         new_model = probe("bouncing_ball.yaml", cache)
         cached = probe("bouncing_ball.yaml", cache)
+        mission = probe("uvms_mission_2.yaml", cache)
+        mission_cached = probe("uvms_mission_2.yaml", cache)
     return {
+        "uvms_mission_2_model_compile_s": mission[3],
+        "uvms_mission_2_cached_model_load_s": mission_cached[3],
+        "uvms_mission_2_cached_process_total_s": sum(mission_cached),
         "first_process_kernel_s": first[2],
         "first_process_model_s": first[3],
         "new_model_compile_s": new_model[3],

@@ -76,6 +76,14 @@ def render(report: dict[str, Any]) -> str:
             f"{compile_s['numba_import_s']:.2f} s | {compile_s['cached_process_total_s']:.2f} s |",
             "",
         ]
+        if "uvms_mission_2_model_compile_s" in compile_s:
+            lines += [
+                f"UVMS mission 2 (library functions compiled): model compile "
+                f"{compile_s['uvms_mission_2_model_compile_s']:.1f} s (kernel cached), cached "
+                f"model load {compile_s['uvms_mission_2_cached_model_load_s']:.2f} s, cached "
+                f"whole process {compile_s['uvms_mission_2_cached_process_total_s']:.2f} s.",
+                "",
+            ]
     lines += _components(report.get("components"))
     lines += _campaigns(report.get("campaigns"))
     lines += ["Peers:", ""]

@@ -90,6 +90,11 @@ def _activate(z: float, activation: Activation) -> float:
         return sigmoid(z)
     if activation == "tanh":
         return math.tanh(z)
+    return _unknown_activation(activation)
+
+
+def _unknown_activation(activation: str) -> float:
+    """ValueError here, NaN in the compiled form (:mod:`uvms_model.compiled`)."""
     raise ValueError(f"unknown activation {activation!r}; use 'sigmoid' or 'tanh'")
 
 

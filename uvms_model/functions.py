@@ -43,12 +43,13 @@ from uvms_model.functional_machine import (
     functional_machine_output,
     functional_machine_rate,
 )
-from uvms_model.paths import DeformedCircle
+from uvms_model.paths import DeformedCircle, oval_geometry, path_state
 from uvms_model.quintic import quintic_state, transition_target
 from uvms_model.vehicle import limited_velocity, limited_velocity_rate
 
 __all__ = [
     "SINGULAR_TOL",
+    "path_formula",
     "quintic",
     "registry",
     "uvms_ee",
@@ -85,8 +86,8 @@ def uvms_ee(
     by: float,
 ) -> tuple[float, float, float]:
     """End-effector pose ``(xe, ye, phie)`` by forward kinematics (:func:`joint_points`)."""
-    *_, ex, ey, t3 = joint_points(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
-    return ex, ey, t3
+    pose = joint_points(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    return pose[6], pose[7], pose[8]
 
 
 def _columns(
@@ -117,24 +118,33 @@ def _det3(a: Column, b: Column, c: Column) -> float:
     )
 
 
+def _singular(det: float) -> tuple[float, float, float]:
+    """A singular ``Ns``: ValueError here, NaNs in the compiled form (:mod:`uvms_model.compiled`)."""
+    raise ValueError(f"kinematic singularity: |det Ns| = {abs(det):.3g}")
+
+
 def _solve(
     columns: tuple[Column, ...],
     secondary: tuple[int, int, int],
-    primary: dict[int, float],
+    primary: tuple[float, ...],
     bias: Column = (0.0, 0.0, 0.0),
 ) -> tuple[float, float, float]:
-    """Cramer's rule for ``Ns Psi_s = -(Np Psi_p + bias)``."""
-    rhs = [-bias[0], -bias[1], -bias[2]]
-    for k, value in primary.items():
+    """Cramer's rule for ``Ns Psi_s = -(Np Psi_p + bias)``.
+
+    ``primary`` holds the nine magnitudes in column order, 0 in the secondary places.
+    """
+    r0, r1, r2 = -bias[0], -bias[1], -bias[2]
+    for k in range(9):
         col = columns[k]
-        rhs[0] -= col[0] * value
-        rhs[1] -= col[1] * value
-        rhs[2] -= col[2] * value
-    a, b, c = (columns[k] for k in secondary)
+        value = primary[k]
+        r0 -= col[0] * value
+        r1 -= col[1] * value
+        r2 -= col[2] * value
+    a, b, c = columns[secondary[0]], columns[secondary[1]], columns[secondary[2]]
     det = _det3(a, b, c)
     if abs(det) < SINGULAR_TOL:
-        raise ValueError(f"kinematic singularity: |det Ns| = {abs(det):.3g}")
-    r = (rhs[0], rhs[1], rhs[2])
+        return _singular(det)
+    r = (r0, r1, r2)
     return _det3(r, b, c) / det, _det3(a, r, c) / det, _det3(a, b, r) / det
 
 
@@ -159,7 +169,7 @@ def uvms_q0(
 ) -> tuple[float, float, float]:
     """Location q0: joint rates ``(q1d, q2d, q3d)`` from vehicle and end-effector rates."""
     cols = _columns(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
-    return _solve(cols, (3, 4, 5), {0: xd, 1: yd, 2: phid, 6: xed, 7: yed, 8: phied})
+    return _solve(cols, (3, 4, 5), (xd, yd, phid, 0.0, 0.0, 0.0, xed, yed, phied))
 
 
 def uvms_state3(
@@ -183,7 +193,7 @@ def uvms_state3(
 ) -> tuple[float, float, float]:
     """Kinematic state 3 (location q1): ``(xd, yd, q2d)`` from the other six rates."""
     cols = _columns(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
-    return _solve(cols, (0, 1, 4), {2: phid, 3: q1d, 5: q3d, 6: xed, 7: yed, 8: phied})
+    return _solve(cols, (0, 1, 4), (0.0, 0.0, phid, q1d, 0.0, q3d, xed, yed, phied))
 
 
 def _acceleration_setup(
@@ -212,12 +222,13 @@ def _acceleration_setup(
     )
     rates = network_column_rates(xd, yd, (p1xd, p1yd), (p2xd, p2yd), (p3xd, p3yd), (exd, eyd))
     psi = (xd, yd, phid, q1d, q2d, q3d, exd, eyd, phid + q1d + q2d + q3d)
-    bias = (
-        sum(col[0] * v for col, v in zip(rates, psi, strict=True)),
-        sum(col[1] * v for col, v in zip(rates, psi, strict=True)),
-        sum(col[2] * v for col, v in zip(rates, psi, strict=True)),
-    )
-    return cols, bias
+    b0 = b1 = b2 = 0.0
+    for k in range(9):
+        col = rates[k]
+        b0 += col[0] * psi[k]
+        b1 += col[1] * psi[k]
+        b2 += col[2] * psi[k]
+    return cols, (b0, b1, b2)
 
 
 def uvms_q0_acc(
@@ -254,7 +265,7 @@ def uvms_q0_acc(
     cols, bias = _acceleration_setup(
         x, y, phi, q1, q2, q3, xd, yd, phid, q1d, q2d, q3d, a1, a2, a3, bx, by
     )
-    primary = {0: xdd, 1: ydd, 2: phidd, 6: xedd, 7: yedd, 8: phiedd}
+    primary = (xdd, ydd, phidd, 0.0, 0.0, 0.0, xedd, yedd, phiedd)
     return _solve(cols, (3, 4, 5), primary, bias)
 
 
@@ -291,12 +302,12 @@ def uvms_state3_acc(
     cols, bias = _acceleration_setup(
         x, y, phi, q1, q2, q3, xd, yd, phid, q1d, q2d, q3d, a1, a2, a3, bx, by
     )
-    primary = {2: phidd, 3: q1dd, 5: q3dd, 6: xedd, 7: yedd, 8: phiedd}
+    primary = (0.0, 0.0, phidd, q1dd, 0.0, q3dd, xedd, yedd, phiedd)
     return _solve(cols, (0, 1, 4), primary, bias)
 
 
 @lru_cache(maxsize=64)
-def _path(
+def _check_path(
     turns: float,
     off_x: float,
     off_y: float,
@@ -306,11 +317,29 @@ def _path(
     epsilon: float,
     heading: float,
     direction: float,
-    follow: float,
-) -> DeformedCircle:
-    sense = 1 if direction >= 0 else -1
-    return DeformedCircle(
-        (sx, sy), (off_x, off_y), turns, duration, epsilon, 0.0, sense, heading, 0.0, follow
+) -> None:
+    """Refuse a path :class:`DeformedCircle` refuses (ValueError), once per geometry."""
+    DeformedCircle((sx, sy), (off_x, off_y), turns, duration, epsilon, 0.0, 1, heading)
+
+
+def path_formula(
+    t: float,
+    turns: float,
+    off_x: float,
+    off_y: float,
+    sx: float,
+    sy: float,
+    duration: float,
+    epsilon: float,
+    heading: float,
+    direction: float,
+    follow: float = 0.0,
+) -> tuple[float, float, float, float, float, float, float, float, float]:
+    """:func:`uvms_path` without the checks of its arguments (its compiled form)."""
+    theta_s, big_r = oval_geometry(off_x, off_y, epsilon, 0.0)
+    laps = turns if direction >= 0 else -turns
+    return path_state(
+        t, 0.0, duration, laps, theta_s, 0.0, big_r, epsilon, sx + off_x, sy + off_y, heading, follow
     )
 
 
@@ -332,8 +361,10 @@ def uvms_path(
     Returns ``(xe, ye, phie, vxe, vye, wphie, axe, aye, dwphie)``; ``direction`` >= 0
     runs counter-clockwise, < 0 clockwise; ``follow`` 1 turns the heading with the path.
     """
-    path = _path(turns, off_x, off_y, sx, sy, duration, epsilon, heading, direction, follow)
-    return tuple(path(t))
+    _check_path(turns, off_x, off_y, sx, sy, duration, epsilon, heading, direction)
+    return path_formula(
+        t, turns, off_x, off_y, sx, sy, duration, epsilon, heading, direction, follow
+    )
 
 
 def uvms_fm(gamma: float, theta_p: float, gamma_min: float, ramp: float = 0.0) -> float:
@@ -391,6 +422,8 @@ def _mark(
 ) -> Callable[..., Any]:
     fn.hybrid_arity = (arity - optional, arity)  # type: ignore[attr-defined]
     fn.hybrid_outputs = outputs  # type: ignore[attr-defined]
+    # the compiled form, named so that only the compiled backend imports numba
+    fn.hybrid_compiled = f"uvms_model.compiled:{fn.__name__}"  # type: ignore[attr-defined]
     return fn
 
 

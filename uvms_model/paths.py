@@ -59,6 +59,8 @@ __all__ = [
     "PathState",
     "mission1_path",
     "mission2_path",
+    "oval_geometry",
+    "path_state",
     "smoothstep5",
 ]
 
@@ -105,6 +107,102 @@ def smoothstep5(tau: float) -> tuple[float, float]:
     """
     sigma, dsigma, _ = quintic_state(tau, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
     return sigma, dsigma
+
+
+def oval_geometry(dx: float, dy: float, epsilon: float, axis_angle: float) -> tuple[float, float]:
+    """Polar angle of the start about the centre and the base radius ``R`` of the oval.
+
+    Parameters
+    ----------
+    dx, dy : float
+        Centre minus start, m (non-zero).
+    epsilon, axis_angle : float
+        Radial deformation and direction of the long axis, rad.
+
+    Returns
+    -------
+    tuple of float
+        ``(theta_s, R)`` with ``R = |S - C| / [1 + epsilon cos 2(theta_s - theta_a)]``.
+
+    Examples
+    --------
+    >>> oval_geometry(-1.0, 0.0, 0.0, 0.0) == (0.0, 1.0)
+    True
+    """
+    theta_s = math.atan2(-dy, -dx)
+    big_r = math.hypot(dx, dy) / (1.0 + epsilon * math.cos(2.0 * (theta_s - axis_angle)))
+    return theta_s, big_r
+
+
+def path_state(
+    t: float,
+    t_start: float,
+    duration: float,
+    laps: float,
+    theta_start: float,
+    axis_angle: float,
+    base_radius: float,
+    epsilon: float,
+    cx: float,
+    cy: float,
+    heading: float,
+    follow: float,
+) -> tuple[float, float, float, float, float, float, float, float, float]:
+    """The commanded end effector at ``t``: the one evaluation of the path (scalars).
+
+    :class:`DeformedCircle` calls it with its geometry; so does the function
+    ``uvms_path`` the specs call (:mod:`uvms_model.functions`), compiled or not.
+
+    Parameters
+    ----------
+    t, t_start, duration : float
+        Time, start time t0 and travel time T, s.
+    laps : float
+        Signed turns: ``direction * turns``.
+    theta_start, axis_angle, base_radius, epsilon : float
+        Geometry (:func:`oval_geometry`).
+    cx, cy : float
+        Centre, m.
+    heading, follow : float
+        Heading at the start and heading_follow (see :class:`DeformedCircle`).
+
+    Returns
+    -------
+    tuple of float
+        ``(xe, ye, phie, vxe, vye, wphie, axe, aye, dwphie)``.
+
+    Examples
+    --------
+    >>> [round(v, 12) for v in path_state(0.0, 0.0, 60.0, 1.0, math.pi, 0.0, 1.0, 0.0,
+    ...                                    1.0, 0.0, 0.0, 0.0)][:3]
+    [0.0, 0.0, 0.0]
+    """
+    sigma, dsigma, ddsigma = quintic_state((t - t_start) / duration, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
+    sweep = laps * 2.0 * math.pi
+    theta = theta_start + sweep * sigma
+    theta_dot = sweep * dsigma / duration
+    theta_ddot = sweep * ddsigma / duration**2
+    arg = 2.0 * (theta - axis_angle)
+    big_r, eps = base_radius, epsilon
+    rho = big_r * (1.0 + eps * math.cos(arg))
+    drho = -2.0 * big_r * eps * math.sin(arg)
+    ddrho = -4.0 * big_r * eps * math.cos(arg)
+    c, s = math.cos(theta), math.sin(theta)
+    # p(theta) = C + rho e, e = (c, s), e_perp = (-s, c):
+    # p_theta = rho' e + rho e_perp, p_theta_theta = (rho'' - rho) e + 2 rho' e_perp
+    ptx, pty = drho * c - rho * s, drho * s + rho * c
+    pttx, ptty = (ddrho - rho) * c - 2.0 * drho * s, (ddrho - rho) * s + 2.0 * drho * c
+    return (
+        cx + rho * c,
+        cy + rho * s,
+        heading + follow * (theta - theta_start),
+        ptx * theta_dot,
+        pty * theta_dot,
+        follow * theta_dot,
+        pttx * theta_dot**2 + ptx * theta_ddot,
+        ptty * theta_dot**2 + pty * theta_ddot,
+        follow * theta_ddot,
+    )
 
 
 @dataclass(frozen=True)
@@ -167,8 +265,7 @@ class DeformedCircle:
         if dist == 0.0:
             raise ValueError("centre_offset must be non-zero")
         sx, sy = float(self.start[0]), float(self.start[1])
-        theta_s = math.atan2(-dy, -dx)
-        big_r = dist / (1.0 + self.epsilon * math.cos(2.0 * (theta_s - self.axis_angle)))
+        theta_s, big_r = oval_geometry(dx, dy, self.epsilon, self.axis_angle)
         theta = np.linspace(0.0, 2.0 * math.pi, _PERIMETER_NODES, endpoint=False)
         arg = 2.0 * (theta - self.axis_angle)
         rho = big_r * (1.0 + self.epsilon * np.cos(arg))
@@ -199,35 +296,21 @@ class DeformedCircle:
         PathState
             ``(xe, ye, phie, vxe, vye, wphie)``.
         """
-        sigma, dsigma, ddsigma = quintic_state(
-            (t - self.t_start) / self.duration, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0
-        )
-        sweep = self.direction * 2.0 * math.pi * self.turns
-        theta = self.theta_start + sweep * sigma
-        theta_dot = sweep * dsigma / self.duration
-        theta_ddot = sweep * ddsigma / self.duration**2
-        arg = 2.0 * (theta - self.axis_angle)
-        big_r, eps = self.base_radius, self.epsilon
-        rho = big_r * (1.0 + eps * math.cos(arg))
-        drho = -2.0 * big_r * eps * math.sin(arg)
-        ddrho = -4.0 * big_r * eps * math.cos(arg)
-        c, s = math.cos(theta), math.sin(theta)
-        # p(theta) = C + rho e, e = (c, s), e_perp = (-s, c):
-        # p_theta = rho' e + rho e_perp, p_theta_theta = (rho'' - rho) e + 2 rho' e_perp
-        ptx, pty = drho * c - rho * s, drho * s + rho * c
-        pttx, ptty = (ddrho - rho) * c - 2.0 * drho * s, (ddrho - rho) * s + 2.0 * drho * c
-        cx, cy = self.centre
-        follow = self.heading_follow
         return PathState(
-            cx + rho * c,
-            cy + rho * s,
-            self.heading + follow * (theta - self.theta_start),
-            ptx * theta_dot,
-            pty * theta_dot,
-            follow * theta_dot,
-            pttx * theta_dot**2 + ptx * theta_ddot,
-            ptty * theta_dot**2 + pty * theta_ddot,
-            follow * theta_ddot,
+            *path_state(
+                t,
+                self.t_start,
+                self.duration,
+                self.direction * self.turns,
+                self.theta_start,
+                self.axis_angle,
+                self.base_radius,
+                self.epsilon,
+                self.centre[0],
+                self.centre[1],
+                self.heading,
+                self.heading_follow,
+            )
         )
 
 

@@ -39,6 +39,11 @@ __all__ = ["Quintic", "quintic_coefficients", "quintic_state", "transition_targe
 Coefficients = tuple[float, float, float, float, float, float]
 
 
+def _bad_duration(t0: float, tf: float) -> float:
+    """``tf <= t0``: ValueError here, NaN in the compiled form (:mod:`uvms_model.compiled`)."""
+    raise ValueError(f"quintic needs tf > t0, got t0={t0}, tf={tf}")
+
+
 def quintic_coefficients(
     t0: float,
     p0: float,
@@ -70,7 +75,7 @@ def quintic_coefficients(
     """
     T = tf - t0
     if not T > 0.0:
-        raise ValueError(f"quintic needs tf > t0, got t0={t0}, tf={tf}")
+        T = _bad_duration(t0, tf)
     d = pf - p0
     c3 = (20.0 * d - (8.0 * vf + 12.0 * v0) * T - (3.0 * a0 - af) * T**2) / (2.0 * T**3)
     c4 = (-30.0 * d + (14.0 * vf + 16.0 * v0) * T + (3.0 * a0 - 2.0 * af) * T**2) / (2.0 * T**4)

@@ -66,6 +66,8 @@ Stop = Callable[[], bool]
 
 POLL = 0.2
 """Seconds between looks at Ctrl-C and at timeouts while waiting for results."""
+ENSEMBLE_BATCH = 256
+"""Runs per ensemble call of the compiled backend when the campaign runs in this process."""
 
 
 def default_workers() -> int:
@@ -144,10 +146,12 @@ class InProcess(Executor):
         should_stop: Stop = lambda: False,
         limit: float | None = None,
     ) -> bool:
-        for job in jobs:
+        # the compiled backend runs a batch in one ensemble call; scipy one run at a time
+        size = ENSEMBLE_BATCH if self.plan.backend == "compiled" else 1
+        for lo in range(0, len(jobs), size):
             if should_stop():
                 return False
-            for index, result in execute(self.payload, self.plan, [job]):
+            for index, result in execute(self.payload, self.plan, jobs[lo : lo + size]):
                 on_result(index, result)
         return True
 

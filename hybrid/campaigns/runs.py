@@ -10,9 +10,9 @@ the message; a run longer than the plan's ``timeout`` is a row with cause
 ``timeout``. Nothing a run does ends the campaign.
 
 The plan's ``backend`` is passed to :func:`hybrid.simulate` as it is (``scipy``,
-the default, is not passed, so today's engine runs as it always has); an
-ensemble backend plugs in at :func:`run_points`, which gets a worker's whole
-batch.
+the default, is not passed, so today's engine runs as it always has); with
+``compiled``, :func:`run_points` runs a worker's whole batch in one call of
+:func:`hybrid.simulate_many` where it can.
 
 Summaries (``KIND:NAME``) read the stored points of the run (``dt`` makes them
 denser; a requirement's robustness is the exact extreme):
@@ -228,6 +228,11 @@ def run_point(
             **row,
             **failed_row(model, plan, "error", f"internal error: {type(exc).__name__}: {exc}"),
         }
+    return _row_of(row, run, plan)
+
+
+def _row_of(row: dict[str, Any], run: Run, plan: RunPlan) -> dict[str, Any]:
+    """``row`` with how ``run`` ended, its requirements and the plan's summaries."""
     end = run.termination
     row.update(
         cause=end.cause,
@@ -249,8 +254,54 @@ def run_point(
 def run_points(
     model: Automaton | System, batch: Sequence[tuple[int, Mapping[str, float]]], plan: RunPlan
 ) -> list[dict[str, Any]]:
-    """The rows of a batch of ``(index, point)``: where an ensemble backend would plug in."""
+    """The rows of a batch of ``(index, point)``.
+
+    With ``backend="compiled"`` the batch is one call of :func:`hybrid.simulate_many`
+    (one compiled loop, threads over runs) when every run can go there: no run
+    timeout, no held inputs, only the solver options the ensemble takes. Otherwise,
+    or if the ensemble refuses the model, each run is :func:`run_point`.
+    """
+    if plan.backend == "compiled" and len(batch) > 1 and _fits_ensemble(batch, plan):
+        try:
+            return _ensemble_rows(model, batch, plan)
+        except HybridError:
+            pass  # each run says why, in its own row
     return [run_point(model, index, point, plan) for index, point in batch]
+
+
+_ENSEMBLE_OPTIONS = frozenset(
+    ("rtol", "atol", "max_step", "max_jumps", "dt", "zeno", "max_jumps_per_instant", "t_start")
+)
+
+
+def _fits_ensemble(batch: Sequence[tuple[int, Mapping[str, float]]], plan: RunPlan) -> bool:
+    return (
+        plan.timeout is None
+        and not plan.inputs
+        and set(plan.solver) - {"method"} <= _ENSEMBLE_OPTIONS
+        and plan.solver.get("method", "RK45") == "RK45"
+        and not any(split(point).inputs for _, point in batch)
+    )
+
+
+def _ensemble_rows(
+    model: Automaton | System, batch: Sequence[tuple[int, Mapping[str, float]]], plan: RunPlan
+) -> list[dict[str, Any]]:
+    """The batch's rows from one :func:`hybrid.simulate_many` call."""
+    from hybrid.simulation.native.many import simulate_many
+
+    columns: dict[str, list[float]] = {}
+    for _, point in batch:
+        over = split(point)
+        for key, value in [*over.parameters.items(), *(("init." + k, v) for k, v in over.initial.items())]:
+            columns.setdefault(key, []).append(float(value))
+    if any(len(column) != len(batch) for column in columns.values()):
+        raise UsageError("the points of a batch vary different names")
+    options = {k: v for k, v in plan.solver.items() if k != "method"}
+    runs = simulate_many(
+        model, plan.t_end, parameters=columns or None, handle_sigint=False, **options
+    )
+    return [_row_of({"run": index, **point}, runs[k], plan) for k, (index, point) in enumerate(batch)]
 
 
 def failed_row(

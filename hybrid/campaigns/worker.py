@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from hybrid.campaigns.payload import Payload, unpack
-from hybrid.campaigns.runs import RunPlan, run_point
+from hybrid.campaigns.runs import RunPlan, run_point, run_points
 
 __all__ = ["Job", "execute", "serve"]
 
@@ -51,7 +51,19 @@ def execute(payload: Payload, plan: RunPlan, jobs: Sequence[Job]) -> list[tuple[
     """Run ``jobs`` here; their results, in order (the batch function of a Dask task)."""
     model = unpack(payload)
     with np.errstate(all="ignore"):
+        if _together(plan, jobs):
+            return _runs_together(model, plan, jobs)
         return [(index, _task(task)(model, index, arg, plan)) for index, task, arg in jobs]
+
+
+def _together(plan: RunPlan, jobs: Sequence[Job]) -> bool:
+    """A batch of runs on the compiled backend: one ensemble call (:func:`run_points`)."""
+    return plan.backend == "compiled" and len(jobs) > 1 and all(t == "run" for _, t, _ in jobs)
+
+
+def _runs_together(model: Any, plan: RunPlan, jobs: Sequence[Job]) -> list[tuple[int, Any]]:
+    rows = run_points(model, [(index, arg) for index, _, arg in jobs], plan)
+    return [(index, row) for (index, _, _), row in zip(jobs, rows, strict=True)]
 
 
 def serve(conn: Connection, payload: Payload, plan: RunPlan) -> None:
@@ -63,6 +75,11 @@ def serve(conn: Connection, payload: Payload, plan: RunPlan) -> None:
             batch = conn.recv()
             if batch is None:
                 return
+            if _together(plan, batch):
+                with np.errstate(all="ignore"):
+                    for answer in _runs_together(model, plan, batch):
+                        conn.send(answer)
+                continue
             for index, task, arg in batch:
                 with np.errstate(all="ignore"):
                     result = _task(task)(model, index, arg, plan)

@@ -57,6 +57,11 @@ def add_campaign_commands(
     p.add_argument("--summary", action="append", default=[], metavar="KIND:NAME",
                    help="a column per run: max:x, min:x, last:x, mean:x, jumps:EDGE, jump_t:K")  # fmt: skip
     _common(p, types)
+    from hybrid.simulation.settings import BACKENDS
+
+    p.add_argument("--backend", default=BACKENDS[0], choices=BACKENDS,
+                   help="scipy (reference) or compiled (numba: one ensemble call per batch; "
+                   "docs/backends.md)")  # fmt: skip
     p.add_argument("--out", required=True, help="results file (.csv or .parquet)")
     p.add_argument("--resume", action="store_true", help="finish an interrupted campaign")
     p.add_argument("--format", choices=REPORT_FORMATS, default="summary",
@@ -154,6 +159,7 @@ def run_sweep(args: argparse.Namespace) -> int:
             out=args.out,
             resume=args.resume,
             progress=line,
+            backend=args.backend,
             **_solver(args),
         )
     if line is not None:

@@ -69,6 +69,7 @@ def evaluation_order(needed: Iterable[str], definitions: Mapping[str, ir.Expr]) 
         graph[name] = ir.names_in(definitions[name]) & definitions.keys()
         pending.extend(sorted(graph[name] - graph.keys()))
     try:
-        return list(TopologicalSorter(graph).static_order())
+        # sorted predecessors: the same order in every process (generated source is cached by it)
+        return list(TopologicalSorter({n: sorted(d) for n, d in graph.items()}).static_order())
     except CycleError as exc:
         raise ValueError(f"signals form a circular definition through '{exc.args[1][0]}'") from None

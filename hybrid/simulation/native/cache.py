@@ -1,9 +1,9 @@
 """Compiled models on disk: the cache key, the generated file, and loading it.
 
 **The key** is the SHA-256 of the generated source (which holds the model's
-structure and the whole kernel, but no parameter values), the numba, Python
-and machine versions, and the text of every module whose compiled library
-functions the model calls (numba does not notice when a function called from
+structure and the whole kernel, but no parameter values or names), the numba,
+Python and machine versions, and the text of every module of each package whose
+compiled library functions the model calls (numba does not notice when a function called from
 cached code changes; the key does). The generated module is written once, as
 ``<cache>/<key>/hybrid_native_<key>.py``, and imported from there; numba
 (``cache=True``) keeps the machine code beside it in ``__pycache__``, indexed
@@ -74,12 +74,22 @@ def cache_key(generated: Generated, numba_version: str) -> str:
         digest.update(part.encode())
         digest.update(b"\0")
     for module in generated.library_modules:
-        spec = importlib.util.find_spec(module)
-        origin = spec.origin if spec is not None else None
         digest.update(module.encode())
-        if origin and os.path.isfile(origin):
-            digest.update(Path(origin).read_bytes())
+        for source in _library_sources(module):
+            digest.update(source.read_bytes())
     return digest.hexdigest()[:24]
+
+
+def _library_sources(module: str) -> list[Path]:
+    """The module's file and the other modules of its package (a compiled form calls them)."""
+    spec = importlib.util.find_spec(module)
+    origin = spec.origin if spec is not None else None
+    if not (origin and os.path.isfile(origin)):
+        return []
+    top = importlib.util.find_spec(module.partition(".")[0])
+    folders = list(top.submodule_search_locations or []) if top is not None else []
+    siblings = sorted(p for folder in folders for p in Path(folder).rglob("*.py"))
+    return siblings if Path(origin) in siblings else [Path(origin)]
 
 
 def _writable_directory(key: str) -> Path:

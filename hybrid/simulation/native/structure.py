@@ -44,6 +44,7 @@ from hybrid.expr.functions import BUILTINS, Function
 from hybrid.expr.rho import _rewrite, guard_to_rho, levels
 from hybrid.model import Automaton, Location
 from hybrid.modes import Mode, TransitionView, transitions_of
+from hybrid.simulation.native.features import refuse_unsupported
 
 __all__ = [
     "COMPILED_FORM",
@@ -140,13 +141,7 @@ class NativeModel:
 
     def __init__(self, model: Automaton | System) -> None:
         self.system = as_system(model)
-        if self.system.single and self.system.components[0].automaton.inputs:
-            name = self.system.components[0].automaton.inputs[0]
-            raise UsageError(
-                f"input '{name}' of {self.system.name} needs a value, and the compiled backend "
-                "cannot take inputs given as Python functions: use backend='scipy' with "
-                f"inputs={{'{name}': f}}, or compose the automaton with one that defines '{name}'"
-            )
+        refuse_unsupported(self.system)
         slots: dict[tuple[int, str], int] = {}
         labels: list[str] = []
         values: list[float] = []

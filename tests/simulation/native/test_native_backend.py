@@ -38,12 +38,11 @@ def test_cli_backend_compiled_writes_what_scipy_writes(tmp_path: Path) -> None:
     assert events_c["termination"]["cause"] == events_s["termination"]["cause"] == "t_end"
 
 
-def test_library_functions_without_a_compiled_form_are_refused() -> None:
-    model = hybrid.load(SPECS / "uvms_mission_2.yaml")
-    with pytest.raises(UsageError, match=r"library function '.*' has no compiled form"):
-        hybrid.simulate(model, t_end=1.0, backend="compiled")
+def test_a_mission_with_requirements_is_refused_on_the_command_line() -> None:
+    # (a library function without a compiled form: tests/simulation/native/test_native_library.py)
     done = run_cli("simulate", SPECS / "uvms_mission_2.yaml", "--t-end", "1", "--backend", "compiled")
-    assert done.returncode == 2 and "has no compiled form" in done.stderr
+    assert done.returncode == 2, done.stderr
+    assert "does not monitor requirements (dexterity)" in done.stderr and "backend='scipy'" in done.stderr
     assert_no_traceback(done.stderr)
 
 

@@ -1,0 +1,63 @@
+"""What the compiled backend refuses: constructs whose semantics it does not implement (yet).
+
+Every refusal is one :class:`~hybrid.errors.UsageError` that names the
+construct and where it is, and suggests ``backend='scipy'``, which runs it.
+Everything not refused here runs as the scipy backend runs it (the agreement
+tests of ``tests/simulation/native`` show each construct).
+
+Examples
+--------
+>>> import hybrid
+>>> from hybrid.compose import as_system
+>>> tank = hybrid.load_text('''
+... automaton: tank
+... inputs: {u: {range: [0.5, 1.5]}}
+... state: {h: {initial: 2.0}}
+... locations: {fill: {flow: {h: u}}}
+... ''')
+>>> refuse_unsupported(as_system(tank))
+Traceback (most recent call last):
+...
+hybrid.errors.UsageError: the compiled backend cannot run tank: input 'u' is free (the scipy backend holds it at its nominal value or takes inputs={'u': f}); use backend='scipy', or compose tank with an automaton that defines 'u'
+"""
+
+from __future__ import annotations
+
+from hybrid.compose import System
+from hybrid.errors import UsageError
+
+__all__ = ["refuse_unsupported"]
+
+
+def refuse_unsupported(system: System) -> None:
+    """Raise :class:`UsageError` if ``system`` uses a construct the compiled backend lacks."""
+    name = system.name
+    free = system.free_inputs
+    if free and free[0] not in system.input_ranges():
+        raise UsageError(
+            f"input '{free[0]}' of {name} needs a value, and the compiled backend cannot take "
+            f"inputs given as Python functions: use backend='scipy' with inputs={{'{free[0]}': f}}, "
+            f"or compose {name} with an automaton that defines '{free[0]}'"
+        )
+    if free:
+        raise UsageError(
+            f"the compiled backend cannot run {name}: input '{free[0]}' is free (the scipy "
+            f"backend holds it at its nominal value or takes inputs={{'{free[0]}': f}}); use "
+            f"backend='scipy', or compose {name} with an automaton that defines '{free[0]}'"
+        )
+    requirements = [r.name for r in system.requirements] + [
+        r.name for c in system.components for r in c.automaton.requirements
+    ]
+    if requirements:
+        raise UsageError(
+            f"the compiled backend cannot run {name}: it does not monitor requirements "
+            f"({', '.join(requirements)}); use backend='scipy'"
+        )
+    for c in system.components:
+        for location in c.automaton.locations.values():
+            if location.urgent:
+                where = location.name if system.single else f"{c.name}.{location.name}"
+                raise UsageError(
+                    f"the compiled backend cannot run {name}: location '{where}' is urgent "
+                    "(no time may pass there), which it does not implement; use backend='scipy'"
+                )

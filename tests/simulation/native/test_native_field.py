@@ -1,0 +1,103 @@
+"""The compiled backend and the field features: each runs as scipy runs it, or is refused by name."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import hybrid
+from hybrid.compose import compose
+from hybrid.errors import UsageError
+
+pytest.importorskip("numba")
+
+TOL = {"rtol": 1e-10, "atol": 1e-12, "handle_sigint": False}
+
+TANK = """
+automaton: tank
+state: {h: {initial: 2.0}}
+locations:
+  fill: {flow: {h: 1}}
+  drain: {flow: {h: -2}}
+edges:
+  - {name: full, from: fill, to: drain, guard: h >= 4}
+  - {name: empty, from: drain, to: fill, guard: h <= 1}
+"""
+# the same tank under other names (no clash in a composition), filling at a rate read as input u
+OTHER = (
+    TANK.replace("tank", "other").replace("{h: 1}", "{g: 0.5}").replace("{h: -2}", "{g: -2}")
+    .replace("h: {", "g: {").replace("h >=", "g >=").replace("h <=", "g <=")
+)  # fmt: skip
+INPUT = TANK.replace("state:", "inputs: {u: {range: [0.5, 1.5]}}\nstate:").replace("{h: 1}", "{h: u}")
+SOURCE = """
+automaton: source
+state: {u: {initial: 1.0}}
+locations: {on: {flow: {u: 0.1}}}
+"""
+
+
+def agree(model: hybrid.Automaton | hybrid.System, t_end: float = 12.0) -> hybrid.Run:
+    compiled = hybrid.simulate(model, t_end=t_end, backend="compiled", **TOL)  # type: ignore[arg-type]
+    reference = hybrid.simulate(model, t_end=t_end, **TOL)  # type: ignore[arg-type]
+    assert [(j.edge, j.source, j.target) for j in compiled.jumps] == [
+        (j.edge, j.source, j.target) for j in reference.jumps
+    ]
+    np.testing.assert_allclose(compiled.jump_times, reference.jump_times, rtol=1e-10, atol=1e-9)
+    assert compiled.termination.cause == reference.termination.cause
+    assert compiled.settings["start"] == reference.settings["start"]
+    return compiled
+
+
+def test_initial_set_starts_at_its_nominal_point() -> None:
+    tank = hybrid.load_text(TANK.replace("{initial: 2.0}", "{initial: [1.0, 3.0], nominal: 2.5}"))
+    run = agree(tank)
+    assert run.jump_times[:3] == pytest.approx([1.5, 3.0, 6.0], abs=1e-9)  # from 2.5 up to 4 at rate 1
+
+
+def test_several_initial_locations_start_in_the_first() -> None:
+    tank = hybrid.load_text(TANK.replace("state:", "initial: {location: [drain, fill]}\nstate:"))
+    run = agree(tank)
+    assert run.jumps[0].edge == "empty" and run.jumps[0].t == pytest.approx(0.5, abs=1e-9)
+
+
+def test_input_bound_to_a_state_variable_of_another_component() -> None:
+    system = compose(hybrid.load_text(SOURCE), hybrid.load_text(INPUT), name="bound")
+    run = agree(system)
+    # h = 2 + t + 0.05 t^2 reaches 4 at t = 10 (sqrt(1.4) - 1)
+    assert run.jump_times[0] == pytest.approx(10 * (np.sqrt(1.4) - 1), rel=1e-9)
+
+
+def test_independent_components_merged_in_hybrid_time() -> None:
+    system = compose(hybrid.load_text(TANK), hybrid.load_text(OTHER), name="apart")
+    run = agree(system)
+    assert {j.edge for j in run.jumps} >= {"tank.full", "other.full", "other.empty"}
+
+
+@pytest.mark.parametrize(
+    ("model", "named"),
+    [
+        (lambda: hybrid.load_text(INPUT), "input 'u' is free"),
+        (
+            lambda: compose(hybrid.load_text(INPUT), hybrid.load_text(OTHER), name="open"),
+            "input 'u' is free",
+        ),
+        (
+            lambda: hybrid.load_text(
+                TANK + "requirements:\n  - {name: low, always: h >= 0}\n"
+            ),
+            "does not monitor requirements (low)",
+        ),
+        (
+            lambda: hybrid.load_text(TANK.replace("drain: {flow", "drain: {urgent: true, flow")),
+            "location 'drain' is urgent",
+        ),
+    ],
+    ids=["bounded-input", "free-input-of-a-system", "requirements", "urgent"],
+)
+def test_refused_with_the_feature_named(model: object, named: str) -> None:
+    built = model()  # type: ignore[operator]
+    hybrid.simulate(built, t_end=1.0, handle_sigint=False)  # the scipy backend runs it
+    with pytest.raises(UsageError, match="backend='scipy'") as refused:
+        hybrid.simulate(built, t_end=1.0, backend="compiled", handle_sigint=False)
+    assert named in str(refused.value)
+    assert str(refused.value).startswith(("the compiled backend cannot run",))
