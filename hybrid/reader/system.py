@@ -132,8 +132,8 @@ def _initial(
 
 
 def _scope(system: System) -> Scope:
-    """The names a system's forbidden states may read: every state variable and signal,
-    and the system's free inputs."""
+    """The names a system file's forbidden states and requirements may read: every
+    state variable and signal, and the system's free inputs."""
     kinds: dict[str, str] = {}
     sizes: dict[str, int] = {}
     for c in system.components:
