@@ -112,11 +112,7 @@ def test_no_rate_changes_by_more_than_the_bound_within_20_ms(
     # no vehicle lag in the model: the vehicle's velocity is the algebraic law of eq. 8
     assert not {"u", "w"} & set(result.model.state_names)
     worst, name = result.rate_change
-    # the bound of the issue holds for mission 1; mission 2 exceeds it once, at the FM's
-    # catch in q0 (S1 -> S2 with the elbow already swinging; docs/uvms.md), so it is
-    # asserted at the measured level and reported
-    bound = RATE_CHANGE_BOUND if which == "mission_1" else 0.025
-    assert worst <= bound, f"{name} changes by {worst:.4f} within 20 ms"
+    assert worst <= RATE_CHANGE_BOUND, f"{name} changes by {worst:.4f} within 20 ms"
     assert result.max_tracking_error < 1e-3
 
 
@@ -266,9 +262,15 @@ def test_fm_alone_fails_at_the_dip_the_automaton_handles(
     assert fm_only.min_abs_gamma < 0.5 * gamma_tol
     assert fm_only.run.termination.t < epsilon_t + 2.0
     # the full strategy switches there and stays well above that: the dip below
-    # gamma_tol is the bounded overshoot while the eq. 9 laws brake the elbow
+    # gamma_tol is the bounded overshoot while the eq. 9 laws brake the elbow (epsilon
+    # fires at gamma_tol with the elbow still closing and its rate continuous, so some
+    # overshoot cannot be avoided), and it is over before those laws end (T_recover)
+    run = mission_2.run
     assert mission_2.min_abs_gamma > 0.5
-    assert mission_2.run.termination.cause == "t_end"
+    assert run.termination.cause == "t_end"
+    below = run.t[run["gamma"] < gamma_tol]
+    assert below[0] >= epsilon_t
+    assert below[-1] - epsilon_t < _uvms_params()["T_recover"]
 
 
 def test_ablations() -> None:
