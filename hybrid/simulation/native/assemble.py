@@ -12,7 +12,7 @@ the message names the expression and its arguments exactly as it does there.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,10 +26,17 @@ from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Jump, Run, Termination
 from hybrid.simulation.settings import Settings
 
-__all__ = ["DenseSegment", "Inputs", "Layout", "run_from", "settings_record"]
+__all__ = ["PACKED_WIDTH", "DenseSegment", "Inputs", "JumpFields", "Layout", "run_from",
+           "settings_record"]  # fmt: skip
 
 Inputs = Mapping[str, Callable[[float], float]] | None
 """The reference engine's inputs of a model (to word a failure as the reference does)."""
+
+JumpFields = tuple[str, str | None, str, str, tuple[str, ...], str]
+"""``(edge, label, source, target, enabled, chosen_by)`` of a jump."""
+
+PACKED_WIDTH = 32
+"""Most transitions a mode may have for a jump's enabled flags to be packed into an int key."""
 
 
 @dataclass(frozen=True)
@@ -43,10 +50,11 @@ class Layout:
     """Per mode, the global index of its first invariant (as ``MODE_INV``)."""
     describe: tuple[tuple[str, str | None, str, str], ...]
     """Per global transition: its name, label, source and target mode names."""
-    choices: dict[tuple[int, bytes], tuple[tuple[str, ...], str]]
-    """Enabled names and ``chosen_by`` per (transition, enabled flags) seen so far."""
+    choices: dict[Hashable, JumpFields]
+    """The fields of a jump but its time and states, per :meth:`jump_keys` key seen so far."""
     modes: tuple[Any, ...]
     """The modes (:class:`~hybrid.simulation.native.structure.NativeMode`)."""
+    state_names: tuple[str, ...]
 
     @classmethod
     def of(cls, native: NativeModel) -> Layout:
@@ -61,23 +69,46 @@ class Layout:
              native.modes[native.index[tr.view.target]].name)
             for m, _, tr in rows
         )  # fmt: skip
-        return cls(names, tuple(rows), tuple(first), describe, {}, tuple(native.modes))
+        return cls(names, tuple(rows), tuple(first), describe, {}, tuple(native.modes),
+                   tuple(native.state_names))  # fmt: skip
 
     def enabled(self, tr: int, flags: bytes) -> tuple[tuple[str, ...], str]:
         """The names of the transitions enabled with ``tr`` chosen, and how it was chosen."""
-        key = (tr, flags)
-        hit = self.choices.get(key)
-        if hit is None:
-            m, _, chosen = self.transitions[tr]
-            mode = self.modes[m]
-            on = [t for k, t in enumerate(mode.transitions) if flags[k]]
-            if len(on) <= 1:
-                how = "only"
-            else:
-                top = [t for t in on if t.view.priority == chosen.view.priority]
-                how = "priority" if len(top) == 1 else "file order"
-            hit = self.choices[key] = (tuple(t.view.name for t in on), how)
-        return hit
+        m, _, chosen = self.transitions[tr]
+        mode = self.modes[m]
+        on = [t for k, t in enumerate(mode.transitions) if flags[k]]
+        if len(on) <= 1:
+            how = "only"
+        else:
+            top = [t for t in on if t.view.priority == chosen.view.priority]
+            how = "priority" if len(top) == 1 else "file order"
+        return tuple(t.view.name for t in on), how
+
+    def jump_keys(self, transitions: NDArray[np.float64], flags: NDArray[np.float64]) -> list[Any]:
+        """A key per jump for :attr:`choices`: its transition and enabled flags (one row each).
+
+        Up to :data:`PACKED_WIDTH` flags a row, the key is an int, ``tr << width``
+        plus bit ``k`` for each enabled transition ``k`` of the mode; beyond, a pair
+        ``(tr, flags as bytes)``.
+        """
+        on = flags != 0.0
+        tr = transitions.astype(np.int64)
+        width = on.shape[1]
+        if width <= PACKED_WIDTH:
+            bits = np.left_shift(1, np.arange(width, dtype=np.int64))
+            keys: list[Any] = ((tr << width) | (on.astype(np.int64) @ bits)).tolist()
+            return keys
+        data = on.astype(np.uint8).tobytes()
+        return [(t, data[k * width : (k + 1) * width]) for k, t in enumerate(tr.tolist())]
+
+    def fields(self, key: Any, width: int) -> JumpFields:
+        """``(edge, label, source, target, enabled, chosen_by)`` of a :meth:`jump_keys` key."""
+        if isinstance(key, int):
+            tr, flags = key >> width, bytes((key >> k) & 1 for k in range(width))
+        else:
+            tr, flags = key
+        found = self.choices[key] = (*self.describe[tr], *self.enabled(tr, flags))
+        return found
 
 
 class DenseSegment:
@@ -100,36 +131,35 @@ class DenseSegment:
         return y[:, 0] if times.ndim == 0 else y
 
 
-def _jumps(native: NativeModel, layout: Layout, buf: b.RunArrays) -> list[Jump]:
-    names = native.state_names
-    d = len(names)
+def _jumps(layout: Layout, buf: b.RunArrays) -> list[Jump]:
+    """The :class:`Jump` records of the run in ``buf``, equal to the reference engine's.
+
+    Costs about as much as the compiled run of a short model, so it is kept
+    lean: the arrays become lists once (``tolist``), each jump's edge, label,
+    modes, enabled transitions and ``chosen_by`` are one lookup (:attr:`Layout.choices`),
+    and each Jump's fields are set at once (Jump is a frozen dataclass without
+    slots, and its generated ``__init__`` costs an ``object.__setattr__`` per field).
+    """
     n = int(buf.oi[b.I_JUMPS])
     if n == 0:
         return []
+    names = layout.state_names
+    x, y, z = b.J_X, b.J_X + len(names), b.J_X + 2 * len(names)
     rows = buf.jps[:n]
-    times = rows[:, b.J_T].tolist()
-    hybrid_times = rows[:, b.J_J].astype(np.int64).tolist()
-    transitions = rows[:, b.J_TR].astype(np.int64).tolist()
-    befores = rows[:, b.J_X : b.J_X + d].tolist()
-    afters = rows[:, b.J_X + d : b.J_X + 2 * d].tolist()
-    width = rows.shape[1] - b.J_X - 2 * d
-    flags = (rows[:, b.J_X + 2 * d :] != 0.0).astype(np.uint8).tobytes()
+    width = rows.shape[1] - z
+    keys = layout.jump_keys(rows[:, b.J_TR], rows[:, z:])
+    seen, fields_of = layout.choices, layout.fields
+    new, set_field = object.__new__, object.__setattr__
     jumps: list[Jump] = []
     append = jumps.append
-    new, set_field = object.__new__, object.__setattr__
-    enabled_of, describe, seen = layout.enabled, layout.describe, layout.choices
-    for k in range(n):
-        tr = transitions[k]
-        key = (tr, flags[k * width : (k + 1) * width])
-        enabled, how = seen.get(key) or enabled_of(*key)
-        name, label, source, target = describe[tr]
+    # each row holds t, j, tr, then exactly d values before and d after (no strict zip)
+    for row, key in zip(rows[:, :z].tolist(), keys, strict=True):
+        edge, label, source, target, enabled, how = seen.get(key) or fields_of(key, width)
         jump = new(Jump)
-        # the fields set at once: Jump is a frozen dataclass without slots, and its
-        # generated __init__ (one object.__setattr__ per field) costs as much as the run
         set_field(jump, "__dict__", {
-            "t": times[k], "j": hybrid_times[k], "edge": name, "label": label,
-            "source": source, "target": target, "before": dict(zip(names, befores[k], strict=True)),
-            "after": dict(zip(names, afters[k], strict=True)), "enabled": enabled, "chosen_by": how,
+            "t": row[0], "j": int(row[1]), "edge": edge, "label": label, "source": source,
+            "target": target, "before": dict(zip(names, row[x:y])),  # noqa: B905
+            "after": dict(zip(names, row[y:z])), "enabled": enabled, "chosen_by": how,  # noqa: B905
         })  # fmt: skip
         append(jump)
     return jumps
@@ -177,14 +207,14 @@ def run_from(
     pts = buf.pts[:n]
     return Run(
         model=model.name,
-        state_names=tuple(native.state_names),
+        state_names=layout.state_names,
         signal_names=tuple(native.columns),
         t=pts[:, b.P_T].copy(),
         j=pts[:, b.P_J].astype(np.int64),
         location=layout.mode_names[pts[:, b.P_M].astype(np.int64)],
         states=pts[:, b.P_X : b.P_X + d].copy(),
         signals=pts[:, b.P_X + d :].copy(),
-        jumps=_jumps(native, layout, buf),
+        jumps=_jumps(layout, buf),
         termination=termination_of(native, layout, model, settings, buf, inputs),
         settings=settings_record(settings),
         segments=_segments(buf, d),

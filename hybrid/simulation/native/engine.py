@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hybrid.compose import System, as_system
+from hybrid.compose import System
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.simulation.interrupts import sigint_watch
@@ -103,13 +103,11 @@ class CompiledNative:
 
     def run_one(self, p: Any, x0: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
                 flag: Any) -> None:  # fmt: skip
-        """One run into ``arrays`` (see :func:`hybrid.simulation.native.loop.run_one`)."""
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # numba: "first-class function type is experimental"
-            self._run_one(p, x0, t0, m0, cfg, arrays, flag)
+        """One run into ``arrays`` (see :func:`hybrid.simulation.native.loop.run_one`).
 
-    def _run_one(self, p: Any, x0: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
-                 flag: Any) -> None:  # fmt: skip
+        The compiled code is called without numba's dispatcher (:func:`_entry_point`),
+        so nothing is typed or compiled here and numba has nothing to warn about.
+        """
         self._one(self.fp, self.tab, p, x0, t0, m0, cfg[0], cfg[1], arrays.pts, arrays.jps,
                   arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
 
@@ -140,7 +138,9 @@ class CompiledNative:
         )
 
     def initial_mode(self, model: Automaton | System) -> int:
-        return self.native.index[as_system(model).initial_mode]
+        if isinstance(model, Automaton):  # as_system's view without building it
+            return self.native.index[(model.initial_location,)]
+        return self.native.index[model.initial_mode]
 
 
 def _entry_point(dispatcher: Any) -> Callable[..., None]:
@@ -161,12 +161,18 @@ def _structure_key(model: Automaton | System) -> tuple[tuple[Any, ...], tuple[An
     signals objects, so the models of a sweep share one entry. The key holds
     their ids; the cache holds the objects, so no other object can take an id.
     """
-    system = as_system(model)
-    objects = tuple(
-        (c.automaton.locations, c.automaton.edges, c.automaton.signals) for c in system.components
-    )
-    names = tuple((c.name, c.automaton.name) for c in system.components)
-    key = (system.name, system.single, names, tuple(id(o) for trio in objects for o in trio))
+    if isinstance(model, Automaton):  # as_system(model)'s key, without building the system
+        objects: tuple[tuple[Any, ...], ...] = ((model.locations, model.edges, model.signals),)
+        names: tuple[tuple[str, str], ...] = ((model.name, model.name),)
+        single = True
+    else:
+        objects = tuple(
+            (c.automaton.locations, c.automaton.edges, c.automaton.signals)
+            for c in model.components
+        )
+        names = tuple((c.name, c.automaton.name) for c in model.components)
+        single = model.single
+    key = (model.name, single, names, tuple(id(o) for trio in objects for o in trio))
     return key, objects
 
 
@@ -282,13 +288,17 @@ def run_arrays(
     cfg = config(settings)
     points, jumps = 256, 64
     steps = 256 if settings.dense else 1
+    in_worker = handle_sigint and threading.current_thread() is threading.main_thread()
     while True:
         arrays = compiled.buffers(points, jumps, steps)
+        if in_worker:
 
-        def call(flag: NDArray[np.int64], arrays: b.RunArrays = arrays) -> None:
-            compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, flag)
+            def call(flag: NDArray[np.int64], arrays: b.RunArrays = arrays) -> None:
+                compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, flag)
 
-        run_in_worker(call, handle_sigint)
+            run_in_worker(call, handle_sigint)
+        else:  # what run_in_worker does then, without its closure and thread check
+            compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, np.zeros(1, dtype=np.int64))
         if not arrays.oi[b.I_OVERFLOW]:
             return arrays
         points, jumps = points * 4, jumps * 4
