@@ -135,9 +135,10 @@ def _jumps(layout: Layout, buf: b.RunArrays) -> list[Jump]:
     """The :class:`Jump` records of the run in ``buf``, equal to the reference engine's.
 
     Costs about as much as the compiled run of a short model, so it is kept
-    lean: the arrays become lists once (``tolist``), each jump's edge, label,
-    modes, enabled transitions and ``chosen_by`` are one lookup (:attr:`Layout.choices`),
-    and each Jump's fields are set at once (Jump is a frozen dataclass without
+    lean: the arrays become lists once (``tolist``), the states' dicts are built
+    in bulk (:func:`_state_dicts`), each jump's edge, label, modes, enabled
+    transitions and ``chosen_by`` are one lookup (:attr:`Layout.choices`), and
+    each Jump's fields are set at once (Jump is a frozen dataclass without
     slots, and its generated ``__init__`` costs an ``object.__setattr__`` per field).
     """
     n = int(buf.oi[b.I_JUMPS])
@@ -148,21 +149,34 @@ def _jumps(layout: Layout, buf: b.RunArrays) -> list[Jump]:
     rows = buf.jps[:n]
     width = rows.shape[1] - z
     keys = layout.jump_keys(rows[:, b.J_TR], rows[:, z:])
+    befores = _state_dicts(names, rows[:, x:y].tolist())
+    afters = _state_dicts(names, rows[:, y:z].tolist())
     seen, fields_of = layout.choices, layout.fields
     new, set_field = object.__new__, object.__setattr__
     jumps: list[Jump] = []
     append = jumps.append
-    # each row holds t, j, tr, then exactly d values before and d after (no strict zip)
-    for row, key in zip(rows[:, :z].tolist(), keys, strict=True):
+    for t, j, key, before, after in zip(rows[:, b.J_T].tolist(),
+                                        rows[:, b.J_J].astype(np.int64).tolist(),
+                                        keys, befores, afters, strict=True):  # fmt: skip
         edge, label, source, target, enabled, how = seen.get(key) or fields_of(key, width)
         jump = new(Jump)
         set_field(jump, "__dict__", {
-            "t": row[0], "j": int(row[1]), "edge": edge, "label": label, "source": source,
-            "target": target, "before": dict(zip(names, row[x:y])),  # noqa: B905
-            "after": dict(zip(names, row[y:z])), "enabled": enabled, "chosen_by": how,  # noqa: B905
+            "t": t, "j": j, "edge": edge, "label": label, "source": source, "target": target,
+            "before": before, "after": after, "enabled": enabled, "chosen_by": how,
         })  # fmt: skip
         append(jump)
     return jumps
+
+
+def _state_dicts(names: tuple[str, ...], rows: list[list[float]]) -> list[dict[str, float]]:
+    """``dict(zip(names, row))`` per row; for one or two names a dict display (a third of the cost)."""
+    if len(names) == 1:
+        (a,) = names
+        return [{a: v} for (v,) in rows]
+    if len(names) == 2:
+        a, c = names
+        return [{a: u, c: v} for u, v in rows]
+    return [dict(zip(names, row)) for row in rows]  # noqa: B905 (each row holds len(names) values)
 
 
 def settings_record(settings: Settings) -> dict[str, Any]:
