@@ -13,6 +13,7 @@ thread turns the first Ctrl-C into a flag the loop reads at every step, as
 
 from __future__ import annotations
 
+import math
 import threading
 import warnings
 from collections.abc import Callable, Mapping
@@ -100,6 +101,7 @@ class CompiledNative:
         self.max_transitions = max(1, *(len(m.transitions) for m in self.native.modes))
         self._one = _entry_point(self.kernel.run_one)
         self._many: Callable[..., None] | None = None
+        self._scratch = threading.local()
 
     def run_one(self, p: Any, x0: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
                 flag: Any) -> None:  # fmt: skip
@@ -136,6 +138,23 @@ class CompiledNative:
             steps,
             runs,
         )
+
+    def scratch(self, points: int, jumps: int, steps: int) -> b.RunArrays:
+        """:meth:`buffers` of these sizes, this thread's own, reset as :func:`~.buffers.allocate` leaves them.
+
+        Allocating costs more than resetting; the caller must be done with the
+        arrays (every value copied out) before it asks for them again.
+        """
+        arrays: b.RunArrays | None = getattr(self._scratch, "arrays", None)
+        if arrays is None or self._scratch.sizes != (points, jumps, steps):
+            arrays = self._scratch.arrays = self.buffers(points, jumps, steps)
+            self._scratch.sizes = (points, jumps, steps)
+            return arrays
+        arrays.jps.fill(0.0)
+        arrays.oi.fill(0)
+        arrays.oi[b.I_CAUSE] = -1
+        arrays.of.fill(np.nan)
+        return arrays
 
     def initial_mode(self, model: Automaton | System) -> int:
         if isinstance(model, Automaton):  # as_system's view without building it
@@ -193,19 +212,19 @@ def compiled_native(model: Automaton | System) -> CompiledNative:
 
 def config(settings: Settings) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """The settings as the compiled loop reads them (``cfg_f``, ``cfg_i``)."""
-    cfg_f = np.empty(b.N_CFG_F)
-    cfg_f[b.CF_T_END] = settings.t_end
-    cfg_f[b.CF_RTOL] = settings.rtol
-    cfg_f[b.CF_ATOL] = settings.atol
-    cfg_f[b.CF_MAX_STEP] = settings.max_step
-    cfg_f[b.CF_DT] = np.nan if settings.dt is None else settings.dt
-    cfg_f[b.CF_T_START] = settings.t_start
-    cfg_i = np.empty(b.N_CFG_I, dtype=np.int64)
-    cfg_i[b.CI_MAX_JUMPS] = settings.max_jumps
-    cfg_i[b.CI_ZENO] = int(settings.zeno)
-    cfg_i[b.CI_PER_INSTANT] = settings.max_jumps_per_instant
-    cfg_i[b.CI_DENSE] = int(settings.dense)
-    return cfg_f, cfg_i
+    floats = [0.0] * b.N_CFG_F  # filled as lists, one array each: cheaper than item by item
+    floats[b.CF_T_END] = settings.t_end
+    floats[b.CF_RTOL] = settings.rtol
+    floats[b.CF_ATOL] = settings.atol
+    floats[b.CF_MAX_STEP] = settings.max_step
+    floats[b.CF_DT] = math.nan if settings.dt is None else settings.dt
+    floats[b.CF_T_START] = settings.t_start
+    ints = [0] * b.N_CFG_I
+    ints[b.CI_MAX_JUMPS] = settings.max_jumps
+    ints[b.CI_ZENO] = int(settings.zeno)
+    ints[b.CI_PER_INSTANT] = settings.max_jumps_per_instant
+    ints[b.CI_DENSE] = int(settings.dense)
+    return np.array(floats, dtype=np.float64), np.array(ints, dtype=np.int64)
 
 
 def check_supported(settings: Settings, inputs: Mapping[str, Any] | None) -> None:
@@ -272,8 +291,8 @@ def simulate_compiled(
     p = np.array(native.parameter_vector(model), dtype=float)
     x0 = np.array(initial_vector(model, native.state_names, initial), dtype=float)
     m0 = compiled.initial_mode(model)
-    arrays = run_arrays(compiled, p, x0, m0, settings, handle_sigint)
-    return run_from(native, compiled.layout, model, settings, arrays)
+    arrays = run_arrays(compiled, p, x0, m0, settings, handle_sigint, reuse=True)
+    return run_from(native, compiled.layout, model, settings, arrays)  # copies all it keeps
 
 
 def run_arrays(
@@ -283,14 +302,24 @@ def run_arrays(
     m0: int,
     settings: Settings,
     handle_sigint: bool,
+    reuse: bool = False,
 ) -> b.RunArrays:
-    """One run's arrays, run again with four times the room until they hold it all."""
+    """One run's arrays, run again with four times the room until they hold it all.
+
+    With ``reuse``, a run in this thread (not in a worker) may fill the
+    thread's :meth:`CompiledNative.scratch` arrays: the caller copies out what
+    it keeps before the next run. A worker's arrays are always its own (after a
+    second Ctrl-C an abandoned worker may still be writing).
+    """
     cfg = config(settings)
     points, jumps = 256, 64
     steps = 256 if settings.dense else 1
     in_worker = handle_sigint and threading.current_thread() is threading.main_thread()
     while True:
-        arrays = compiled.buffers(points, jumps, steps)
+        if reuse and not in_worker:
+            arrays = compiled.scratch(points, jumps, steps)
+        else:
+            arrays = compiled.buffers(points, jumps, steps)
         if in_worker:
 
             def call(flag: NDArray[np.int64], arrays: b.RunArrays = arrays) -> None:
