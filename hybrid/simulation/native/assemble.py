@@ -244,12 +244,12 @@ def termination_of(
     inputs: Inputs = None,
 ) -> Termination:
     """How the run in ``buf`` ended, worded as the reference engine words it."""
-    code = int(buf.oi[b.I_CAUSE])
-    cause = b.CAUSE_CODES[code]
-    t, j, m = float(buf.of[b.F_T]), int(buf.oi[b.I_J]), int(buf.oi[b.I_MODE])
-    detail, index = int(buf.oi[b.I_DETAIL]), int(buf.oi[b.I_DETAIL_INDEX])
+    oi, of = buf.oi.tolist(), buf.of.tolist()  # Python numbers, read at once
+    cause = b.CAUSE_CODES[oi[b.I_CAUSE]]
+    t, j, m = of[b.F_T], oi[b.I_J], oi[b.I_MODE]
+    detail, index = oi[b.I_DETAIL], oi[b.I_DETAIL_INDEX]
     mode = native.modes[m]
-    zeno_time = float(buf.of[b.F_ZENO_TIME]) if cause == "zeno" else None
+    zeno_time = of[b.F_ZENO_TIME] if cause == "zeno" else None
     if detail == b.D_INITIAL:
         message = "initial state is not finite"
     elif detail in (b.D_BLOCKED_ENTRY, b.D_BLOCKED_FLOW):

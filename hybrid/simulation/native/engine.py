@@ -48,6 +48,8 @@ __all__ = [
 _CACHE_SIZE = 16
 _CACHE: dict[tuple[Any, ...], tuple[tuple[Any, ...], CompiledNative]] = {}
 _CACHE_LOCK = threading.Lock()
+_LAST: list[tuple[Automaton | System, CompiledNative] | None] = [None]
+"""The model of the last :func:`compiled_native` call and its answer."""
 
 
 _KERNEL: dict[str, ModuleType] = {}
@@ -197,17 +199,20 @@ def _structure_key(model: Automaton | System) -> tuple[tuple[Any, ...], tuple[An
 
 def compiled_native(model: Automaton | System) -> CompiledNative:
     """The :class:`CompiledNative` of ``model``'s structure (generated once per process)."""
+    last = _LAST[0]  # the model of the last call, first: a run repeated costs no key
+    if last is not None and last[0] is model:
+        return last[1]
     key, objects = _structure_key(model)
     with _CACHE_LOCK:
         hit = _CACHE.get(key)
-        if hit is not None:
-            return hit[1]
-    compiled = CompiledNative(model)
-    with _CACHE_LOCK:
-        if len(_CACHE) >= _CACHE_SIZE:
-            _CACHE.pop(next(iter(_CACHE)))
-        _CACHE[key] = (objects, compiled)
-    return compiled
+    if hit is None:
+        compiled = CompiledNative(model)
+        with _CACHE_LOCK:
+            if len(_CACHE) >= _CACHE_SIZE:
+                _CACHE.pop(next(iter(_CACHE)))
+            hit = _CACHE[key] = (objects, compiled)
+    _LAST[0] = (model, hit[1])  # one tuple, replaced at once; it holds the model (and its id)
+    return hit[1]
 
 
 def config(settings: Settings) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
