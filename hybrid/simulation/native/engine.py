@@ -289,15 +289,32 @@ def simulate_compiled(
     inputs: Mapping[str, Callable[[float], float]] | None = None,
     handle_sigint: bool = True,
 ) -> Run:
-    """One run of ``model`` (parameters and initial location already applied) with ``settings``."""
+    """One run of ``model`` (parameters and initial location already applied) with ``settings``.
+
+    What the loop is given (parameter vector, initial point and mode, settings
+    arrays) is kept for the last model and settings objects run without
+    ``initial`` (both frozen; the loop only reads these arrays): running them
+    again costs no conversions.
+    """
     check_supported(settings, inputs)
-    compiled = compiled_native(model)
-    native = compiled.native
-    p = np.array(native.parameter_vector(model), dtype=float)
-    x0 = np.array(initial_vector(model, native.state_names, initial), dtype=float)
-    m0 = compiled.initial_mode(model)
-    arrays = run_arrays(compiled, p, x0, m0, settings, handle_sigint, reuse=True)
-    return run_from(native, compiled.layout, model, settings, arrays)  # copies all it keeps
+    last = _LAST_RUN[0]
+    if last is not None and last[0] is model and last[1] is settings and not initial:
+        compiled, p, x0, m0, cfg = last[2:]
+    else:
+        compiled = compiled_native(model)
+        native = compiled.native
+        p = np.array(native.parameter_vector(model), dtype=float)
+        x0 = np.array(initial_vector(model, native.state_names, initial), dtype=float)
+        m0 = compiled.initial_mode(model)
+        cfg = config(settings)
+        if not initial:
+            _LAST_RUN[0] = (model, settings, compiled, p, x0, m0, cfg)  # replaced at once
+    arrays = run_arrays(compiled, p, x0, m0, settings, handle_sigint, reuse=True, cfg=cfg)
+    return run_from(compiled.native, compiled.layout, model, settings, arrays)  # copies all it keeps
+
+
+_LAST_RUN: list[tuple[Any, ...] | None] = [None]
+"""``(model, settings, compiled, p, x0, m0, cfg)`` of the last :func:`simulate_compiled` call."""
 
 
 def run_arrays(
@@ -308,15 +325,16 @@ def run_arrays(
     settings: Settings,
     handle_sigint: bool,
     reuse: bool = False,
+    cfg: tuple[NDArray[np.float64], NDArray[np.int64]] | None = None,
 ) -> b.RunArrays:
     """One run's arrays, run again with four times the room until they hold it all.
 
     With ``reuse``, a run in this thread (not in a worker) may fill the
     thread's :meth:`CompiledNative.scratch` arrays: the caller copies out what
     it keeps before the next run. A worker's arrays are always its own (after a
-    second Ctrl-C an abandoned worker may still be writing).
+    second Ctrl-C an abandoned worker may still be writing). ``cfg``: ``config(settings)``.
     """
-    cfg = config(settings)
+    cfg = config(settings) if cfg is None else cfg
     points, jumps = 256, 64
     steps = 256 if settings.dense else 1
     in_worker = handle_sigint and threading.current_thread() is threading.main_thread()
