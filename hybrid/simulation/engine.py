@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 import threading
 from collections.abc import Callable, Mapping
-from typing import Any
 
 import numpy as np
 
@@ -119,7 +118,7 @@ def simulate(
     >>> round(run.jumps[0].t, 9)  # sqrt(2 * 10 / 9.81)
     1.427843123
     """
-    settings = _settings(
+    settings = Settings(
         t_end=t_end,
         t_start=t_start,
         max_jumps=max_jumps,
@@ -185,36 +184,6 @@ def simulate(
     if tracker is not None:
         tracker.finish(termination.t, jumps=len(run.jumps), points=len(run))
     return run
-
-
-_SETTINGS: dict[tuple[Any, ...], Settings] = {}
-_SETTINGS_SIZE = 16
-_SETTINGS_LOCK = threading.Lock()
-
-
-def _settings(**values: Any) -> Settings:
-    """``Settings(**values)``, the same frozen object for the same values (the last few kept).
-
-    Checking them costs as much as a tenth of a short compiled run. Each value
-    is keyed by its type and, for a float, its exact bits (``-0.0`` is not
-    ``0.0``, ``1`` not ``1.0`` nor ``True``); values that cannot be keyed are
-    checked afresh, and so is anything that fails.
-    """
-    try:
-        key = tuple(
-            (v.__class__, v.hex() if isinstance(v, float) else v) for v in values.values()
-        )
-        with _SETTINGS_LOCK:
-            hit = _SETTINGS.get(key)
-    except (TypeError, AttributeError):  # unhashable: Settings says what is wrong with it
-        return Settings(**values)
-    if hit is None:
-        hit = Settings(**values)
-        with _SETTINGS_LOCK:
-            if len(_SETTINGS) >= _SETTINGS_SIZE:
-                _SETTINGS.pop(next(iter(_SETTINGS)))
-            _SETTINGS[key] = hit
-    return hit
 
 
 def _groups(model: System) -> list[tuple[int, ...]]:

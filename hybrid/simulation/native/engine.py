@@ -292,13 +292,13 @@ def simulate_compiled(
     """One run of ``model`` (parameters and initial location already applied) with ``settings``.
 
     What the loop is given (parameter vector, initial point and mode, settings
-    arrays) is kept for the last model and settings objects run without
-    ``initial`` (both frozen; the loop only reads these arrays): running them
-    again costs no conversions.
+    arrays) is kept for the last model object (frozen) and settings run without
+    ``initial``; the loop only reads these arrays. Running them again costs no
+    conversions.
     """
     check_supported(settings, inputs)
     last = _LAST_RUN[0]
-    if last is not None and last[0] is model and last[1] is settings and not initial:
+    if last is not None and last[0] is model and not initial and _same_config(last[1], settings):
         compiled, p, x0, m0, cfg = last[2:]
     else:
         compiled = compiled_native(model)
@@ -311,6 +311,15 @@ def simulate_compiled(
             _LAST_RUN[0] = (model, settings, compiled, p, x0, m0, cfg)  # replaced at once
     arrays = run_arrays(compiled, p, x0, m0, settings, handle_sigint, reuse=True, cfg=cfg)
     return run_from(compiled.native, compiled.layout, model, settings, arrays)  # copies all it keeps
+
+
+def _same_config(a: Settings, b: Settings) -> bool:
+    """Whether ``config(a)`` and ``config(b)`` hold the same numbers (signed zeros too)."""
+    return a is b or (
+        a == b
+        and math.copysign(1.0, a.t_start) == math.copysign(1.0, b.t_start)
+        and math.copysign(1.0, a.t_end) == math.copysign(1.0, b.t_end)
+    )
 
 
 _LAST_RUN: list[tuple[Any, ...] | None] = [None]
