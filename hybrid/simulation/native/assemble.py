@@ -55,6 +55,9 @@ class Layout:
     modes: tuple[Any, ...]
     """The modes (:class:`~hybrid.simulation.native.structure.NativeMode`)."""
     state_names: tuple[str, ...]
+    bits: NDArray[np.int64]
+    """``1 << k`` for each flag column of a jump (as many as a mode has transitions, at most
+    :data:`PACKED_WIDTH`)."""
 
     @classmethod
     def of(cls, native: NativeModel) -> Layout:
@@ -69,8 +72,10 @@ class Layout:
              native.modes[native.index[tr.view.target]].name)
             for m, _, tr in rows
         )  # fmt: skip
+        width = max(1, *(len(mode.transitions) for mode in native.modes))  # jps' flag columns
+        bits = np.left_shift(1, np.arange(min(width, PACKED_WIDTH), dtype=np.int64))
         return cls(names, tuple(rows), tuple(first), describe, {}, tuple(native.modes),
-                   tuple(native.state_names))  # fmt: skip
+                   tuple(native.state_names), bits)  # fmt: skip
 
     def enabled(self, tr: int, flags: bytes) -> tuple[tuple[str, ...], str]:
         """The names of the transitions enabled with ``tr`` chosen, and how it was chosen."""
@@ -95,7 +100,7 @@ class Layout:
         tr = transitions.astype(np.int64)
         width = on.shape[1]
         if width <= PACKED_WIDTH:
-            bits = np.left_shift(1, np.arange(width, dtype=np.int64))
+            bits = self.bits if self.bits.size == width else np.left_shift(1, np.arange(width))
             keys: list[Any] = ((tr << width) | (on.astype(np.int64) @ bits)).tolist()
             return keys
         data = on.astype(np.uint8).tobytes()
