@@ -14,6 +14,8 @@ thread turns the first Ctrl-C into a flag the loop reads at every step, as
 from __future__ import annotations
 
 import math
+import os
+import queue
 import threading
 import warnings
 from collections.abc import Callable, Mapping
@@ -252,33 +254,69 @@ def run_in_worker(
     handle_sigint: bool,
     flag: NDArray[np.int64] | None = None,
 ) -> bool:
-    """Run ``call(flag)``; with ``handle_sigint`` a first Ctrl-C sets ``flag``. True if it did."""
+    """Run ``call(flag)``; with ``handle_sigint`` a first Ctrl-C sets ``flag``. True if it did.
+
+    With ``handle_sigint`` in the main thread, ``call`` runs on the process's
+    worker thread (:func:`_worker_jobs`) while the main thread waits, turning
+    Ctrl-C into the flag. The worker is started once: a thread started per run
+    cost as much as a short run (and numba sets up each new thread).
+    """
     flag = np.zeros(1, dtype=np.int64) if flag is None else flag
     if not handle_sigint or threading.current_thread() is not threading.main_thread():
         call(flag)
         return False
-    errors: list[BaseException] = []
-
-    def work() -> None:
-        try:
-            call(flag)
-        except BaseException as exc:  # re-raised in the caller's thread
-            errors.append(exc)
-
+    done: _Done = queue.SimpleQueue()
     with sigint_watch(True) as interrupted:
-        worker = threading.Thread(target=work, name="hybrid-compiled", daemon=True)
-        worker.start()
+        _worker_jobs().put((call, flag, done))
         try:
-            while worker.is_alive():
-                worker.join(0.05)
-                if interrupted.requested:
-                    flag[0] = 1
+            while True:
+                try:
+                    error = done.get(timeout=0.05)
+                    break
+                except queue.Empty:
+                    if interrupted.requested:
+                        flag[0] = 1
+            if interrupted.requested:
+                flag[0] = 1
         except KeyboardInterrupt:
             flag[0] = 1  # a second Ctrl-C: stop the loop too, and abandon the run
             raise
-    if errors:
-        raise errors[0]
+    if error is not None:
+        raise error
     return bool(flag[0])
+
+
+_Done = queue.SimpleQueue[BaseException | None]
+_Job = tuple[Callable[[NDArray[np.int64]], None], NDArray[np.int64], _Done]
+_WORKER: list[tuple[int, threading.Thread, queue.SimpleQueue[_Job]]] = []
+_WORKER_LOCK = threading.Lock()
+
+
+def _worker_jobs() -> queue.SimpleQueue[_Job]:
+    """The job queue of this process's worker thread (started on first use, again after a fork)."""
+    with _WORKER_LOCK:
+        if _WORKER:
+            pid, thread, jobs = _WORKER[0]
+            if pid == os.getpid() and thread.is_alive():
+                return jobs
+        jobs = queue.SimpleQueue()
+        thread = threading.Thread(target=_serve, args=(jobs,), name="hybrid-compiled", daemon=True)
+        thread.start()
+        _WORKER[:] = [(os.getpid(), thread, jobs)]
+        return jobs
+
+
+def _serve(jobs: queue.SimpleQueue[_Job]) -> None:
+    """The worker: each job's ``call(flag)``, then None or its exception into its ``done`` queue."""
+    while True:
+        call, flag, done = jobs.get()
+        try:
+            call(flag)
+        except BaseException as exc:  # re-raised in the waiting thread
+            done.put(exc)
+        else:
+            done.put(None)
+        del call, flag, done  # hold nothing of a finished run while waiting for the next
 
 
 def simulate_compiled(

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import math
 import pickle
+import subprocess
+import sys
 import threading
 
 import numpy as np
@@ -243,3 +245,28 @@ def test_jump_keys_name_the_edge_the_enabled_set_and_how_it_was_chosen(n: int) -
         how = "only" if len(on) == 1 else "priority" if len(top) == 1 else "file order"
         assert fields == (order[tr], None, "a", "b", tuple(on), how)
         assert layout.fields((tr, bytes(int(f) for f in row)), n) == fields  # either key form
+
+
+CTRL_C = """
+import os, signal, threading, time
+import hybrid
+zoo = hybrid.load({zoo!r})
+endless = dict(t_end=1e7, initial_location="moving", max_step=1e-4, backend="compiled")
+hybrid.simulate(zoo, t_end=1.0, initial_location="moving", backend="compiled")  # compiled, warm
+for _ in range(2):  # the same worker thread serves the next run
+    threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()
+    start = time.perf_counter()
+    run = hybrid.simulate(zoo, **endless)
+    print(run.termination.cause, run.termination.t < 1e7, time.perf_counter() - start < 20)
+after = hybrid.simulate(zoo, t_end=2.0, initial_location="moving", backend="compiled")
+print(after.termination.cause, after.termination.t)
+"""
+
+
+def test_ctrl_c_ends_compiled_runs_as_interrupted_and_the_next_run_normally() -> None:
+    code = CTRL_C.format(zoo=str(REPO / "tests" / "data" / "native_zoo.yaml"))
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=REPO, timeout=120)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split("\n")[:3] == ["interrupted True True", "interrupted True True",
+                                           "t_end 2.0"]  # fmt: skip
