@@ -7,15 +7,15 @@ processes), the run's parameter vector, initial point and mode are arguments,
 and the arrays the loop fills become a :class:`~hybrid.simulation.result.Run`.
 A run that fills its buffers is run again with four times the room. Ctrl-C:
 the loop runs in a worker thread (numba releases the GIL) while the main
-thread turns the first Ctrl-C into a flag the loop reads at every step, as
-:func:`hybrid.simulation.interrupts.sigint_watch` does for the reference engine.
+thread turns the first Ctrl-C into a flag the loop reads at every step
+(:mod:`hybrid.simulation.native.worker`). What does not change between runs
+of one model (its structure, the loop's inputs, the run's arrays) is kept
+between calls, never stale: a short compiled run costs little more than its loop.
 """
 
 from __future__ import annotations
 
 import math
-import os
-import queue
 import threading
 import warnings
 from collections.abc import Callable, Mapping
@@ -28,13 +28,13 @@ from numpy.typing import NDArray
 from hybrid.compose import System
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
-from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import Layout, run_from
 from hybrid.simulation.native.cache import load_generated, require_numba
 from hybrid.simulation.native.kernel_types import PIECES
 from hybrid.simulation.native.source import generate, kernel_module
 from hybrid.simulation.native.structure import NativeModel
+from hybrid.simulation.native.worker import run_in_worker
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
 
@@ -43,7 +43,6 @@ __all__ = [
     "compiled_native",
     "config",
     "run_arrays",
-    "run_in_worker",
     "simulate_compiled",
 ]
 
@@ -247,76 +246,6 @@ def check_supported(settings: Settings, inputs: Mapping[str, Any] | None) -> Non
             "the compiled backend cannot call external inputs given as Python functions "
             "(inputs=...); use backend='scipy'"
         )
-
-
-def run_in_worker(
-    call: Callable[[NDArray[np.int64]], None],
-    handle_sigint: bool,
-    flag: NDArray[np.int64] | None = None,
-) -> bool:
-    """Run ``call(flag)``; with ``handle_sigint`` a first Ctrl-C sets ``flag``. True if it did.
-
-    With ``handle_sigint`` in the main thread, ``call`` runs on the process's
-    worker thread (:func:`_worker_jobs`) while the main thread waits, turning
-    Ctrl-C into the flag. The worker is started once: a thread started per run
-    cost as much as a short run (and numba sets up each new thread).
-    """
-    flag = np.zeros(1, dtype=np.int64) if flag is None else flag
-    if not handle_sigint or threading.current_thread() is not threading.main_thread():
-        call(flag)
-        return False
-    done: _Done = queue.SimpleQueue()
-    with sigint_watch(True) as interrupted:
-        _worker_jobs().put((call, flag, done))
-        try:
-            while True:
-                try:
-                    error = done.get(timeout=0.05)
-                    break
-                except queue.Empty:
-                    if interrupted.requested:
-                        flag[0] = 1
-            if interrupted.requested:
-                flag[0] = 1
-        except KeyboardInterrupt:
-            flag[0] = 1  # a second Ctrl-C: stop the loop too, and abandon the run
-            raise
-    if error is not None:
-        raise error
-    return bool(flag[0])
-
-
-_Done = queue.SimpleQueue[BaseException | None]
-_Job = tuple[Callable[[NDArray[np.int64]], None], NDArray[np.int64], _Done]
-_WORKER: list[tuple[int, threading.Thread, queue.SimpleQueue[_Job]]] = []
-_WORKER_LOCK = threading.Lock()
-
-
-def _worker_jobs() -> queue.SimpleQueue[_Job]:
-    """The job queue of this process's worker thread (started on first use, again after a fork)."""
-    with _WORKER_LOCK:
-        if _WORKER:
-            pid, thread, jobs = _WORKER[0]
-            if pid == os.getpid() and thread.is_alive():
-                return jobs
-        jobs = queue.SimpleQueue()
-        thread = threading.Thread(target=_serve, args=(jobs,), name="hybrid-compiled", daemon=True)
-        thread.start()
-        _WORKER[:] = [(os.getpid(), thread, jobs)]
-        return jobs
-
-
-def _serve(jobs: queue.SimpleQueue[_Job]) -> None:
-    """The worker: each job's ``call(flag)``, then None or its exception into its ``done`` queue."""
-    while True:
-        call, flag, done = jobs.get()
-        try:
-            call(flag)
-        except BaseException as exc:  # re-raised in the waiting thread
-            done.put(exc)
-        else:
-            done.put(None)
-        del call, flag, done  # hold nothing of a finished run while waiting for the next
 
 
 def simulate_compiled(
