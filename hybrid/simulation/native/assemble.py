@@ -32,8 +32,8 @@ __all__ = ["PACKED_WIDTH", "DenseSegment", "Inputs", "JumpFields", "Layout", "ru
 Inputs = Mapping[str, Callable[[float], float]] | None
 """The reference engine's inputs of a model (to word a failure as the reference does)."""
 
-JumpFields = tuple[str, str | None, str, str, tuple[str, ...], str]
-"""``(edge, label, source, target, enabled, chosen_by)`` of a jump."""
+JumpFields = dict[str, Any]
+"""A :class:`Jump`'s fields in order, ``t``, ``j``, ``before`` and ``after`` to be filled in."""
 
 PACKED_WIDTH = 32
 """Most transitions a mode may have for a jump's enabled flags to be packed into an int key."""
@@ -90,29 +90,30 @@ class Layout:
         return tuple(t.view.name for t in on), how
 
     def jump_keys(self, transitions: NDArray[np.float64], flags: NDArray[np.float64]) -> list[Any]:
-        """A key per jump for :attr:`choices`: its transition and enabled flags (one row each).
-
-        Up to :data:`PACKED_WIDTH` flags a row, the key is an int, ``tr << width``
-        plus bit ``k`` for each enabled transition ``k`` of the mode; beyond, a pair
-        ``(tr, flags as bytes)``.
-        """
+        """A key per jump for :attr:`choices` from its transition and enabled flags (a row each):
+        up to :data:`PACKED_WIDTH` flags, ``tr << width`` plus bit ``k`` per enabled ``k``;
+        beyond, ``(tr, flags as bytes)``."""
         on = flags != 0.0
         tr = transitions.astype(np.int64)
         width = on.shape[1]
         if width <= PACKED_WIDTH:
             bits = self.bits if self.bits.size == width else np.left_shift(1, np.arange(width))
-            keys: list[Any] = ((tr << width) | (on.astype(np.int64) @ bits)).tolist()
-            return keys
+            return ((tr << width) | (on.astype(np.int64) @ bits)).tolist()  # type: ignore[no-any-return]
         data = on.astype(np.uint8).tobytes()
         return [(t, data[k * width : (k + 1) * width]) for k, t in enumerate(tr.tolist())]
 
     def fields(self, key: Any, width: int) -> JumpFields:
-        """``(edge, label, source, target, enabled, chosen_by)`` of a :meth:`jump_keys` key."""
+        """The fields of a jump of a :meth:`jump_keys` key but its time and states (None)."""
         if isinstance(key, int):
             tr, flags = key >> width, bytes((key >> k) & 1 for k in range(width))
         else:
             tr, flags = key
-        found = self.choices[key] = (*self.describe[tr], *self.enabled(tr, flags))
+        edge, label, source, target = self.describe[tr]
+        enabled, how = self.enabled(tr, flags)
+        found = self.choices[key] = {
+            "t": None, "j": None, "edge": edge, "label": label, "source": source, "target": target,
+            "before": None, "after": None, "enabled": enabled, "chosen_by": how,
+        }  # fmt: skip
         return found
 
 
@@ -141,10 +142,11 @@ def _jumps(layout: Layout, buf: b.RunArrays) -> list[Jump]:
 
     Costs about as much as the compiled run of a short model, so it is kept
     lean: the arrays become lists once (``tolist``), the states' dicts are built
-    in bulk (:func:`_state_dicts`), each jump's edge, label, modes, enabled
-    transitions and ``chosen_by`` are one lookup (:attr:`Layout.choices`), and
-    each Jump's fields are set at once (Jump is a frozen dataclass without
-    slots, and its generated ``__init__`` costs an ``object.__setattr__`` per field).
+    in bulk (:func:`_state_dicts`), each jump's fields are a copy of its
+    transition's (:attr:`Layout.choices`: edge, label, modes, enabled
+    transitions, ``chosen_by``, in field order) with its time and states set,
+    and are set at once (Jump is a frozen dataclass without slots, and its
+    generated ``__init__`` costs an ``object.__setattr__`` per field).
     """
     n = int(buf.oi[b.I_JUMPS])
     if n == 0:
@@ -163,12 +165,10 @@ def _jumps(layout: Layout, buf: b.RunArrays) -> list[Jump]:
     for t, j, key, before, after in zip(rows[:, b.J_T].tolist(),
                                         rows[:, b.J_J].astype(np.int64).tolist(),
                                         keys, befores, afters, strict=True):  # fmt: skip
-        edge, label, source, target, enabled, how = seen.get(key) or fields_of(key, width)
+        fields = (seen.get(key) or fields_of(key, width)).copy()
+        fields["t"], fields["j"], fields["before"], fields["after"] = t, j, before, after
         jump = new(Jump)
-        set_field(jump, "__dict__", {
-            "t": t, "j": j, "edge": edge, "label": label, "source": source, "target": target,
-            "before": before, "after": after, "enabled": enabled, "chosen_by": how,
-        })  # fmt: skip
+        set_field(jump, "__dict__", fields)
         append(jump)
     return jumps
 

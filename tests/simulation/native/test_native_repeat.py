@@ -243,7 +243,9 @@ def test_jump_keys_name_the_edge_the_enabled_set_and_how_it_was_chosen(n: int) -
         priority = {f"e{k}": k % 2 for k in range(n)}
         top = [name for name in on if priority[name] == priority[order[tr]]]
         how = "only" if len(on) == 1 else "priority" if len(top) == 1 else "file order"
-        assert fields == (order[tr], None, "a", "b", tuple(on), how)
+        assert fields == {"t": None, "j": None, "edge": order[tr], "label": None, "source": "a",
+                          "target": "b", "before": None, "after": None, "enabled": tuple(on),
+                          "chosen_by": how}  # fmt: skip
         assert layout.fields((tr, bytes(int(f) for f in row)), n) == fields  # either key form
 
 
