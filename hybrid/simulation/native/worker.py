@@ -55,6 +55,7 @@ def run_in_worker(
                 flag[0] = 1
         except KeyboardInterrupt:
             flag[0] = 1  # a second Ctrl-C: stop the loop too, and abandon the run
+            _retire_worker()  # the next run gets a new worker, not a wait for this one
             raise
     if error is not None:
         raise error
@@ -81,8 +82,27 @@ def _worker_jobs() -> queue.SimpleQueue[_Job]:
         return jobs
 
 
+def _retire_worker() -> None:
+    """Start a new worker for the next job; the current one ends after its job."""
+    with _WORKER_LOCK:
+        _WORKER.clear()
+
+
+def _reset_after_fork() -> None:
+    """In a forked child: no worker (threads do not survive a fork), and a lock nobody holds."""
+    global _WORKER_LOCK
+    _WORKER_LOCK = threading.Lock()
+    _WORKER.clear()
+
+
+os.register_at_fork(after_in_child=_reset_after_fork)
+
+
 def _serve(jobs: queue.SimpleQueue[_Job]) -> None:
-    """The worker: each job's ``call(flag)``, then None or its exception into its ``done`` queue."""
+    """The worker: each job's ``call(flag)``, then None or its exception into its ``done`` queue.
+
+    It ends after a job once it is no longer the process's worker (retired).
+    """
     while True:
         call, flag, done = jobs.get()
         try:
@@ -92,3 +112,6 @@ def _serve(jobs: queue.SimpleQueue[_Job]) -> None:
         else:
             done.put(None)
         del call, flag, done  # hold nothing of a finished run while waiting for the next
+        with _WORKER_LOCK:
+            if not _WORKER or _WORKER[0][1] is not threading.current_thread():
+                return

@@ -272,3 +272,25 @@ def test_ctrl_c_ends_compiled_runs_as_interrupted_and_the_next_run_normally() ->
     assert done.returncode == 0, done.stderr
     assert done.stdout.split("\n")[:3] == ["interrupted True True", "interrupted True True",
                                            "t_end 2.0"]  # fmt: skip
+
+
+def test_an_abandoned_run_does_not_hold_up_the_next() -> None:
+    """A second Ctrl-C abandons a run still in the worker; the next run starts at once."""
+    import _thread
+    import time
+
+    from hybrid.simulation.interrupts import Interrupts
+    from hybrid.simulation.native.worker import run_in_worker
+
+    release = threading.Event()
+    stop = Interrupts()
+    stop.press()  # a run was interrupted: in the writing phase the next Ctrl-C abandons
+    with stop.installed(), stop.writing():
+        threading.Timer(0.2, _thread.interrupt_main).start()
+        with pytest.raises(KeyboardInterrupt):
+            run_in_worker(lambda flag: release.wait(10), True)  # ignores its flag: stuck
+    start = time.perf_counter()
+    ran: list[int] = []
+    assert run_in_worker(lambda flag: ran.append(int(flag[0])), True) is False
+    assert ran == [0] and time.perf_counter() - start < 1.0
+    release.set()
