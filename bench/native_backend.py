@@ -30,18 +30,35 @@ import numpy as np
 import hybrid
 from bench.harness import Comparison, compare, time_call
 
-__all__ = ["compile_times", "run"]
+__all__ = ["compile_times", "run", "single_runs"]
 
 RTOL, ATOL = 1e-10, 1e-12
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def _jumps(model: Any, backend: str, **kwargs: Any) -> list[float]:
-    run = hybrid.simulate(model, rtol=RTOL, atol=ATOL, backend=backend, handle_sigint=False, **kwargs)
+def _jumps(model: Any, backend: str, handle_sigint: bool = False, **kwargs: Any) -> list[float]:
+    run = hybrid.simulate(model, rtol=RTOL, atol=ATOL, backend=backend,
+                          handle_sigint=handle_sigint, **kwargs)  # fmt: skip
     return [j.t for j in run.jumps]
 
 
 def run(repeats: int = 9, ensemble_size: int = 10_000) -> list[Comparison]:
+    thermo = hybrid.load(ROOT / "specs" / "thermostat.yaml")
+    results = single_runs(repeats)
+    results.append(_ensemble(thermo, ensemble_size, max(5, repeats // 3)))
+    results.append(_mission(max(3, repeats // 3)))
+    results.append(_sweep(thermo, 200 if ensemble_size >= 10_000 else 40, max(3, repeats // 3)))
+    return results
+
+
+def single_runs(repeats: int = 9) -> list[Comparison]:
+    """The bouncing ball for 40 bounces and the thermostat for 10 periods, compiled / scipy.
+
+    Both with ``handle_sigint=False``; the extra ``compiled_handle_sigint_median_s``
+    is the compiled call with the default ``handle_sigint=True`` (its loop on the
+    worker thread while the main thread watches Ctrl-C), timed the same way.
+    ``python -m bench.native_backend single`` runs these two alone.
+    """
     ball = hybrid.load(ROOT / "specs" / "bouncing_ball.yaml", parameters={"e": 0.95})
     thermo = hybrid.load(ROOT / "specs" / "thermostat.yaml")
     results = []
@@ -56,14 +73,14 @@ def run(repeats: int = 9, ensemble_size: int = 10_000) -> list[Comparison]:
             repeats=repeats,
         )
         ours, reference = _jumps(model, "compiled", **kwargs), _jumps(model, "scipy", **kwargs)
+        watched = [time_call(lambda m=model, k=kwargs: _jumps(m, "compiled", True, **k))
+                   for _ in range(repeats)]  # fmt: skip
         c.extra = {
             "jumps": len(ours),
             "max_jump_time_difference_s": max(abs(a - b) for a, b in zip(ours, reference, strict=True)),
+            "compiled_handle_sigint_median_s": statistics.median(watched),
         }
         results.append(c)
-    results.append(_ensemble(thermo, ensemble_size, max(5, repeats // 3)))
-    results.append(_mission(max(3, repeats // 3)))
-    results.append(_sweep(thermo, 200 if ensemble_size >= 10_000 else 40, max(3, repeats // 3)))
     return results
 
 
@@ -224,6 +241,10 @@ def compile_times() -> dict[str, float]:
 
 
 if __name__ == "__main__":
+    if sys.argv[1:] == ["single"]:
+        for result in single_runs():
+            print(result.line(), result.extra)
+        sys.exit()
     for result in run():
         print(result.line(), result.extra)
     print(compile_times())

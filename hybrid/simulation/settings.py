@@ -71,7 +71,7 @@ def finite_number(name: str, value: Any) -> float:
     ...
     hybrid.errors.UsageError: g must be a finite number, got nan
     """
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+    if not _plain_number(value) and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
         raise UsageError(f"{name} must be a number, got {value!r}")
     number = float(value)
     if not math.isfinite(number):
@@ -79,8 +79,19 @@ def finite_number(name: str, value: Any) -> float:
     return number
 
 
+def _plain_number(value: Any) -> bool:
+    """Whether ``value`` is a float or an int (not a bool): a real number, found without ABCs.
+
+    The checks of :class:`numbers.Real` cost more than the rest of a short
+    compiled run's settings; almost every value is one of these two.
+    """
+    return value.__class__ is float or value.__class__ is int
+
+
 def _whole(name: str, value: Any, least: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+    if value.__class__ is not int and (
+        isinstance(value, bool) or not isinstance(value, numbers.Integral)
+    ):
         raise UsageError(f"{name} must be a whole number, got {value!r}")
     if value < least:
         raise UsageError(f"{name} must be >= {least}, got {value}")
@@ -107,8 +118,10 @@ class Settings:
     def __post_init__(self) -> None:
         t0 = finite_number("t_start", self.t_start)
         if (
-            isinstance(self.t_end, bool)
-            or not isinstance(self.t_end, numbers.Real)
+            (
+                not _plain_number(self.t_end)
+                and (isinstance(self.t_end, bool) or not isinstance(self.t_end, numbers.Real))
+            )
             or not math.isfinite(self.t_end)
             or self.t_end <= t0
         ):
@@ -125,7 +138,9 @@ class Settings:
         if not finite_number("atol", self.atol) > 0:
             raise UsageError(f"atol must be > 0, got {self.atol}")
         step = self.max_step
-        if isinstance(step, bool) or not isinstance(step, numbers.Real) or not step > 0:
+        if (
+            not _plain_number(step) and (isinstance(step, bool) or not isinstance(step, numbers.Real))
+        ) or not step > 0:
             raise UsageError(f"max_step must be > 0, got {step}")
         resolution = 4 * 2.220446049250313e-16 * max(1.0, abs(t0), abs(float(self.t_end)))
         if step < resolution:

@@ -12,7 +12,7 @@ the message names the expression and its arguments exactly as it does there.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,10 +26,17 @@ from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Jump, Run, Termination
 from hybrid.simulation.settings import Settings
 
-__all__ = ["DenseSegment", "Inputs", "Layout", "run_from", "settings_record"]
+__all__ = ["PACKED_WIDTH", "DenseSegment", "Inputs", "JumpFields", "Layout", "run_from",
+           "settings_record"]  # fmt: skip
 
 Inputs = Mapping[str, Callable[[float], float]] | None
 """The reference engine's inputs of a model (to word a failure as the reference does)."""
+
+JumpFields = dict[str, Any]
+"""A :class:`Jump`'s fields in order, ``t``, ``j``, ``before`` and ``after`` to be filled in."""
+
+PACKED_WIDTH = 32
+"""Most transitions a mode may have for a jump's enabled flags to be packed into an int key."""
 
 
 @dataclass(frozen=True)
@@ -43,10 +50,14 @@ class Layout:
     """Per mode, the global index of its first invariant (as ``MODE_INV``)."""
     describe: tuple[tuple[str, str | None, str, str], ...]
     """Per global transition: its name, label, source and target mode names."""
-    choices: dict[tuple[int, bytes], tuple[tuple[str, ...], str]]
-    """Enabled names and ``chosen_by`` per (transition, enabled flags) seen so far."""
+    choices: dict[Hashable, JumpFields]
+    """The fields of a jump but its time and states, per :meth:`jump_keys` key seen so far."""
     modes: tuple[Any, ...]
     """The modes (:class:`~hybrid.simulation.native.structure.NativeMode`)."""
+    state_names: tuple[str, ...]
+    bits: NDArray[np.int64]
+    """``1 << k`` for each flag column of a jump (as many as a mode has transitions, at most
+    :data:`PACKED_WIDTH`)."""
 
     @classmethod
     def of(cls, native: NativeModel) -> Layout:
@@ -61,23 +72,49 @@ class Layout:
              native.modes[native.index[tr.view.target]].name)
             for m, _, tr in rows
         )  # fmt: skip
-        return cls(names, tuple(rows), tuple(first), describe, {}, tuple(native.modes))
+        width = max(1, *(len(mode.transitions) for mode in native.modes))  # jps' flag columns
+        bits = np.left_shift(1, np.arange(min(width, PACKED_WIDTH), dtype=np.int64))
+        return cls(names, tuple(rows), tuple(first), describe, {}, tuple(native.modes),
+                   tuple(native.state_names), bits)  # fmt: skip
 
     def enabled(self, tr: int, flags: bytes) -> tuple[tuple[str, ...], str]:
         """The names of the transitions enabled with ``tr`` chosen, and how it was chosen."""
-        key = (tr, flags)
-        hit = self.choices.get(key)
-        if hit is None:
-            m, _, chosen = self.transitions[tr]
-            mode = self.modes[m]
-            on = [t for k, t in enumerate(mode.transitions) if flags[k]]
-            if len(on) <= 1:
-                how = "only"
-            else:
-                top = [t for t in on if t.view.priority == chosen.view.priority]
-                how = "priority" if len(top) == 1 else "file order"
-            hit = self.choices[key] = (tuple(t.view.name for t in on), how)
-        return hit
+        m, _, chosen = self.transitions[tr]
+        mode = self.modes[m]
+        on = [t for k, t in enumerate(mode.transitions) if flags[k]]
+        if len(on) <= 1:
+            how = "only"
+        else:
+            top = [t for t in on if t.view.priority == chosen.view.priority]
+            how = "priority" if len(top) == 1 else "file order"
+        return tuple(t.view.name for t in on), how
+
+    def jump_keys(self, transitions: NDArray[np.float64], flags: NDArray[np.float64]) -> list[Any]:
+        """A key per jump for :attr:`choices` from its transition and enabled flags (a row each):
+        up to :data:`PACKED_WIDTH` flags, ``tr << width`` plus bit ``k`` per enabled ``k``;
+        beyond, ``(tr, flags as bytes)``."""
+        on = flags != 0.0
+        tr = transitions.astype(np.int64)
+        width = on.shape[1]
+        if width <= PACKED_WIDTH:
+            bits = self.bits if self.bits.size == width else np.left_shift(1, np.arange(width))
+            return ((tr << width) | (on.astype(np.int64) @ bits)).tolist()  # type: ignore[no-any-return]
+        data = on.astype(np.uint8).tobytes()
+        return [(t, data[k * width : (k + 1) * width]) for k, t in enumerate(tr.tolist())]
+
+    def fields(self, key: Any, width: int) -> JumpFields:
+        """The fields of a jump of a :meth:`jump_keys` key but its time and states (None)."""
+        if isinstance(key, int):
+            tr, flags = key >> width, bytes((key >> k) & 1 for k in range(width))
+        else:
+            tr, flags = key
+        edge, label, source, target = self.describe[tr]
+        enabled, how = self.enabled(tr, flags)
+        found = self.choices[key] = {
+            "t": None, "j": None, "edge": edge, "label": label, "source": source, "target": target,
+            "before": None, "after": None, "enabled": enabled, "chosen_by": how,
+        }  # fmt: skip
+        return found
 
 
 class DenseSegment:
@@ -100,39 +137,51 @@ class DenseSegment:
         return y[:, 0] if times.ndim == 0 else y
 
 
-def _jumps(native: NativeModel, layout: Layout, buf: b.RunArrays) -> list[Jump]:
-    names = native.state_names
-    d = len(names)
+def _jumps(layout: Layout, buf: b.RunArrays) -> list[Jump]:
+    """The :class:`Jump` records of the run in ``buf``, equal to the reference engine's.
+
+    Costs about as much as the compiled run of a short model, so it is kept
+    lean: the arrays become lists once (``tolist``), the states' dicts are built
+    in bulk (:func:`_state_dicts`), each jump's fields are a copy of its
+    transition's (:attr:`Layout.choices`: edge, label, modes, enabled
+    transitions, ``chosen_by``, in field order) with its time and states set,
+    and are set at once (Jump is a frozen dataclass without slots, and its
+    generated ``__init__`` costs an ``object.__setattr__`` per field).
+    """
     n = int(buf.oi[b.I_JUMPS])
     if n == 0:
         return []
+    names = layout.state_names
+    x, y, z = b.J_X, b.J_X + len(names), b.J_X + 2 * len(names)
     rows = buf.jps[:n]
-    times = rows[:, b.J_T].tolist()
-    hybrid_times = rows[:, b.J_J].astype(np.int64).tolist()
-    transitions = rows[:, b.J_TR].astype(np.int64).tolist()
-    befores = rows[:, b.J_X : b.J_X + d].tolist()
-    afters = rows[:, b.J_X + d : b.J_X + 2 * d].tolist()
-    width = rows.shape[1] - b.J_X - 2 * d
-    flags = (rows[:, b.J_X + 2 * d :] != 0.0).astype(np.uint8).tobytes()
+    width = rows.shape[1] - z
+    keys = layout.jump_keys(rows[:, b.J_TR], rows[:, z:])
+    befores = _state_dicts(names, rows[:, x:y].tolist())
+    afters = _state_dicts(names, rows[:, y:z].tolist())
+    seen, fields_of = layout.choices, layout.fields
+    new, set_field = object.__new__, object.__setattr__
     jumps: list[Jump] = []
     append = jumps.append
-    new, set_field = object.__new__, object.__setattr__
-    enabled_of, describe, seen = layout.enabled, layout.describe, layout.choices
-    for k in range(n):
-        tr = transitions[k]
-        key = (tr, flags[k * width : (k + 1) * width])
-        enabled, how = seen.get(key) or enabled_of(*key)
-        name, label, source, target = describe[tr]
+    for t, j, key, before, after in zip(rows[:, b.J_T].tolist(),
+                                        rows[:, b.J_J].astype(np.int64).tolist(),
+                                        keys, befores, afters, strict=True):  # fmt: skip
+        fields = (seen.get(key) or fields_of(key, width)).copy()
+        fields["t"], fields["j"], fields["before"], fields["after"] = t, j, before, after
         jump = new(Jump)
-        # the fields set at once: Jump is a frozen dataclass without slots, and its
-        # generated __init__ (one object.__setattr__ per field) costs as much as the run
-        set_field(jump, "__dict__", {
-            "t": times[k], "j": hybrid_times[k], "edge": name, "label": label,
-            "source": source, "target": target, "before": dict(zip(names, befores[k], strict=True)),
-            "after": dict(zip(names, afters[k], strict=True)), "enabled": enabled, "chosen_by": how,
-        })  # fmt: skip
+        set_field(jump, "__dict__", fields)
         append(jump)
     return jumps
+
+
+def _state_dicts(names: tuple[str, ...], rows: list[list[float]]) -> list[dict[str, float]]:
+    """``dict(zip(names, row))`` per row; for one or two names a dict display (a third of the cost)."""
+    if len(names) == 1:
+        (a,) = names
+        return [{a: v} for (v,) in rows]
+    if len(names) == 2:
+        a, c = names
+        return [{a: u, c: v} for u, v in rows]
+    return [dict(zip(names, row)) for row in rows]  # noqa: B905 (each row holds len(names) values)
 
 
 def settings_record(settings: Settings) -> dict[str, Any]:
@@ -177,14 +226,14 @@ def run_from(
     pts = buf.pts[:n]
     return Run(
         model=model.name,
-        state_names=tuple(native.state_names),
+        state_names=layout.state_names,
         signal_names=tuple(native.columns),
         t=pts[:, b.P_T].copy(),
         j=pts[:, b.P_J].astype(np.int64),
         location=layout.mode_names[pts[:, b.P_M].astype(np.int64)],
         states=pts[:, b.P_X : b.P_X + d].copy(),
         signals=pts[:, b.P_X + d :].copy(),
-        jumps=_jumps(native, layout, buf),
+        jumps=_jumps(layout, buf),
         termination=termination_of(native, layout, model, settings, buf, inputs),
         settings=settings_record(settings),
         segments=_segments(buf, d),
@@ -200,12 +249,12 @@ def termination_of(
     inputs: Inputs = None,
 ) -> Termination:
     """How the run in ``buf`` ended, worded as the reference engine words it."""
-    code = int(buf.oi[b.I_CAUSE])
-    cause = b.CAUSE_CODES[code]
-    t, j, m = float(buf.of[b.F_T]), int(buf.oi[b.I_J]), int(buf.oi[b.I_MODE])
-    detail, index = int(buf.oi[b.I_DETAIL]), int(buf.oi[b.I_DETAIL_INDEX])
+    oi, of = buf.oi.tolist(), buf.of.tolist()  # Python numbers, read at once
+    cause = b.CAUSE_CODES[oi[b.I_CAUSE]]
+    t, j, m = of[b.F_T], oi[b.I_J], oi[b.I_MODE]
+    detail, index = oi[b.I_DETAIL], oi[b.I_DETAIL_INDEX]
     mode = native.modes[m]
-    zeno_time = float(buf.of[b.F_ZENO_TIME]) if cause == "zeno" else None
+    zeno_time = of[b.F_ZENO_TIME] if cause == "zeno" else None
     if detail == b.D_INITIAL:
         message = "initial state is not finite"
     elif detail in (b.D_BLOCKED_ENTRY, b.D_BLOCKED_FLOW):

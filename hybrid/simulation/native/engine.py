@@ -7,12 +7,15 @@ processes), the run's parameter vector, initial point and mode are arguments,
 and the arrays the loop fills become a :class:`~hybrid.simulation.result.Run`.
 A run that fills its buffers is run again with four times the room. Ctrl-C:
 the loop runs in a worker thread (numba releases the GIL) while the main
-thread turns the first Ctrl-C into a flag the loop reads at every step, as
-:func:`hybrid.simulation.interrupts.sigint_watch` does for the reference engine.
+thread turns the first Ctrl-C into a flag the loop reads at every step
+(:mod:`hybrid.simulation.native.worker`). What does not change between runs
+of one model (its structure, the loop's inputs, the run's arrays) is kept
+between calls, never stale: a short compiled run costs little more than its loop.
 """
 
 from __future__ import annotations
 
+import math
 import threading
 import warnings
 from collections.abc import Callable, Mapping
@@ -22,16 +25,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hybrid.compose import System, as_system
+from hybrid.compose import System
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
-from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import Layout, run_from
 from hybrid.simulation.native.cache import load_generated, require_numba
 from hybrid.simulation.native.kernel_types import PIECES
 from hybrid.simulation.native.source import generate, kernel_module
 from hybrid.simulation.native.structure import NativeModel
+from hybrid.simulation.native.worker import run_in_worker
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
 
@@ -40,13 +43,14 @@ __all__ = [
     "compiled_native",
     "config",
     "run_arrays",
-    "run_in_worker",
     "simulate_compiled",
 ]
 
 _CACHE_SIZE = 16
 _CACHE: dict[tuple[Any, ...], tuple[tuple[Any, ...], CompiledNative]] = {}
 _CACHE_LOCK = threading.Lock()
+_LAST: list[tuple[Automaton | System, CompiledNative] | None] = [None]
+"""The model of the last :func:`compiled_native` call and its answer."""
 
 
 _KERNEL: dict[str, ModuleType] = {}
@@ -100,16 +104,15 @@ class CompiledNative:
         self.max_transitions = max(1, *(len(m.transitions) for m in self.native.modes))
         self._one = _entry_point(self.kernel.run_one)
         self._many: Callable[..., None] | None = None
+        self._scratch = threading.local()
 
     def run_one(self, p: Any, x0: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
                 flag: Any) -> None:  # fmt: skip
-        """One run into ``arrays`` (see :func:`hybrid.simulation.native.loop.run_one`)."""
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # numba: "first-class function type is experimental"
-            self._run_one(p, x0, t0, m0, cfg, arrays, flag)
+        """One run into ``arrays`` (see :func:`hybrid.simulation.native.loop.run_one`).
 
-    def _run_one(self, p: Any, x0: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
-                 flag: Any) -> None:  # fmt: skip
+        The compiled code is called without numba's dispatcher (:func:`_entry_point`),
+        so nothing is typed or compiled here and numba has nothing to warn about.
+        """
         self._one(self.fp, self.tab, p, x0, t0, m0, cfg[0], cfg[1], arrays.pts, arrays.jps,
                   arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
 
@@ -139,8 +142,27 @@ class CompiledNative:
             runs,
         )
 
+    def scratch(self, points: int, jumps: int, steps: int) -> b.RunArrays:
+        """:meth:`buffers` of these sizes, this thread's own, reset as :func:`~.buffers.allocate` leaves them.
+
+        Allocating costs more than resetting; the caller must be done with the
+        arrays (every value copied out) before it asks for them again.
+        """
+        arrays: b.RunArrays | None = getattr(self._scratch, "arrays", None)
+        if arrays is None or self._scratch.sizes != (points, jumps, steps):
+            arrays = self._scratch.arrays = self.buffers(points, jumps, steps)
+            self._scratch.sizes = (points, jumps, steps)
+            return arrays
+        arrays.jps.fill(0.0)
+        arrays.oi.fill(0)
+        arrays.oi[b.I_CAUSE] = -1
+        arrays.of.fill(np.nan)
+        return arrays
+
     def initial_mode(self, model: Automaton | System) -> int:
-        return self.native.index[as_system(model).initial_mode]
+        if isinstance(model, Automaton):  # as_system's view without building it
+            return self.native.index[(model.initial_location,)]
+        return self.native.index[model.initial_mode]
 
 
 def _entry_point(dispatcher: Any) -> Callable[..., None]:
@@ -161,45 +183,54 @@ def _structure_key(model: Automaton | System) -> tuple[tuple[Any, ...], tuple[An
     signals objects, so the models of a sweep share one entry. The key holds
     their ids; the cache holds the objects, so no other object can take an id.
     """
-    system = as_system(model)
-    objects = tuple(
-        (c.automaton.locations, c.automaton.edges, c.automaton.signals) for c in system.components
-    )
-    names = tuple((c.name, c.automaton.name) for c in system.components)
-    key = (system.name, system.single, names, tuple(id(o) for trio in objects for o in trio))
+    if isinstance(model, Automaton):  # as_system(model)'s key, without building the system
+        objects: tuple[tuple[Any, ...], ...] = ((model.locations, model.edges, model.signals),)
+        names: tuple[tuple[str, str], ...] = ((model.name, model.name),)
+        single = True
+    else:
+        objects = tuple(
+            (c.automaton.locations, c.automaton.edges, c.automaton.signals)
+            for c in model.components
+        )
+        names = tuple((c.name, c.automaton.name) for c in model.components)
+        single = model.single
+    key = (model.name, single, names, tuple(id(o) for trio in objects for o in trio))
     return key, objects
 
 
 def compiled_native(model: Automaton | System) -> CompiledNative:
     """The :class:`CompiledNative` of ``model``'s structure (generated once per process)."""
+    last = _LAST[0]  # the model of the last call, first: a run repeated costs no key
+    if last is not None and last[0] is model:
+        return last[1]
     key, objects = _structure_key(model)
     with _CACHE_LOCK:
         hit = _CACHE.get(key)
-        if hit is not None:
-            return hit[1]
-    compiled = CompiledNative(model)
-    with _CACHE_LOCK:
-        if len(_CACHE) >= _CACHE_SIZE:
-            _CACHE.pop(next(iter(_CACHE)))
-        _CACHE[key] = (objects, compiled)
-    return compiled
+    if hit is None:
+        compiled = CompiledNative(model)
+        with _CACHE_LOCK:
+            if len(_CACHE) >= _CACHE_SIZE:
+                _CACHE.pop(next(iter(_CACHE)))
+            hit = _CACHE[key] = (objects, compiled)
+    _LAST[0] = (model, hit[1])  # one tuple, replaced at once; it holds the model (and its id)
+    return hit[1]
 
 
 def config(settings: Settings) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """The settings as the compiled loop reads them (``cfg_f``, ``cfg_i``)."""
-    cfg_f = np.empty(b.N_CFG_F)
-    cfg_f[b.CF_T_END] = settings.t_end
-    cfg_f[b.CF_RTOL] = settings.rtol
-    cfg_f[b.CF_ATOL] = settings.atol
-    cfg_f[b.CF_MAX_STEP] = settings.max_step
-    cfg_f[b.CF_DT] = np.nan if settings.dt is None else settings.dt
-    cfg_f[b.CF_T_START] = settings.t_start
-    cfg_i = np.empty(b.N_CFG_I, dtype=np.int64)
-    cfg_i[b.CI_MAX_JUMPS] = settings.max_jumps
-    cfg_i[b.CI_ZENO] = int(settings.zeno)
-    cfg_i[b.CI_PER_INSTANT] = settings.max_jumps_per_instant
-    cfg_i[b.CI_DENSE] = int(settings.dense)
-    return cfg_f, cfg_i
+    floats = [0.0] * b.N_CFG_F  # filled as lists, one array each: cheaper than item by item
+    floats[b.CF_T_END] = settings.t_end
+    floats[b.CF_RTOL] = settings.rtol
+    floats[b.CF_ATOL] = settings.atol
+    floats[b.CF_MAX_STEP] = settings.max_step
+    floats[b.CF_DT] = math.nan if settings.dt is None else settings.dt
+    floats[b.CF_T_START] = settings.t_start
+    ints = [0] * b.N_CFG_I
+    ints[b.CI_MAX_JUMPS] = settings.max_jumps
+    ints[b.CI_ZENO] = int(settings.zeno)
+    ints[b.CI_PER_INSTANT] = settings.max_jumps_per_instant
+    ints[b.CI_DENSE] = int(settings.dense)
+    return np.array(floats, dtype=np.float64), np.array(ints, dtype=np.int64)
 
 
 def check_supported(settings: Settings, inputs: Mapping[str, Any] | None) -> None:
@@ -217,40 +248,6 @@ def check_supported(settings: Settings, inputs: Mapping[str, Any] | None) -> Non
         )
 
 
-def run_in_worker(
-    call: Callable[[NDArray[np.int64]], None],
-    handle_sigint: bool,
-    flag: NDArray[np.int64] | None = None,
-) -> bool:
-    """Run ``call(flag)``; with ``handle_sigint`` a first Ctrl-C sets ``flag``. True if it did."""
-    flag = np.zeros(1, dtype=np.int64) if flag is None else flag
-    if not handle_sigint or threading.current_thread() is not threading.main_thread():
-        call(flag)
-        return False
-    errors: list[BaseException] = []
-
-    def work() -> None:
-        try:
-            call(flag)
-        except BaseException as exc:  # re-raised in the caller's thread
-            errors.append(exc)
-
-    with sigint_watch(True) as interrupted:
-        worker = threading.Thread(target=work, name="hybrid-compiled", daemon=True)
-        worker.start()
-        try:
-            while worker.is_alive():
-                worker.join(0.05)
-                if interrupted.requested:
-                    flag[0] = 1
-        except KeyboardInterrupt:
-            flag[0] = 1  # a second Ctrl-C: stop the loop too, and abandon the run
-            raise
-    if errors:
-        raise errors[0]
-    return bool(flag[0])
-
-
 def simulate_compiled(
     model: Automaton | System,
     settings: Settings,
@@ -259,15 +256,41 @@ def simulate_compiled(
     inputs: Mapping[str, Callable[[float], float]] | None = None,
     handle_sigint: bool = True,
 ) -> Run:
-    """One run of ``model`` (parameters and initial location already applied) with ``settings``."""
+    """One run of ``model`` (parameters and initial location already applied) with ``settings``.
+
+    What the loop is given (parameter vector, initial point and mode, settings
+    arrays) is kept for the last model object (frozen) and settings run without
+    ``initial``; the loop only reads these arrays. Running them again costs no
+    conversions.
+    """
     check_supported(settings, inputs)
-    compiled = compiled_native(model)
-    native = compiled.native
-    p = np.array(native.parameter_vector(model), dtype=float)
-    x0 = np.array(initial_vector(model, native.state_names, initial), dtype=float)
-    m0 = compiled.initial_mode(model)
-    arrays = run_arrays(compiled, p, x0, m0, settings, handle_sigint)
-    return run_from(native, compiled.layout, model, settings, arrays)
+    last = _LAST_RUN[0]
+    if last is not None and last[0] is model and not initial and _same_config(last[1], settings):
+        compiled, p, x0, m0, cfg = last[2:]
+    else:
+        compiled = compiled_native(model)
+        native = compiled.native
+        p = np.array(native.parameter_vector(model), dtype=float)
+        x0 = np.array(initial_vector(model, native.state_names, initial), dtype=float)
+        m0 = compiled.initial_mode(model)
+        cfg = config(settings)
+        if not initial:
+            _LAST_RUN[0] = (model, settings, compiled, p, x0, m0, cfg)  # replaced at once
+    arrays = run_arrays(compiled, p, x0, m0, settings, handle_sigint, reuse=True, cfg=cfg)
+    return run_from(compiled.native, compiled.layout, model, settings, arrays)  # copies all it keeps
+
+
+def _same_config(a: Settings, b: Settings) -> bool:
+    """Whether ``config(a)`` and ``config(b)`` hold the same numbers (signed zeros too)."""
+    return a is b or (
+        a == b
+        and math.copysign(1.0, a.t_start) == math.copysign(1.0, b.t_start)
+        and math.copysign(1.0, a.t_end) == math.copysign(1.0, b.t_end)
+    )
+
+
+_LAST_RUN: list[tuple[Any, ...] | None] = [None]
+"""``(model, settings, compiled, p, x0, m0, cfg)`` of the last :func:`simulate_compiled` call."""
 
 
 def run_arrays(
@@ -277,18 +300,33 @@ def run_arrays(
     m0: int,
     settings: Settings,
     handle_sigint: bool,
+    reuse: bool = False,
+    cfg: tuple[NDArray[np.float64], NDArray[np.int64]] | None = None,
 ) -> b.RunArrays:
-    """One run's arrays, run again with four times the room until they hold it all."""
-    cfg = config(settings)
+    """One run's arrays, run again with four times the room until they hold it all.
+
+    With ``reuse``, a run in this thread (not in a worker) may fill the
+    thread's :meth:`CompiledNative.scratch` arrays: the caller copies out what
+    it keeps before the next run. A worker's arrays are always its own (after a
+    second Ctrl-C an abandoned worker may still be writing). ``cfg``: ``config(settings)``.
+    """
+    cfg = config(settings) if cfg is None else cfg
     points, jumps = 256, 64
     steps = 256 if settings.dense else 1
+    in_worker = handle_sigint and threading.current_thread() is threading.main_thread()
     while True:
-        arrays = compiled.buffers(points, jumps, steps)
+        if reuse and not in_worker:
+            arrays = compiled.scratch(points, jumps, steps)
+        else:
+            arrays = compiled.buffers(points, jumps, steps)
+        if in_worker:
 
-        def call(flag: NDArray[np.int64], arrays: b.RunArrays = arrays) -> None:
-            compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, flag)
+            def call(flag: NDArray[np.int64], arrays: b.RunArrays = arrays) -> None:
+                compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, flag)
 
-        run_in_worker(call, handle_sigint)
+            run_in_worker(call, handle_sigint)
+        else:  # what run_in_worker does then, without its closure and thread check
+            compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, np.zeros(1, dtype=np.int64))
         if not arrays.oi[b.I_OVERFLOW]:
             return arrays
         points, jumps = points * 4, jumps * 4

@@ -29,9 +29,9 @@ from hybrid.simulation.native.engine import (
     compiled_native,
     config,
     run_arrays,
-    run_in_worker,
     simulate_compiled,
 )
+from hybrid.simulation.native.worker import run_in_worker
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import MAX_JUMPS_PER_INSTANT, Settings
 

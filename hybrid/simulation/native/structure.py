@@ -235,10 +235,12 @@ class NativeModel:
 
     def parameter_vector(self, model: Automaton | System) -> list[float]:
         """The slot values of ``model`` (this model, possibly with other parameter values)."""
-        system = as_system(model)
+        automata = (
+            (model,) if isinstance(model, Automaton) else tuple(c.automaton for c in model.components)
+        )  # as_system(model)'s components, without building the system
         values = list(self.values)
         for (i, name), k in self.slots.items():
-            values[k] = float(system.components[i].automaton.parameters[name])
+            values[k] = float(automata[i].parameters[name])
         return values
 
 
