@@ -271,13 +271,14 @@ def flow_stay(fns: Fns, step: StepFn, search: SearchFn, decide: DecideFn, tab: I
         stop = t_new if kind == EV_NONE else t_event
         finished = t_new >= t_end
         going_on = kind == EV_NONE and not finished and flag[0] == 0
+        if kind != EV_NONE:  # the event point, before the grid's points reuse ``xs``
+            for i in range(d):
+                x[i] = xs[i]
         if gridded and not record_grid(fns, pts, oi, t, stop, going_on, t, h, j, m, cfg_f, wf, wi):
             return STAY_DONE, t, -1
         if dense and not record_step(sts, oi, t, h, stop, j, stay, y, q):
             return STAY_DONE, t, -1
         if kind != EV_NONE:
-            for i in range(d):
-                x[i] = xs[i]
             if not record_point(fns, pts, oi, t_event, j, m, x, wf, wi):
                 return STAY_DONE, t_event, -1
             if kind == EV_FAILED or failed(wi):

@@ -169,3 +169,25 @@ def test_dt_grid_and_dense_output(zoo: hybrid.Automaton) -> None:
         assert j1 == j2 and a1 == pytest.approx(a2) and b1 == pytest.approx(b2, abs=1e-9)
         grid = np.linspace(a1, min(b1, b2), 7)
         np.testing.assert_allclose(f1(grid), f2(grid), rtol=1e-8, atol=1e-9)
+
+
+@pytest.mark.parametrize("dt", [0.1, 0.01, 0.3])
+def test_dt_grid_between_events_keeps_the_event_state(dt: float) -> None:
+    # a grid point falls inside the step that holds a bounce: recording it must not
+    # disturb the event's state; bounce k of a ball dropped from h0 with restitution e
+    # is at sqrt(2 h0/g) (1 + 2 e + ... + 2 e^(k-1))
+    ball = hybrid.load(REPO / "specs" / "bouncing_ball.yaml")
+    p = ball.parameters
+    h0 = dict(zip(ball.state_names, ball.initial_vector(), strict=True))["h"]
+    first = math.sqrt(2 * h0 / p["g"])
+    expected = [first * (1 + 2 * sum(p["e"] ** i for i in range(1, k))) for k in range(1, 5)]
+    for backend in ("compiled", "scipy"):
+        run = hybrid.simulate(ball, t_end=8.0, dt=dt, backend=backend, rtol=1e-10, atol=1e-12,
+                              handle_sigint=False, max_jumps=4)  # fmt: skip
+        np.testing.assert_allclose(run.jump_times, expected, rtol=1e-9)
+        # every point recorded before the first bounce lies on the free fall
+        falling = run.j == 0
+        assert np.count_nonzero(falling) >= 3
+        np.testing.assert_allclose(run["h"][falling], h0 - p["g"] * run.t[falling] ** 2 / 2, atol=1e-8)
+        for jump in run.jumps:
+            assert abs(jump.before["h"]) < 1e-9
