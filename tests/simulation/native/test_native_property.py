@@ -59,10 +59,13 @@ parameters = st.fixed_dictionaries(
 
 
 @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(values=parameters, x0=st.floats(-0.1, 0.4), y0=st.floats(-1.0, 0.4))
-def test_generated_models_agree(values: dict[str, float], x0: float, y0: float) -> None:
+@given(values=parameters, x0=st.floats(-0.1, 0.4), y0=st.floats(-1.0, 0.4),
+       dt=st.one_of(st.none(), st.floats(0.05, 1.0)))  # fmt: skip
+def test_generated_models_agree(
+    values: dict[str, float], x0: float, y0: float, dt: float | None
+) -> None:
     model = MODEL.with_parameters(values)
-    common = {"t_end": 6.0, "max_jumps": 40, "rtol": 1e-10, "atol": 1e-12,
+    common = {"t_end": 6.0, "max_jumps": 40, "rtol": 1e-10, "atol": 1e-12, "dt": dt,
               "initial": {"x": x0, "y": y0}, "handle_sigint": False}  # fmt: skip
     compiled = hybrid.simulate(model, backend="compiled", **common)  # type: ignore[arg-type]
     reference = hybrid.simulate(model, **common)  # type: ignore[arg-type]
@@ -70,3 +73,7 @@ def test_generated_models_agree(values: dict[str, float], x0: float, y0: float) 
     np.testing.assert_allclose(compiled.jump_times, reference.jump_times, rtol=1e-10, atol=1e-9)
     assert compiled.termination.cause == reference.termination.cause
     assert compiled.termination.location == reference.termination.location
+    if dt is not None:  # the grid's points and the event points, in the same order
+        np.testing.assert_allclose(compiled.t, reference.t, rtol=1e-10, atol=1e-9)
+        for name in ("x", "y"):
+            np.testing.assert_allclose(compiled[name], reference[name], rtol=1e-7, atol=1e-8)
