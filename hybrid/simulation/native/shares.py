@@ -1,0 +1,160 @@
+"""The kernel compiled in shares by several processes, when numba's cache misses it.
+
+Compiling the kernel (:func:`~hybrid.simulation.native.source.kernel_module`)
+costs about 14 s of one core, almost all of it numba's own typing and lowering
+and LLVM, spread over the whole kernel (no function dominates, and no
+optimisation level short of none saves much: measured in docs/performance.md).
+Its pieces (:data:`~hybrid.simulation.native.kernel_types.PIECES`) are
+independent compile units (they reach each other through function pointers),
+so on a machine with more than one core they are compiled in parallel: this
+process compiles its share, worker processes compile theirs into numba's disk
+cache beside the generated module, and this process then loads those from the
+cache, as a second process would. A worker that fails or is not possible
+leaves its pieces to this process (compiled here, as without workers).
+
+How many processes: ``$HYBRID_NATIVE_COMPILE_PROCESSES`` if set (``1``: all
+in this process), else the CPUs this process may use, at most one per piece.
+
+Examples
+--------
+>>> shares({"a": 4.0, "b": 3.5, "c": 3.0, "d": 2.0, "e": 1.5}, 2, startup=1.0)
+[['a', 'c'], ['b', 'd', 'e']]
+>>> shares({"a": 4.0, "b": 3.5}, 1)
+[['a', 'b']]
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from typing import Any
+
+__all__ = ["PIECE_COSTS", "PROCESSES_ENV", "SHARE_ENV", "compile_kernel", "processes", "shares"]
+
+PROCESSES_ENV = "HYBRID_NATIVE_COMPILE_PROCESSES"
+SHARE_ENV = "HYBRID_NATIVE_COMPILE_SHARE"
+"""Set in a worker: the pieces it compiles (comma-separated); it compiles nothing else."""
+
+PIECE_COSTS = {
+    "flow_stay": 4.0,
+    "first_event": 3.5,
+    "run_one": 3.0,
+    "decide": 2.2,
+    "rk45_step": 1.5,
+}
+"""Seconds of one core to compile each piece with the functions it calls (measured, numba 0.68)."""
+
+WORKER_STARTUP_S = 1.2
+"""What a worker spends before compiling (importing hybrid and numba), in the costs' unit."""
+
+WORKER_TIMEOUT_S = 900.0
+
+_WORKER = """
+import importlib.util, sys
+path, name = sys.argv[1], sys.argv[2]
+spec = importlib.util.spec_from_file_location(name, path)
+module = importlib.util.module_from_spec(spec)
+sys.modules[name] = module
+spec.loader.exec_module(module)
+"""
+
+
+def processes(pieces: int) -> int:
+    """How many processes compile ``pieces`` pieces (see the module docstring)."""
+    configured = os.environ.get(PROCESSES_ENV, "").strip()
+    if configured:
+        try:
+            wanted = int(configured)
+        except ValueError:
+            wanted = 1
+    else:
+        affinity = getattr(os, "sched_getaffinity", None)
+        wanted = len(affinity(0)) if affinity is not None else (os.cpu_count() or 1)
+    return max(1, min(wanted, pieces))
+
+
+def shares(costs: Mapping[str, float], count: int, startup: float = WORKER_STARTUP_S) -> list[list[str]]:
+    """The pieces split into ``count`` shares of about equal cost, this process's first.
+
+    Largest first, each to the share that would finish first; a worker's share
+    starts at ``startup`` (this process's at 0).
+    """
+    loads = [0.0] + [startup] * (count - 1)
+    out: list[list[str]] = [[] for _ in range(count)]
+    for name in sorted(costs, key=lambda n: -costs[n]):
+        k = min(range(count), key=lambda i: loads[i])
+        out[k].append(name)
+        loads[k] += costs[name]
+    return [share for share in out if share] or [[]]
+
+
+def _compile(namespace: dict[str, Any], jit: Callable[[str], Any], names: Sequence[str],
+             needs: Mapping[str, Iterable[str]], pieces: Iterable[str], done: set[str]) -> None:  # fmt: skip
+    """Compile ``pieces`` and the functions they call, callees first (each once)."""
+    wanted = set(pieces)
+    for piece in pieces:
+        wanted.update(needs[piece])
+    for name in names:
+        if name in wanted and name not in done:
+            namespace[name] = jit(name)
+            done.add(name)
+
+
+def _spawn(path: str, module: str, share: Sequence[str]) -> subprocess.Popen[bytes] | None:
+    if not sys.executable:
+        return None
+    env = dict(os.environ)
+    env[SHARE_ENV] = ",".join(share)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if isinstance(p, str) and p)
+    try:
+        return subprocess.Popen(
+            [sys.executable, "-c", _WORKER, path, module],
+            env=env,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+    except OSError:
+        return None
+
+
+def _wait(worker: subprocess.Popen[bytes] | None) -> None:
+    if worker is None:
+        return
+    try:
+        worker.wait(timeout=WORKER_TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        worker.kill()
+        worker.wait()
+
+
+def compile_kernel(namespace: dict[str, Any], jit: Callable[[str], Any], names: Sequence[str],
+                   costs: Mapping[str, float], needs: Mapping[str, Iterable[str]], path: str,
+                   module: str) -> None:  # fmt: skip
+    """Compile every piece of the generated module ``module`` (its file: ``path``) into ``namespace``.
+
+    ``jit(name)`` compiles the function ``name`` of the module (or loads it
+    from numba's cache); ``names`` lists them callees first; ``needs[piece]``
+    names the functions a piece calls; ``costs`` holds each piece's estimated
+    compile time. In a worker (``$HYBRID_NATIVE_COMPILE_SHARE`` set) only that
+    share is compiled.
+    """
+    done: set[str] = set()
+    share = os.environ.get(SHARE_ENV)
+    if share is not None:
+        _compile(namespace, jit, names, needs, [p for p in share.split(",") if p in costs], done)
+        return
+    plan = shares(costs, processes(len(costs)))
+    workers = [_spawn(path, module, s) for s in plan[1:]]
+    try:
+        _compile(namespace, jit, names, needs, plan[0], done)
+    finally:
+        for worker in workers:
+            _wait(worker)
+    for piece in (p for s in plan[1:] for p in s):
+        try:
+            namespace[piece] = jit(piece)  # from numba's cache (the functions it calls are not needed)
+        except Exception:  # the worker did not compile it: here, callees first
+            _compile(namespace, jit, names, needs, [piece], done)
