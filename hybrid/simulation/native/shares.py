@@ -25,13 +25,14 @@ Examples
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
-__all__ = ["PIECE_COSTS", "PROCESSES_ENV", "SHARE_ENV", "compile_kernel", "processes", "shares"]
+__all__ = ["PIECE_COSTS", "PROCESSES_ENV", "SHARE_ENV", "compile_kernel", "maybe_cached", "processes", "shares"]
 
 PROCESSES_ENV = "HYBRID_NATIVE_COMPILE_PROCESSES"
 SHARE_ENV = "HYBRID_NATIVE_COMPILE_SHARE"
@@ -52,8 +53,9 @@ WORKER_STARTUP_S = 1.2
 WORKER_TIMEOUT_S = 900.0
 
 _WORKER = """
-import importlib.util, sys
+import importlib.util, json, sys
 path, name = sys.argv[1], sys.argv[2]
+sys.path[:] = json.loads(sys.argv[3])  # this process's, so that hybrid is the same one
 spec = importlib.util.spec_from_file_location(name, path)
 module = importlib.util.module_from_spec(spec)
 sys.modules[name] = module
@@ -73,6 +75,21 @@ def processes(pieces: int) -> int:
         affinity = getattr(os, "sched_getaffinity", None)
         wanted = len(affinity(0)) if affinity is not None else (os.cpu_count() or 1)
     return max(1, min(wanted, pieces))
+
+
+def maybe_cached(path: str, module: str, pieces: Sequence[str]) -> bool:
+    """False if numba's cache surely lacks a piece (no file of it beside ``path``), else True.
+
+    Saves a failed attempt at loading (typing the first piece until it calls a
+    function not compiled yet) when compiling is certain; a worker never loads.
+    """
+    if os.environ.get(SHARE_ENV) is not None:
+        return False
+    try:
+        files = os.listdir(os.path.join(os.path.dirname(path), "__pycache__"))
+    except OSError:
+        return False
+    return all(any(f.startswith(f"{module}.{piece}-") for f in files) for piece in pieces)
 
 
 def shares(costs: Mapping[str, float], count: int, startup: float = WORKER_STARTUP_S) -> list[list[str]]:
@@ -107,10 +124,10 @@ def _spawn(path: str, module: str, share: Sequence[str]) -> subprocess.Popen[byt
         return None
     env = dict(os.environ)
     env[SHARE_ENV] = ",".join(share)
-    env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if isinstance(p, str) and p)
+    search = [os.path.abspath(p) for p in sys.path if isinstance(p, str)]
     try:
         return subprocess.Popen(
-            [sys.executable, "-c", _WORKER, path, module],
+            [sys.executable, "-c", _WORKER, path, module, json.dumps(search)],
             env=env,
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
@@ -132,29 +149,46 @@ def _wait(worker: subprocess.Popen[bytes] | None) -> None:
 
 def compile_kernel(namespace: dict[str, Any], jit: Callable[[str], Any], names: Sequence[str],
                    costs: Mapping[str, float], needs: Mapping[str, Iterable[str]], path: str,
-                   module: str) -> None:  # fmt: skip
-    """Compile every piece of the generated module ``module`` (its file: ``path``) into ``namespace``.
+                   module: str) -> Callable[[], None]:  # fmt: skip
+    """Compile the pieces of the generated module ``module`` (file ``path``) into ``namespace``.
 
     ``jit(name)`` compiles the function ``name`` of the module (or loads it
     from numba's cache); ``names`` lists them callees first; ``needs[piece]``
     names the functions a piece calls; ``costs`` holds each piece's estimated
-    compile time. In a worker (``$HYBRID_NATIVE_COMPILE_SHARE`` set) only that
-    share is compiled.
+    compile time. Returns ``finish``: this process's share is compiled now,
+    the workers' pieces are there once ``finish()`` returns (meanwhile this
+    process may compile something else: a model). In a worker
+    (``$HYBRID_NATIVE_COMPILE_SHARE`` set) only that share is compiled.
     """
     done: set[str] = set()
     share = os.environ.get(SHARE_ENV)
     if share is not None:
         _compile(namespace, jit, names, needs, [p for p in share.split(",") if p in costs], done)
-        return
+        return _nothing
     plan = shares(costs, processes(len(costs)))
     workers = [_spawn(path, module, s) for s in plan[1:]]
     try:
         _compile(namespace, jit, names, needs, plan[0], done)
-    finally:
+    except BaseException:
         for worker in workers:
             _wait(worker)
-    for piece in (p for s in plan[1:] for p in s):
-        try:
-            namespace[piece] = jit(piece)  # from numba's cache (the functions it calls are not needed)
-        except Exception:  # the worker did not compile it: here, callees first
-            _compile(namespace, jit, names, needs, [piece], done)
+        raise
+
+    def finish() -> None:
+        """Wait for the workers, then load their pieces (or compile those they did not)."""
+        while workers:
+            _wait(workers.pop())
+        for piece in (p for s in plan[1:] for p in s):
+            if piece in done:
+                continue
+            try:
+                namespace[piece] = jit(piece)  # from numba's cache (its callees are not needed)
+            except Exception:  # the worker did not compile it: here, callees first
+                _compile(namespace, jit, names, needs, [piece], done)
+            done.add(piece)
+
+    return finish
+
+
+def _nothing() -> None:
+    """Nothing left to compile."""
