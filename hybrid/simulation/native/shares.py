@@ -120,7 +120,7 @@ def _compile(namespace: dict[str, Any], jit: Callable[[str], Any], names: Sequen
 
 
 def _spawn(path: str, module: str, share: Sequence[str]) -> subprocess.Popen[bytes] | None:
-    if not sys.executable:
+    if not sys.executable or getattr(sys, "frozen", False):  # no interpreter to start
         return None
     env = dict(os.environ)
     env[SHARE_ENV] = ",".join(share)
