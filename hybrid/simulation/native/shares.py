@@ -25,6 +25,7 @@ Examples
 
 from __future__ import annotations
 
+import ast
 import json
 import os
 import subprocess
@@ -32,7 +33,16 @@ import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
-__all__ = ["PIECE_COSTS", "PROCESSES_ENV", "SHARE_ENV", "compile_kernel", "maybe_cached", "processes", "shares"]
+__all__ = [
+    "PIECE_COSTS",
+    "PROCESSES_ENV",
+    "SHARE_ENV",
+    "compile_kernel",
+    "maybe_cached",
+    "piece_callees",
+    "processes",
+    "shares",
+]
 
 PROCESSES_ENV = "HYBRID_NATIVE_COMPILE_PROCESSES"
 SHARE_ENV = "HYBRID_NATIVE_COMPILE_SHARE"
@@ -77,6 +87,38 @@ def processes(pieces: int) -> int:
     return max(1, min(wanted, pieces))
 
 
+def piece_callees(
+    code: str, names: Sequence[str], pieces: Sequence[str]
+) -> dict[str, tuple[str, ...]]:
+    """Each piece's callees among ``names``, transitively (a call of a parameter or local is not one)."""
+    known = set(names)
+    direct: dict[str, set[str]] = {}
+    for node in ast.parse(code).body:
+        if isinstance(node, ast.FunctionDef):
+            params = {a.arg for a in node.args.args} | {
+                n.id
+                for n in ast.walk(node)
+                if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)
+            }
+            direct[node.name] = {
+                call.func.id
+                for call in ast.walk(node)
+                if isinstance(call, ast.Call) and isinstance(call.func, ast.Name)
+                and call.func.id in known and call.func.id not in params
+            }  # fmt: skip
+    out = {}
+    for piece in pieces:
+        seen: set[str] = set()
+        stack = list(direct.get(piece, ()))
+        while stack:
+            name = stack.pop()
+            if name not in seen:
+                seen.add(name)
+                stack.extend(direct.get(name, ()))
+        out[piece] = tuple(n for n in names if n in seen)
+    return out
+
+
 def maybe_cached(path: str, module: str, pieces: Sequence[str]) -> bool:
     """False if numba's cache surely lacks a piece (no file of it beside ``path``), else True.
 
@@ -92,7 +134,9 @@ def maybe_cached(path: str, module: str, pieces: Sequence[str]) -> bool:
     return all(any(f.startswith(f"{module}.{piece}-") for f in files) for piece in pieces)
 
 
-def shares(costs: Mapping[str, float], count: int, startup: float = WORKER_STARTUP_S) -> list[list[str]]:
+def shares(
+    costs: Mapping[str, float], count: int, startup: float = WORKER_STARTUP_S
+) -> list[list[str]]:
     """The pieces split into ``count`` shares of about equal cost, this process's first.
 
     Largest first, each to the share that would finish first; a worker's share

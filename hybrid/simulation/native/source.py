@@ -43,7 +43,7 @@ from hybrid.simulation.native.buffers import T_MODE_TR, TAB_HEADER, TABLES
 from hybrid.simulation.native.kernel_types import PIECES
 from hybrid.simulation.native.library import importable
 from hybrid.simulation.native.printer import body_lines
-from hybrid.simulation.native.shares import PIECE_COSTS
+from hybrid.simulation.native.shares import PIECE_COSTS, piece_callees
 from hybrid.simulation.native.structure import (
     COMPILED_FORM,
     NativeMode,
@@ -119,7 +119,7 @@ def kernel_module(parallel_over: str = "") -> Generated:
         f"_NAMES = {tuple(names)!r}",
         f"_PIECES = {pieces!r}",
         f"_COSTS = {({p: PIECE_COSTS.get(p, 1.0) for p in pieces})!r}",
-        f"_NEEDS = {_callees(code, names, pieces)!r}",
+        f"_NEEDS = {piece_callees(code, names, pieces)!r}",
         "_ALIASES = dict(PIECES)",
         "# only these allocate arrays; the others never keep one, so they need no reference",
         "# counting (numba's runtime, NRT: an atomic operation per array view made or dropped)",
@@ -152,34 +152,6 @@ def kernel_module(parallel_over: str = "") -> Generated:
         "",
     ]
     return Generated("\n".join(lines))
-
-
-def _callees(code: str, names: Sequence[str], pieces: Sequence[str]) -> dict[str, tuple[str, ...]]:
-    """Each piece's callees among ``names``, transitively (a call of a parameter or local is not one)."""
-    known = set(names)
-    direct: dict[str, set[str]] = {}
-    for node in ast.parse(code).body:
-        if isinstance(node, ast.FunctionDef):
-            params = {a.arg for a in node.args.args} | {
-                n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)
-            }
-            direct[node.name] = {
-                call.func.id
-                for call in ast.walk(node)
-                if isinstance(call, ast.Call) and isinstance(call.func, ast.Name)
-                and call.func.id in known and call.func.id not in params
-            }  # fmt: skip
-    out = {}
-    for piece in pieces:
-        seen: set[str] = set()
-        stack = list(direct.get(piece, ()))
-        while stack:
-            name = stack.pop()
-            if name not in seen:
-                seen.add(name)
-                stack.extend(direct.get(name, ()))
-        out[piece] = tuple(n for n in names if n in seen)
-    return out
 
 
 class _Forms:
