@@ -76,6 +76,14 @@ def render(report: dict[str, Any]) -> str:
             f"{compile_s['numba_import_s']:.2f} s | {compile_s['cached_process_total_s']:.2f} s |",
             "",
         ]
+        if "first_process_kernel_and_model_s" in compile_s:
+            lines += [
+                f"A first process that asks for the thermostat at once (as `simulate` does) "
+                f"compiles the kernel and the model in "
+                f"{compile_s['first_process_kernel_and_model_s']:.1f} s (the kernel's pieces in "
+                f"worker processes meanwhile, one per CPU).",
+                "",
+            ]
         if "uvms_mission_2_model_compile_s" in compile_s:
             lines += [
                 f"UVMS mission 2 (library functions compiled): model compile "

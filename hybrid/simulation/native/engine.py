@@ -58,8 +58,13 @@ _PIECES: dict[str, tuple[int, ...]] = {}
 """The addresses of the kernel's pieces (C wrapper, compiled code), in ``PIECES`` order."""
 
 
-def kernel(parallel: bool = False) -> ModuleType:
-    """The compiled loop, or its ensemble loop (compiled or loaded once per process)."""
+def kernel(parallel: bool = False, wait: bool = True) -> ModuleType:
+    """The compiled loop, or its ensemble loop (compiled or loaded once per process).
+
+    ``wait=False``: return once this process's share of a first compile is
+    done, worker processes still compiling theirs (see
+    :mod:`~hybrid.simulation.native.shares`); a later ``kernel()`` waits.
+    """
     require_numba()
     with _CACHE_LOCK:
         if not _KERNEL:
@@ -69,6 +74,10 @@ def kernel(parallel: bool = False) -> ModuleType:
             warnings.filterwarnings("ignore", category=NumbaExperimentalFeatureWarning)
         if "one" not in _KERNEL:
             _KERNEL["one"] = load_generated(kernel_module())
+        if not wait and not parallel:
+            return _KERNEL["one"]
+        if "one" not in _PIECES:
+            _KERNEL["one"].finish_compiling()
             from hybrid.simulation.native.pointers import addresses
 
             _PIECES["one"] = tuple(
@@ -86,7 +95,7 @@ class CompiledNative:
         self.native = NativeModel(model)
         self.layout = Layout.of(self.native)
         self.generated = generate(self.native)
-        self.kernel = kernel()
+        kernel(wait=False)  # the first time, worker processes compile the rest meanwhile
         try:
             self.module: ModuleType = load_generated(self.generated)
         except Exception as exc:  # numba refusing a library's compiled form, say
@@ -96,6 +105,7 @@ class CompiledNative:
                 f"the compiled backend could not compile {self.native.system.name} "
                 f"(library functions: {what}): {lines[0] if lines else type(exc).__name__}"
             ) from exc
+        self.kernel = kernel()
         self.functions: Any = self.module.model
         self.fp = np.array([self.functions.address, 0, *_PIECES["one"]], dtype=np.int64)
         """The addresses the compiled loop calls: the model (a ``cfunc``), then the pieces."""

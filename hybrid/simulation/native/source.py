@@ -43,6 +43,7 @@ from hybrid.simulation.native.buffers import T_MODE_TR, TAB_HEADER, TABLES
 from hybrid.simulation.native.kernel_types import PIECES
 from hybrid.simulation.native.library import importable
 from hybrid.simulation.native.printer import body_lines
+from hybrid.simulation.native.shares import PIECE_COSTS, piece_callees
 from hybrid.simulation.native.structure import (
     COMPILED_FORM,
     NativeMode,
@@ -111,11 +112,14 @@ def kernel_module(parallel_over: str = "") -> Generated:
         "from hybrid.simulation.native.kernel_types import FUNCTION_TYPES, PIECES",
         "from hybrid.simulation.native.kernel_types import numba_signature, numba_types",
         "from hybrid.simulation.native.pointers import at, function_at",
+        "from hybrid.simulation.native.shares import compile_kernel, maybe_cached",
         code,
         "",
         "# ---- compiled with numba, callees first (cached on disk beside this file) ----",
         f"_NAMES = {tuple(names)!r}",
         f"_PIECES = {pieces!r}",
+        f"_COSTS = {({p: PIECE_COSTS.get(p, 1.0) for p in pieces})!r}",
+        f"_NEEDS = {piece_callees(code, names, pieces)!r}",
         "_ALIASES = dict(PIECES)",
         "# only these allocate arrays; the others never keep one, so they need no reference",
         "# counting (numba's runtime, NRT: an atomic operation per array view made or dropped)",
@@ -127,6 +131,8 @@ def kernel_module(parallel_over: str = "") -> Generated:
         "                    no_cfunc_wrapper=_name not in _ALIASES,",
         "                    _nrt=_name in _ALLOCATING)",
         f"    return njit(_sig, parallel={parallel}, {JIT}, **_options)(_PLAIN[_name])",
+        "def finish_compiling():",
+        "    \"\"\"Nothing left: every piece is loaded or compiled (else: compile_kernel's finish).\"\"\"",
         "with warnings.catch_warnings():",
         "    warnings.simplefilter('ignore', NumbaExperimentalFeatureWarning)",
         f"    _TYPES = {types}",
@@ -137,11 +143,12 @@ def kernel_module(parallel_over: str = "") -> Generated:
         "    for _alias, _global in FUNCTION_TYPES:",
         "        globals()[_global] = _TYPES[_alias]",
         "    try:",
+        "        if not maybe_cached(__file__, __name__, _PIECES):",
+        "            raise LookupError('not in numba cache')",
         "        for _name in _PIECES:",
         "            globals()[_name] = _jit(_name)",
-        "    except Exception:",
-        "        for _name in _NAMES:",
-        "            globals()[_name] = _jit(_name)",
+        "    except Exception:  # not cached: compiled, in shares by several processes",
+        "        finish_compiling = compile_kernel(globals(), _jit, _NAMES, _COSTS, _NEEDS, __file__, __name__)",
         "",
     ]
     return Generated("\n".join(lines))

@@ -1,0 +1,143 @@
+"""The kernel compiled in shares by several processes (a cache miss), and what each piece needs."""
+
+from __future__ import annotations
+
+import ast
+import importlib.util
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+from types import ModuleType
+
+import pytest
+
+from hybrid.simulation.native import shares as sh
+from hybrid.simulation.native.kernel_types import PIECES
+from hybrid.simulation.native.source import KERNEL_MODULES, kernel_module, kernel_source
+
+pytest.importorskip("numba")
+
+# a generated module in miniature: two pieces calling one helper, compiled as the kernel is
+MODULE = textwrap.dedent(
+    """
+    from numba import njit
+    from hybrid.simulation.native.shares import compile_kernel, maybe_cached
+
+    def helper(x):
+        return x + 1.0
+
+    def first(x):
+        return helper(x) * 2.0
+
+    def second(x):
+        return helper(x) * 3.0
+
+    _NAMES = ("helper", "first", "second")
+    _PLAIN = {name: globals()[name] for name in _NAMES}
+
+    def _jit(name):
+        return njit("float64(float64)", cache=True)(_PLAIN[name])
+
+    def finish_compiling():
+        pass
+
+    try:
+        if not maybe_cached(__file__, __name__, ("first", "second")):
+            raise LookupError
+        for name in ("first", "second"):
+            globals()[name] = _jit(name)
+    except Exception:
+        finish_compiling = compile_kernel(globals(), _jit, _NAMES, {"first": 2.0, "second": 1.0},
+                                          {"first": ("helper",), "second": ("helper",)},
+                                          __file__, __name__)
+    HERE_BEFORE_FINISH = [name for name in ("first", "second") if hasattr(globals()[name], "py_func")]
+    finish_compiling()
+    """
+)
+
+
+def _load(path: Path, name: str) -> ModuleType:
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    finally:
+        del sys.modules[name]
+    return module
+
+
+def _hits(dispatcher: object) -> int:
+    return sum(dispatcher.stats.cache_hits.values())  # type: ignore[attr-defined]
+
+
+def test_shares_balance_costs_this_process_first() -> None:
+    # by hand: 4 -> main (0); 3.5 -> worker (1.2 + 3.5 = 4.7); 3 -> main (7); 2.2 -> worker (6.9);
+    # 1.5 -> worker (8.4)
+    costs = {"a": 4.0, "b": 3.5, "c": 3.0, "d": 2.2, "e": 1.5}
+    assert sh.shares(costs, 2, startup=1.2) == [["a", "c"], ["b", "d", "e"]]
+    assert sh.shares(costs, 1) == [["a", "b", "c", "d", "e"]]
+    assert sorted(p for share in sh.shares(costs, 9) for p in share) == sorted(costs)
+
+
+def test_processes_follow_the_environment(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv(sh.PROCESSES_ENV, "3")
+    assert sh.processes(5) == 3
+    assert sh.processes(2) == 2  # at most one per piece
+    monkeypatch.setenv(sh.PROCESSES_ENV, "1")
+    assert sh.processes(5) == 1
+    monkeypatch.setenv(sh.PROCESSES_ENV, "many")
+    assert sh.processes(5) == 1
+
+
+def test_each_piece_needs_exactly_the_kernel_functions_it_calls() -> None:
+    """Every kernel function is a piece or called by one; no piece is called directly by another."""
+    _code, names = kernel_source(KERNEL_MODULES[:-1])
+    source = kernel_module().source
+    needs = ast.literal_eval(source.split("_NEEDS = ", 1)[1].splitlines()[0])
+    pieces = [name for name, _ in PIECES]
+    assert sorted(needs) == sorted(pieces)
+    assert set(names) == set(pieces) | {n for callees in needs.values() for n in callees}
+    assert not any(set(callees) & set(pieces) for callees in needs.values())
+    # by hand: the step calls only remember_flow_failure; run_one calls decide through a pointer
+    assert needs["rk45_step"] == ("remember_flow_failure",)
+    assert "enabled_at_entry" in needs["decide"] and "enabled_at_entry" not in needs["run_one"]
+
+
+def test_a_worker_compiles_its_share_and_this_process_loads_it(tmp_path: Path) -> None:
+    path = tmp_path / "hybrid_native_shares_probe.py"
+    path.write_text(MODULE, encoding="utf-8")
+    code = (
+        "import importlib.util, sys\n"
+        f"spec = importlib.util.spec_from_file_location('hybrid_native_shares_probe', {str(path)!r})\n"
+        "m = importlib.util.module_from_spec(spec); sys.modules[spec.name] = m\n"
+        "spec.loader.exec_module(m)\n"
+        "print(m.first(1.0), m.second(1.0), sum(m.first.stats.cache_hits.values()),"
+        " sum(m.second.stats.cache_hits.values()), *m.HERE_BEFORE_FINISH)\n"
+    )
+    env = {**__import__("os").environ, sh.PROCESSES_ENV: "2"}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                          timeout=300, check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    # "first" (the larger share) compiled here, "second" by the worker and loaded from the cache
+    # once finish_compiling() is called (before: still the Python function)
+    assert done.stdout.split() == ["4.0", "6.0", "0", "1", "first"]
+    assert sh.maybe_cached(str(path), "hybrid_native_shares_probe", ("first", "second"))
+    again = _load(path, "hybrid_native_shares_probe")  # a second process's path: both from the cache
+    assert (again.first(2.0), again.second(2.0)) == (6.0, 9.0)
+    assert (_hits(again.first), _hits(again.second)) == (1, 1)
+
+
+def test_without_workers_this_process_compiles_every_piece(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "hybrid_native_shares_alone.py"
+    path.write_text(MODULE, encoding="utf-8")
+    monkeypatch.setenv(sh.PROCESSES_ENV, "2")
+    monkeypatch.setattr(sh.sys, "executable", "")  # no interpreter to start: no worker
+    assert not sh.maybe_cached(str(path), "hybrid_native_shares_alone", ("first", "second"))
+    module = _load(path, "hybrid_native_shares_alone")
+    assert (module.first(1.0), module.second(1.0)) == (4.0, 6.0)
+    assert (_hits(module.first), _hits(module.second)) == (0, 0)
