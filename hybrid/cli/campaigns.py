@@ -78,6 +78,9 @@ def add_campaign_commands(
     p.add_argument("--seed", type=int, default=0, help="seed of the global phase (default 0)")
     p.add_argument("--sampler", choices=SAMPLERS, default="lhs", help="the global design")
     _common(p, types)
+    p.add_argument("--backend", default=BACKENDS[0], choices=BACKENDS,
+                   help="scipy (reference) or compiled (numba; requirements are monitored over "
+                   "its steps; docs/backends.md)")  # fmt: skip
     p.add_argument("--out", metavar="DIR", help="write the counterexample here")
 
 
@@ -229,6 +232,7 @@ def run_falsify(args: argparse.Namespace) -> int:
             scheduler=args.scheduler,
             run_timeout=args.run_timeout,
             progress=line,
+            backend=args.backend,
             **_solver(args),
         )
     if line is not None:

@@ -33,7 +33,7 @@ import numpy as np
 from scipy.integrate import RK23, RK45, DenseOutput, OdeSolver
 from scipy.integrate._ivp.rk import RkDenseOutput
 
-__all__ = ["StepCurve", "step_curve"]
+__all__ = ["StepCurve", "polynomial_curve", "step_curve"]
 
 
 _FRACTIONS: dict[int, np.ndarray] = {}
@@ -157,3 +157,20 @@ def step_curve(solver: OdeSolver, x0: np.ndarray | None = None) -> StepCurve:
     dense = solver.dense_output()
     start = np.asarray(dense(t0), dtype=float) if x0 is None else x0
     return _SolverCurve(t0, t1, start, x1, dense)
+
+
+def polynomial_curve(t0: float, t1: float, x0: np.ndarray, q: np.ndarray) -> StepCurve:
+    """The curve ``x0 + h q @ [s, s**2, ...]`` of a Runge-Kutta step ``[t0, t1]``, ``h = t1 - t0``.
+
+    The step's end state is the polynomial at ``s = 1`` (a compiled run keeps
+    ``x0`` and ``q`` of each step, as ``RkDenseOutput`` does).
+
+    Examples
+    --------
+    >>> curve = polynomial_curve(1.0, 3.0, np.array([0.0]), np.array([[0.5, 0.25]]))
+    >>> float(curve.x1[0]), float(curve.at(2.0)[0])   # h (q1 + q2); at s = 1/2, h (q1/2 + q2/4)
+    (1.5, 0.625)
+    """
+    h = t1 - t0
+    x1 = x0 + h * q.sum(axis=1)
+    return _PolynomialCurve(t0, t1, x0, x1, q)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import threading
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 
 import numpy as np
 
@@ -142,11 +143,7 @@ def simulate(
     if isinstance(model, Automaton) and (initial or initial_location):
         model = model.with_initial(initial_location, initial)
     if settings.backend == "compiled":
-        from hybrid.simulation.native.engine import simulate_compiled
-
-        run = simulate_compiled(
-            model, settings, initial=initial, inputs=inputs, handle_sigint=handle_sigint
-        )
+        run = _simulate_compiled(model, settings, initial, inputs, handle_sigint)
         run.settings["start"] = start
         return run
     compiled = _compiled(model, inputs)
@@ -184,6 +181,42 @@ def simulate(
     if tracker is not None:
         tracker.finish(termination.t, jumps=len(run.jumps), points=len(run))
     return run
+
+
+def _simulate_compiled(
+    model: Automaton | System,
+    settings: Settings,
+    initial: Mapping[str, float] | None,
+    inputs: Mapping[str, Callable[[float], float]] | None,
+    handle_sigint: bool,
+) -> Run:
+    """A run on the compiled backend; requirements monitored over its steps afterwards."""
+    from hybrid.simulation.native.engine import compiled_native, simulate_compiled
+
+    if not _has_requirements(model):
+        return simulate_compiled(
+            model, settings, initial=initial, inputs=inputs, handle_sigint=handle_sigint
+        )
+    from hybrid.simulation.native.monitoring import replay
+
+    reference = _compiled(model, None)
+    monitor = _monitor(reference, settings)
+    kept = settings if settings.dense else replace(settings, dense=True)  # every step's curve
+    run = simulate_compiled(
+        model, kept, initial=initial, inputs=inputs, handle_sigint=handle_sigint
+    )
+    if monitor is not None:
+        run.requirements = replay(monitor, reference, compiled_native(model).layout, run)
+    if not settings.dense:
+        run.segments = []
+        run.settings["dense"] = False
+    return run
+
+
+def _has_requirements(model: Automaton | System) -> bool:
+    if isinstance(model, Automaton):
+        return bool(model.requirements)
+    return bool(model.requirements) or any(c.automaton.requirements for c in model.components)
 
 
 def _groups(model: System) -> list[tuple[int, ...]]:

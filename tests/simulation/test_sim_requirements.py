@@ -5,11 +5,14 @@ The heater of issue 13 cools as x' = -0.1 x from x = 20, so x(t) = 20 e^(-t/10):
 is violated where x = 15, at t = 10 ln(4/3). Windows and ``in:`` scoping are
 checked on the same heater and on a sawtooth whose extremes are known by hand;
 a dip inside one solver step on a harmonic oscillator (x = cos t, minimum -1 at
-t = pi). A requirement never changes the run.
+t = pi). A requirement never changes the run. Every test runs on both backends: the
+compiled backend's runs are shown to the same monitor step by step
+(:mod:`hybrid.simulation.native.monitoring`).
 """
 
 from __future__ import annotations
 
+import importlib.util
 import math
 from pathlib import Path
 
@@ -20,7 +23,22 @@ import hybrid
 from hybrid.simulation.apart import independent_groups
 from hybrid.simulation.monitor_apart import join_groups
 
-TIGHT = {"rtol": 1e-10, "atol": 1e-12}
+TIGHT = {"rtol": 1e-10, "atol": 1e-12, "handle_sigint": False}
+BACKENDS = [
+    "scipy",
+    pytest.param(
+        "compiled",
+        marks=pytest.mark.skipif(
+            importlib.util.find_spec("numba") is None, reason="the compiled backend needs numba"
+        ),
+    ),
+]
+
+
+@pytest.fixture(params=BACKENDS)
+def backend(request: pytest.FixtureRequest) -> str:
+    return str(request.param)
+
 
 HEATER = """
 automaton: heater
@@ -43,9 +61,9 @@ def x_of(t: float) -> float:
     return 20.0 * math.exp(-t / 10.0)
 
 
-@pytest.fixture(scope="module")
-def heater_run() -> hybrid.Run:
-    return hybrid.simulate(hybrid.load_text(HEATER), t_end=5.0, **TIGHT)
+@pytest.fixture(scope="module", params=BACKENDS)
+def heater_run(request: pytest.FixtureRequest) -> hybrid.Run:
+    return hybrid.simulate(hybrid.load_text(HEATER), t_end=5.0, backend=request.param, **TIGHT)
 
 
 def test_always_robustness_and_crossing_of_the_heater(heater_run: hybrid.Run) -> None:
@@ -89,10 +107,10 @@ def test_strict_and_compound_conditions(heater_run: hybrid.Run) -> None:
     assert both.robustness == pytest.approx(x_of(5) - 14, abs=1e-9)
 
 
-def test_a_requirement_never_changes_the_run() -> None:
+def test_a_requirement_never_changes_the_run(backend: str) -> None:
     plain = hybrid.load_text(HEATER.split("requirements:")[0])
-    with_reqs = hybrid.simulate(hybrid.load_text(HEATER), t_end=5.0, **TIGHT)
-    without = hybrid.simulate(plain, t_end=5.0, **TIGHT)
+    with_reqs = hybrid.simulate(hybrid.load_text(HEATER), t_end=5.0, backend=backend, **TIGHT)
+    without = hybrid.simulate(plain, t_end=5.0, backend=backend, **TIGHT)
     assert without.requirements == {}
     assert np.array_equal(with_reqs.t, without.t)
     assert np.array_equal(with_reqs.states, without.states)
@@ -119,8 +137,8 @@ requirements:
 """
 
 
-def test_in_location_scopes_to_the_time_spent_there() -> None:
-    run = hybrid.simulate(hybrid.load_text(SAW), t_end=11.0, **TIGHT)
+def test_in_location_scopes_to_the_time_spent_there(backend: str) -> None:
+    run = hybrid.simulate(hybrid.load_text(SAW), t_end=11.0, backend=backend, **TIGHT)
     assert [j.t for j in run.jumps] == pytest.approx([4.0, 6.0, 10.0])
     r = run.requirements
     # in down x falls from 22 to 18; the first time below 19 is at t = 4 + 3/2
@@ -152,8 +170,8 @@ requirements:
 """
 
 
-def test_a_dip_inside_one_step_is_found() -> None:
-    run = hybrid.simulate(hybrid.load_text(OSCILLATOR), t_end=4.0, **TIGHT)
+def test_a_dip_inside_one_step_is_found(backend: str) -> None:
+    run = hybrid.simulate(hybrid.load_text(OSCILLATOR), t_end=4.0, backend=backend, **TIGHT)
     # the minimum at t = pi lies inside a step (no stored point near it): it is refined,
     # not read off the samples (a sample a quarter step away would be off by ~1e-4)
     assert np.min(np.abs(run.t - math.pi)) > 1e-3
@@ -167,20 +185,20 @@ def test_a_dip_inside_one_step_is_found() -> None:
     assert top.robustness == pytest.approx(math.cos(1.0) - 1, abs=1e-9)  # at the window start
 
 
-def test_the_bouncing_ball_touches_its_floor_and_holds() -> None:
+def test_the_bouncing_ball_touches_its_floor_and_holds(backend: str) -> None:
     text = Path("specs/bouncing_ball.yaml").read_text()
     ball = hybrid.load_text(text + "requirements:\n  - {name: above_floor, always: 'h >= 0'}\n")
-    run = hybrid.simulate(ball, t_end=5.0, **TIGHT)
+    run = hybrid.simulate(ball, t_end=5.0, backend=backend, **TIGHT)
     floor = run.requirements["above_floor"]
     assert floor.holds and abs(floor.robustness) < 1e-9
 
 
-def test_an_evaluation_error_is_reported_and_the_run_goes_on() -> None:
+def test_an_evaluation_error_is_reported_and_the_run_goes_on(backend: str) -> None:
     model = hybrid.load_text(
         HEATER.split("requirements:")[0]
         + "requirements:\n  - {name: rooted, always: 'sqrt(x - 19) >= 0'}\n"
     )
-    run = hybrid.simulate(model, t_end=5.0, **TIGHT)
+    run = hybrid.simulate(model, t_end=5.0, backend=backend, **TIGHT)
     assert run.termination.cause == "t_end"
     rooted = run.requirements["rooted"]
     assert not rooted.holds and math.isnan(rooted.robustness)
@@ -195,13 +213,13 @@ locations: {ticking: {flow: {c: 1}, invariant: c <= 1}}
 """
 
 
-def test_apart_groups_keep_their_requirements_and_cut_them_at_the_system_end() -> None:
+def test_apart_groups_keep_their_requirements_and_cut_them_at_the_system_end(backend: str) -> None:
     heater = hybrid.load_text(HEATER)
     ball = hybrid.load("specs/bouncing_ball.yaml")
-    alone = hybrid.simulate(heater, t_end=5.0, **TIGHT)
+    alone = hybrid.simulate(heater, t_end=5.0, backend=backend, **TIGHT)
     system = hybrid.compose(ball, heater)
     assert independent_groups(system) == [(0,), (1,)]
-    together = hybrid.simulate(system, t_end=5.0, **TIGHT)
+    together = hybrid.simulate(system, t_end=5.0, backend=backend, **TIGHT)
     for name, expected in alone.requirements.items():
         got = together.requirements[f"heater.{name}"]
         assert (got.holds, got.violated_at is None) == (
@@ -210,7 +228,9 @@ def test_apart_groups_keep_their_requirements_and_cut_them_at_the_system_end() -
         )
         assert got.robustness == pytest.approx(expected.robustness, abs=1e-9)
     # another group blocks at t = 1: the heater's requirements are judged up to t = 1
-    cut = hybrid.simulate(hybrid.compose(hybrid.load_text(BLOCKER), heater), t_end=5.0, **TIGHT)
+    cut = hybrid.simulate(
+        hybrid.compose(hybrid.load_text(BLOCKER), heater), t_end=5.0, backend=backend, **TIGHT
+    )
     assert cut.termination.cause == "blocked" and cut.termination.t == pytest.approx(1.0)
     warm = cut.requirements["heater.warm"]
     assert warm.holds and warm.robustness == pytest.approx(x_of(1.0) - 15, abs=1e-9)
@@ -229,7 +249,7 @@ requirements:
 """
 
 
-def test_a_requirement_spanning_groups_joins_them(tmp_path: Path) -> None:
+def test_a_requirement_spanning_groups_joins_them(tmp_path: Path, backend: str) -> None:
     base = tmp_path
     (base / "heater.yaml").write_text(HEATER)
     ball = str(Path("specs/bouncing_ball.yaml").resolve())
@@ -237,7 +257,7 @@ def test_a_requirement_spanning_groups_joins_them(tmp_path: Path) -> None:
     (base / "both.yaml").write_text(text)
     system = hybrid.load(base / "both.yaml")
     assert join_groups(system, independent_groups(system)) == [(0, 1)]
-    run = hybrid.simulate(system, t_end=3.0, dt=1e-4, **TIGHT)
+    run = hybrid.simulate(system, t_end=3.0, dt=1e-4, backend=backend, **TIGHT)
     sampled = float(np.min(run["h"] + run["x"]) - 20)
     total = run.requirements["sum"]
     assert total.robustness <= sampled + 1e-12

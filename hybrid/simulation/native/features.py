@@ -26,7 +26,7 @@ from __future__ import annotations
 from hybrid.compose import System
 from hybrid.errors import UsageError
 
-__all__ = ["refuse_unsupported"]
+__all__ = ["refuse_requirements", "refuse_unsupported"]
 
 
 def refuse_unsupported(system: System) -> None:
@@ -45,14 +45,6 @@ def refuse_unsupported(system: System) -> None:
             f"backend holds it at its nominal value or takes inputs={{'{free[0]}': f}}); use "
             f"backend='scipy', or compose {name} with an automaton that defines '{free[0]}'"
         )
-    requirements = [r.name for r in system.requirements] + [
-        r.name for c in system.components for r in c.automaton.requirements
-    ]
-    if requirements:
-        raise UsageError(
-            f"the compiled backend cannot run {name}: it does not monitor requirements "
-            f"({', '.join(requirements)}); use backend='scipy'"
-        )
     for c in system.components:
         for location in c.automaton.locations.values():
             if location.urgent:
@@ -61,3 +53,16 @@ def refuse_unsupported(system: System) -> None:
                     f"the compiled backend cannot run {name}: location '{where}' is urgent "
                     "(no time may pass there), which it does not implement; use backend='scipy'"
                 )
+
+
+def refuse_requirements(system: System) -> None:
+    """Raise :class:`UsageError` if ``system`` has requirements (the ensemble does not monitor them)."""
+    requirements = [r.name for r in system.requirements] + [
+        r.name for c in system.components for r in c.automaton.requirements
+    ]
+    if requirements:
+        raise UsageError(
+            f"the compiled ensemble cannot run {system.name}: it does not monitor requirements "
+            f"({', '.join(requirements)}); use backend='scipy', or hybrid.simulate(..., "
+            "backend='compiled') per run, which does"
+        )

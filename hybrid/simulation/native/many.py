@@ -31,6 +31,7 @@ from hybrid.simulation.native.engine import (
     run_arrays,
     simulate_compiled,
 )
+from hybrid.simulation.native.features import refuse_requirements
 from hybrid.simulation.native.worker import run_in_worker
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import MAX_JUMPS_PER_INSTANT, Settings
@@ -239,6 +240,7 @@ def simulate_many(
     if len(sizes) > 1:
         raise UsageError(f"parameters and initial have different numbers of rows {sorted(sizes)}")
     n = sizes.pop() if sizes else 1
+    refuse_requirements(as_system(model))
     compiled = compiled_native(model)
     native = compiled.native
     params = np.tile(np.array(native.parameter_vector(model), dtype=float), (n, 1))

@@ -38,12 +38,27 @@ def test_cli_backend_compiled_writes_what_scipy_writes(tmp_path: Path) -> None:
     assert events_c["termination"]["cause"] == events_s["termination"]["cause"] == "t_end"
 
 
-def test_a_mission_with_requirements_is_refused_on_the_command_line() -> None:
-    # (a library function without a compiled form: tests/simulation/native/test_native_library.py)
-    done = run_cli("simulate", SPECS / "uvms_mission_2.yaml", "--t-end", "1", "--backend", "compiled")
-    assert done.returncode == 2, done.stderr
-    assert "does not monitor requirements (dexterity)" in done.stderr and "backend='scipy'" in done.stderr
-    assert_no_traceback(done.stderr)
+HEATER = """
+automaton: heater
+state: {x: {initial: 20.0}}
+locations: {cooling: {flow: {x: -0.1*x}}}
+requirements: [{name: warm, always: "x >= 15"}]
+"""
+
+
+def test_a_violated_requirement_is_reported_alike_on_the_command_line(tmp_path: Path) -> None:
+    # x = 20 e^(-t/10) reaches 15 at t = 10 ln(4/3) = 2.87682...
+    spec = tmp_path / "heater.yaml"
+    spec.write_text(HEATER)
+    said = {}
+    for backend in ("scipy", "compiled"):
+        done = run_cli("simulate", spec, "--t-end", "5", "--rtol", "1e-10", "--atol", "1e-12",
+                       "--backend", backend, "--out", tmp_path / f"{backend}.csv")  # fmt: skip
+        assert_no_traceback(done.stderr)
+        said[backend] = (done.returncode, [line for line in done.stderr.splitlines() if "warm" in line])
+    assert said["compiled"] == said["scipy"]
+    code, lines = said["compiled"]
+    assert code == 1 and len(lines) == 1 and "violated at t=2.87682" in lines[0], lines
 
 
 def test_what_the_compiled_backend_cannot_do_is_refused(ball: hybrid.Automaton) -> None:

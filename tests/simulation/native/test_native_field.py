@@ -82,17 +82,11 @@ def test_independent_components_merged_in_hybrid_time() -> None:
             "input 'u' is free",
         ),
         (
-            lambda: hybrid.load_text(
-                TANK + "requirements:\n  - {name: low, always: h >= 0}\n"
-            ),
-            "does not monitor requirements (low)",
-        ),
-        (
             lambda: hybrid.load_text(TANK.replace("drain: {flow", "drain: {urgent: true, flow")),
             "location 'drain' is urgent",
         ),
     ],
-    ids=["bounded-input", "free-input-of-a-system", "requirements", "urgent"],
+    ids=["bounded-input", "free-input-of-a-system", "urgent"],
 )
 def test_refused_with_the_feature_named(model: object, named: str) -> None:
     built = model()  # type: ignore[operator]

@@ -70,3 +70,39 @@ def test_sweep_compiled_in_a_worker_process_gives_the_scipy_table(thermostat: hy
     reference = hybrid.sweep(thermostat, 60.0, grid=GRID, summaries=SUMMARIES, **OPTIONS)
     compiled = hybrid.sweep(thermostat, 60.0, grid=GRID, summaries=SUMMARIES, backend="compiled", **options)
     same_tables(compiled, reference)
+
+
+COOLING = """
+automaton: heater
+parameters: {k: 0.1}
+state: {x: {initial: 20.0}}
+locations: {cooling: {flow: {x: -k*x}}}
+requirements: [{name: warm, always: "x >= 15"}]
+"""
+
+
+def test_requirements_in_a_compiled_sweep_are_monitored_per_run() -> None:
+    # the ensemble does not monitor requirements: it says so, and the sweep then runs
+    # each point on its own (hybrid.simulate monitors them); x = 20 e^(-k t) over 5 s
+    # has robustness 20 e^(-5 k) - 15, violated at ln(4/3) / k where it is negative
+    heater = hybrid.load_text(COOLING)
+    with pytest.raises(hybrid.UsageError, match=r"does not monitor requirements \(warm\)"):
+        hybrid.simulate_many(heater, 5.0, parameters={"k": [0.05, 0.1]})
+    rates = [0.03, 0.05, 0.08]
+    table = hybrid.sweep(heater, 5.0, grid={"k": rates}, **OPTIONS, backend="compiled")
+    for row, k in zip(table.rows, rates, strict=True):
+        assert row["warm.robustness"] == pytest.approx(20 * np.exp(-5 * k) - 15, abs=1e-9)
+        holds = 20 * np.exp(-5 * k) >= 15
+        assert row["warm.holds"] == holds
+        if not holds:
+            assert row["warm.violated_at"] == pytest.approx(np.log(4 / 3) / k, abs=1e-7)
+
+
+def test_falsify_on_the_compiled_backend_finds_the_violation(tmp_path: Path) -> None:
+    spec = tmp_path / "heater.yaml"
+    spec.write_text(COOLING)
+    done = run_cli("falsify", spec, "--t-end", "5", "--requirement", "warm", "--vary", "k=0.01:0.1",
+                   "--budget", "20", "--workers", "0", "--backend", "compiled")  # fmt: skip
+    # violated for k > ln(4/3) / 5 = 0.0575
+    assert done.returncode == 1, done.stderr
+    assert "requirement 'warm' violated at" in done.stdout

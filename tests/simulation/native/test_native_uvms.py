@@ -48,9 +48,18 @@ def test_mission_agrees_with_scipy(name: str, t_end: float, jumps: int) -> None:
     np.testing.assert_allclose(compiled["gamma"], reference["gamma"], rtol=1e-5, atol=1e-9)
 
 
-def test_mission_with_requirements_is_refused_by_name() -> None:
-    with pytest.raises(hybrid.UsageError, match=r"does not monitor requirements \(dexterity"):
-        hybrid.simulate(hybrid.load(SPECS / "uvms_mission_2.yaml"), t_end=1.0, backend="compiled")
+def test_mission_requirements_agree_with_scipy() -> None:
+    # the compiled run's steps shown to the same monitor: mission 2's dexterity
+    # (always gamma >= 0.5) has the same robustness, the smallest |gamma| less 0.5
+    mission = hybrid.load(SPECS / "uvms_mission_2.yaml")
+    kwargs = {"t_end": 59.0, "rtol": 1e-8, "atol": 1e-10, "handle_sigint": False}
+    compiled = hybrid.simulate(mission, backend="compiled", **kwargs)  # type: ignore[arg-type]
+    reference = hybrid.simulate(mission, **kwargs)  # type: ignore[arg-type]
+    mine, theirs = compiled.requirements["dexterity"], reference.requirements["dexterity"]
+    assert mine.holds and theirs.holds
+    assert mine.robustness == pytest.approx(theirs.robustness, abs=1e-6)
+    assert 0.0 < mine.robustness < 0.2  # the dip after epsilon: min |gamma| between 0.5 and 0.7
+    assert compiled.segments == [] and compiled.settings["dense"] is False
 
 
 def test_compiled_forms_compute_the_python_forms() -> None:
