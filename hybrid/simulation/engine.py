@@ -142,15 +142,17 @@ def simulate(
     start = describe_start(model, inputs, initial, initial_location, t_start)
     if isinstance(model, Automaton) and (initial or initial_location):
         model = model.with_initial(initial_location, initial)
-    if settings.backend == "compiled":
-        run = _simulate_compiled(model, settings, initial, inputs, handle_sigint)
-        run.settings["start"] = start
-        return run
-    compiled = _compiled(model, inputs)
-    x0 = np.array(_initial_vector(model, compiled, initial), dtype=float)
     tracker = None
     if progress is not None:
         tracker = Tracker("simulate", total=t_end, unit="s", start=t_start, report=progress)
+    if settings.backend == "compiled":
+        run = _simulate_compiled(model, settings, initial, inputs, handle_sigint, _updater(tracker))
+        run.settings["start"] = start
+        if tracker is not None:
+            tracker.finish(run.termination.t, jumps=len(run.jumps), points=len(run))
+        return run
+    compiled = _compiled(model, inputs)
+    x0 = np.array(_initial_vector(model, compiled, initial), dtype=float)
     # a solution that blows up overflows inside the solver's linear algebra; the run
     # sees the non-finite state and ends with a message, so numpy's warnings are noise
     with sigint_watch(handle_sigint) as interrupts, np.errstate(all="ignore"):
@@ -189,13 +191,19 @@ def _simulate_compiled(
     initial: Mapping[str, float] | None,
     inputs: Mapping[str, Callable[[float], float]] | None,
     handle_sigint: bool,
+    progress: Callable[[float, int, int], None] | None,
 ) -> Run:
     """A run on the compiled backend; requirements monitored over its steps afterwards."""
     from hybrid.simulation.native.engine import compiled_native, simulate_compiled
 
     if not _has_requirements(model):
         return simulate_compiled(
-            model, settings, initial=initial, inputs=inputs, handle_sigint=handle_sigint
+            model,
+            settings,
+            initial=initial,
+            inputs=inputs,
+            handle_sigint=handle_sigint,
+            progress=progress,
         )
     from hybrid.simulation.native.monitoring import replay
 
@@ -203,7 +211,7 @@ def _simulate_compiled(
     monitor = _monitor(reference, settings)
     kept = settings if settings.dense else replace(settings, dense=True)  # every step's curve
     run = simulate_compiled(
-        model, kept, initial=initial, inputs=inputs, handle_sigint=handle_sigint
+        model, kept, initial=initial, inputs=inputs, handle_sigint=handle_sigint, progress=progress
     )
     if monitor is not None:
         run.requirements = replay(monitor, reference, compiled_native(model).layout, run)

@@ -265,8 +265,11 @@ def simulate_compiled(
     initial: Mapping[str, float] | None = None,
     inputs: Mapping[str, Callable[[float], float]] | None = None,
     handle_sigint: bool = True,
+    progress: Callable[[float, int, int], None] | None = None,
 ) -> Run:
     """One run of ``model`` (parameters and initial location already applied) with ``settings``.
+
+    ``progress(t, jumps, points)``: see :func:`run_arrays`.
 
     What the loop is given (parameter vector, initial point and mode, settings
     arrays) is kept for the last model object (frozen) and settings run without
@@ -286,7 +289,9 @@ def simulate_compiled(
         cfg = config(settings)
         if not initial:
             _LAST_RUN[0] = (model, settings, compiled, p, x0, m0, cfg)  # replaced at once
-    arrays = run_arrays(compiled, p, x0, m0, settings, handle_sigint, reuse=True, cfg=cfg)
+    arrays = run_arrays(
+        compiled, p, x0, m0, settings, handle_sigint, reuse=True, cfg=cfg, progress=progress
+    )
     return run_from(compiled.native, compiled.layout, model, settings, arrays)  # copies all it keeps
 
 
@@ -312,6 +317,7 @@ def run_arrays(
     handle_sigint: bool,
     reuse: bool = False,
     cfg: tuple[NDArray[np.float64], NDArray[np.int64]] | None = None,
+    progress: Callable[[float, int, int], None] | None = None,
 ) -> b.RunArrays:
     """One run's arrays, run again with four times the room until they hold it all.
 
@@ -319,11 +325,16 @@ def run_arrays(
     thread's :meth:`CompiledNative.scratch` arrays: the caller copies out what
     it keeps before the next run. A worker's arrays are always its own (after a
     second Ctrl-C an abandoned worker may still be writing). ``cfg``: ``config(settings)``.
+    ``progress(t, jumps, points)`` is called while the loop runs on the worker
+    (in the main thread only), with the time reached (never going back, also
+    when a run is repeated with more room).
     """
     cfg = config(settings) if cfg is None else cfg
     points, jumps = 256, 64
     steps = 256 if settings.dense else 1
-    in_worker = handle_sigint and threading.current_thread() is threading.main_thread()
+    main = threading.current_thread() is threading.main_thread()
+    in_worker = (handle_sigint or progress is not None) and main
+    reached: list[float] = [settings.t_start, 0, 0]  # time, jumps, points: see _ticker
     while True:
         if reuse and not in_worker:
             arrays = compiled.scratch(points, jumps, steps)
@@ -334,13 +345,31 @@ def run_arrays(
             def call(flag: NDArray[np.int64], arrays: b.RunArrays = arrays) -> None:
                 compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, flag)
 
-            run_in_worker(call, handle_sigint)
+            run_in_worker(call, handle_sigint, tick=_ticker(arrays, reached, progress))
         else:  # what run_in_worker does then, without its closure and thread check
             compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, np.zeros(1, dtype=np.int64))
         if not arrays.oi[b.I_OVERFLOW]:
             return arrays
         points, jumps = points * 4, jumps * 4
         steps = steps * 4 if settings.dense else 1
+
+
+def _ticker(
+    arrays: b.RunArrays, reached: list[float], progress: Callable[[float, int, int], None] | None
+) -> Callable[[], None] | None:
+    """``progress`` fed from the arrays the loop is filling (how far it has got)."""
+    if progress is None:
+        return None
+
+    def tick() -> None:
+        # numbers the loop's thread writes (each read whole on 64-bit); a run repeated
+        # with more room starts again, so each is the furthest any attempt has reached
+        now = (float(arrays.of[b.F_NOW]), int(arrays.oi[b.I_JUMPS]), int(arrays.oi[b.I_POINTS]))
+        if now[0] >= reached[0]:
+            reached[:] = now
+        progress(reached[0], int(reached[1]), int(reached[2]))
+
+    return tick
 
 
 def initial_vector(

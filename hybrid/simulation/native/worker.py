@@ -22,35 +22,43 @@ from numpy.typing import NDArray
 
 from hybrid.simulation.interrupts import sigint_watch
 
-__all__ = ["run_in_worker"]
+__all__ = ["TICK", "run_in_worker"]
+
+TICK = 0.05
+"""Seconds between the waiting thread's looks at Ctrl-C and at the run's progress."""
 
 
 def run_in_worker(
     call: Callable[[NDArray[np.int64]], None],
     handle_sigint: bool,
     flag: NDArray[np.int64] | None = None,
+    tick: Callable[[], None] | None = None,
 ) -> bool:
     """Run ``call(flag)``; with ``handle_sigint`` a first Ctrl-C sets ``flag``. True if it did.
 
-    With ``handle_sigint`` in the main thread, ``call`` runs on the process's
-    worker thread (:func:`_worker_jobs`) while the main thread waits, turning
-    Ctrl-C into the flag (see the module's docstring).
+    With ``handle_sigint`` or ``tick`` in the main thread, ``call`` runs on the
+    process's worker thread (:func:`_worker_jobs`) while the main thread waits,
+    turning Ctrl-C into the flag (see the module's docstring) and calling
+    ``tick()`` every :data:`TICK` seconds (progress read from the run's arrays).
     """
     flag = np.zeros(1, dtype=np.int64) if flag is None else flag
-    if not handle_sigint or threading.current_thread() is not threading.main_thread():
+    wanted = handle_sigint or tick is not None
+    if not wanted or threading.current_thread() is not threading.main_thread():
         call(flag)
         return False
     done: _Done = queue.SimpleQueue()
-    with sigint_watch(True) as interrupted:
+    with sigint_watch(handle_sigint) as interrupted:
         _worker_jobs().put((call, flag, done))
         try:
             while True:
                 try:
-                    error = done.get(timeout=0.05)
+                    error = done.get(timeout=TICK)
                     break
                 except queue.Empty:
                     if interrupted.requested:
                         flag[0] = 1
+                    if tick is not None:
+                        tick()
             if interrupted.requested:
                 flag[0] = 1
         except KeyboardInterrupt:
