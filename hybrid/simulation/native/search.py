@@ -87,9 +87,7 @@ def curve_at(t: float, t0: float, t1: float, wf: Array, wi: Ints) -> None:
         for i in range(d):
             xs[i] = wf[wi[W_Y] + i]
     else:
-        y = wf[wi[W_Y] : wi[W_Y] + d]
-        q = wf[wi[W_Q] : wi[W_Q] + 4 * d].reshape((d, 4))
-        dense_eval(t, t0, t1 - t0, y, q, xs)
+        dense_eval(t, t0, t1 - t0, wf, wi, xs)
 
 
 def sample(i: int, n: int, t0: float, t1: float, wf: Array, wi: Ints) -> float:
