@@ -40,7 +40,7 @@ from hybrid.simulation.native.buffers import (
     W_YNEW,
     W_YTMP,
 )
-from hybrid.simulation.native.kernel_types import Array, Array2, Fns, Ints, at
+from hybrid.simulation.native.kernel_types import Array, Fns, Ints, at
 
 __all__ = [
     "P_DENSE",
@@ -129,10 +129,15 @@ def rk45_step(
     f = wf[wi[W_F] : wi[W_F] + d]
     y_new = wf[wi[W_YNEW] : wi[W_YNEW] + d]
     z = wf[wi[W_YTMP] : wi[W_YTMP] + d]
-    K = wf[wi[W_K] : wi[W_K] + 7 * d].reshape((7, d))
     p_c, z_c, yn_c = at(p, 0), at(z, 0), at(y_new, 0)
-    k_at = wi[W_K]
-    k1, k2, k3, k4, k5, k6 = K[1], K[2], K[3], K[4], K[5], K[6]
+    k_at = wi[W_K]  # K[s, i] at wf[k_at + s * d + i] (flat: a reshape calls numba's runtime)
+    k0 = wf[k_at : k_at + d]
+    k1 = wf[k_at + d : k_at + 2 * d]
+    k2 = wf[k_at + 2 * d : k_at + 3 * d]
+    k3 = wf[k_at + 3 * d : k_at + 4 * d]
+    k4 = wf[k_at + 4 * d : k_at + 5 * d]
+    k5 = wf[k_at + 5 * d : k_at + 6 * d]
+    k6 = wf[k_at + 6 * d : k_at + 7 * d]
     min_step = 10.0 * abs(np.nextafter(t, math.inf) - t)
     if h_abs > max_step:
         h_abs = max_step
@@ -148,29 +153,29 @@ def rk45_step(
         h = t_new - t
         h_abs = abs(h)
         for i in range(d):
-            K[0, i] = f[i]
-            z[i] = y[i] + (K[0, i] * A21) * h
+            k0[i] = f[i]
+            z[i] = y[i] + (k0[i] * A21) * h
         fns(OP_RHS, m, t + C2 * h, z_c, p_c, at(wf, k_at + 1 * d))
         for i in range(d):
             if k1[i] != k1[i]:
                 remember_flow_failure(t + C2 * h, z, k1, wf, wi)
                 break
         for i in range(d):
-            z[i] = y[i] + (K[0, i] * A31 + K[1, i] * A32) * h
+            z[i] = y[i] + (k0[i] * A31 + k1[i] * A32) * h
         fns(OP_RHS, m, t + C3 * h, z_c, p_c, at(wf, k_at + 2 * d))
         for i in range(d):
             if k2[i] != k2[i]:
                 remember_flow_failure(t + C3 * h, z, k2, wf, wi)
                 break
         for i in range(d):
-            z[i] = y[i] + (K[0, i] * A41 + K[1, i] * A42 + K[2, i] * A43) * h
+            z[i] = y[i] + (k0[i] * A41 + k1[i] * A42 + k2[i] * A43) * h
         fns(OP_RHS, m, t + C4 * h, z_c, p_c, at(wf, k_at + 3 * d))
         for i in range(d):
             if k3[i] != k3[i]:
                 remember_flow_failure(t + C4 * h, z, k3, wf, wi)
                 break
         for i in range(d):
-            z[i] = y[i] + (K[0, i] * A51 + K[1, i] * A52 + K[2, i] * A53 + K[3, i] * A54) * h
+            z[i] = y[i] + (k0[i] * A51 + k1[i] * A52 + k2[i] * A53 + k3[i] * A54) * h
         fns(OP_RHS, m, t + C5 * h, z_c, p_c, at(wf, k_at + 4 * d))
         for i in range(d):
             if k4[i] != k4[i]:
@@ -178,7 +183,7 @@ def rk45_step(
                 break
         for i in range(d):
             z[i] = y[i] + (
-                K[0, i] * A61 + K[1, i] * A62 + K[2, i] * A63 + K[3, i] * A64 + K[4, i] * A65
+                k0[i] * A61 + k1[i] * A62 + k2[i] * A63 + k3[i] * A64 + k4[i] * A65
             ) * h
         fns(OP_RHS, m, t + h, z_c, p_c, at(wf, k_at + 5 * d))
         for i in range(d):
@@ -187,7 +192,7 @@ def rk45_step(
                 break
         for i in range(d):
             y_new[i] = y[i] + h * (
-                K[0, i] * B1 + K[2, i] * B3 + K[3, i] * B4 + K[4, i] * B5 + K[5, i] * B6
+                k0[i] * B1 + k2[i] * B3 + k3[i] * B4 + k4[i] * B5 + k5[i] * B6
             )
         fns(OP_RHS, m, t + h, yn_c, p_c, at(wf, k_at + 6 * d))
         for i in range(d):
@@ -198,8 +203,8 @@ def rk45_step(
         for i in range(d):
             scale = atol + max(abs(y[i]), abs(y_new[i])) * rtol
             e = (
-                K[0, i] * E1 + K[2, i] * E3 + K[3, i] * E4 + K[4, i] * E5 + K[5, i] * E6
-                + K[6, i] * E7
+                k0[i] * E1 + k2[i] * E3 + k3[i] * E4 + k4[i] * E5 + k5[i] * E6
+                + k6[i] * E7
             ) * h / scale  # fmt: skip
             total += e * e
         error_norm = math.sqrt(total) / math.sqrt(d) if d > 0 else 0.0
@@ -212,13 +217,13 @@ def rk45_step(
                     factor = MAX_FACTOR
             if rejected and not factor < 1.0:
                 factor = 1.0
-            q = wf[wi[W_Q] : wi[W_Q] + 4 * d].reshape((d, 4))
+            q = wi[W_Q]
             for i in range(d):
                 for c in range(4):
                     acc = 0.0
                     for s in range(7):
-                        acc += K[s, i] * P_DENSE[s, c]
-                    q[i, c] = acc
+                        acc += wf[k_at + s * d + i] * P_DENSE[s, c]
+                    wf[q + 4 * i + c] = acc
             return True, t_new, h_abs * factor, h
         factor = SAFETY * error_norm**ERROR_EXPONENT
         if not factor > MIN_FACTOR:  # also when the error is NaN (a failing right-hand side)
@@ -276,11 +281,18 @@ def initial_step(
     return min(100.0 * h0, h1, interval, max_step)
 
 
-def dense_eval(t: float, t_old: float, h: float, y_old: Array, q: Array2, out: Array) -> None:
-    """``out`` = the step's interpolant at ``t`` (``RkDenseOutput``)."""
+def dense_eval(t: float, t_old: float, h: float, wf: Array, wi: Ints, out: Array) -> None:
+    """``out`` = the step's interpolant at ``t`` (``RkDenseOutput``; ``y`` and ``q`` read in ``wf``).
+
+    Flat indices rather than a ``(d, 4)`` view of ``q``: a reshape inside the
+    compiled code is a call into numba's runtime helper, each time.
+    """
     s = (t - t_old) / h
     p2 = s * s
     p3 = p2 * s
     p4 = p3 * s
+    y = wi[W_Y]
+    q = wi[W_Q]
     for i in range(out.shape[0]):
-        out[i] = h * (q[i, 0] * s + q[i, 1] * p2 + q[i, 2] * p3 + q[i, 3] * p4) + y_old[i]
+        c = q + 4 * i
+        out[i] = h * (wf[c] * s + wf[c + 1] * p2 + wf[c + 2] * p3 + wf[c + 3] * p4) + wf[y + i]

@@ -30,10 +30,15 @@ import math
 
 from hybrid.simulation.native.buffers import (
     S_GEN,
+    T_MODE_INV,
+    T_MODE_TR,
     W_D,
     W_FAILI,
+    W_INVARMED,
     W_Q,
     W_SCAL,
+    W_TERMS,
+    W_TRARMED,
     W_XS,
     W_Y,
     W_YNEW,
@@ -41,7 +46,14 @@ from hybrid.simulation.native.buffers import (
 from hybrid.simulation.native.decide import band
 from hybrid.simulation.native.integrator import dense_eval
 from hybrid.simulation.native.kernel_types import Array, Fns, Ints
-from hybrid.simulation.native.watch import arm_at, pending, watch_terms, watch_value
+from hybrid.simulation.native.watch import (
+    arm_at,
+    armed_min,
+    pending,
+    watch_at,
+    watch_terms,
+    watch_value,
+)
 
 __all__ = [
     "EV_CROSSING",
@@ -87,9 +99,7 @@ def curve_at(t: float, t0: float, t1: float, wf: Array, wi: Ints) -> None:
         for i in range(d):
             xs[i] = wf[wi[W_Y] + i]
     else:
-        y = wf[wi[W_Y] : wi[W_Y] + d]
-        q = wf[wi[W_Q] : wi[W_Q] + 4 * d].reshape((d, 4))
-        dense_eval(t, t0, t1 - t0, y, q, xs)
+        dense_eval(t, t0, t1 - t0, wf, wi, xs)
 
 
 def sample(i: int, n: int, t0: float, t1: float, wf: Array, wi: Ints) -> float:
@@ -118,9 +128,7 @@ def watch_on_curve(fns: Fns, tab: Ints, m: int, t: float, t0: float, t1: float, 
     """The watch at ``t`` on the step's curve (the state left in ``xs``)."""
     d = wi[W_D]
     curve_at(t, t0, t1, wf, wi)
-    xs = wf[wi[W_XS] : wi[W_XS] + d]
-    watch_terms(fns, m, t, xs, wf, wi)
-    return watch_value(tab, m, t, xs, wf, wi)
+    return watch_at(fns, tab, m, t, wf[wi[W_XS] : wi[W_XS] + d], wf, wi)
 
 
 def locate(fns: Fns, tab: Ints, m: int, a: float, wa: float, b: float, wb: float, t0: float,
@@ -290,12 +298,18 @@ def first_event(fns: Fns, tab: Ints, m: int, t0: float, t1: float, w0: float, sp
     gen = wi[W_SCAL] + S_GEN
     fail = wi[W_FAILI]
     arming = pending(tab, m, wi)
+    terms, tr_armed, inv_armed = wi[W_TERMS], wi[W_TRARMED], wi[W_INVARMED]
+    first, inv0 = tab[tab[T_MODE_TR] + m], tab[tab[T_MODE_INV] + m]
+    n_tr = tab[tab[T_MODE_TR] + m + 1] - first
+    n_inv = tab[tab[T_MODE_INV] + m + 1] - inv0
     ta, wa, ga = t0, math.inf, -1.0
     tb, wb, gb = t0, w0, wf[gen]
     for i in range(1, n + 1):
         t = sample(i, n, t0, t1, wf, wi)
         watch_terms(fns, m, t, xs, wf, wi)
-        w = watch_value(tab, m, t, xs, wf, wi)
+        w = armed_min(wf, wi, terms, tr_armed, n_tr, inv_armed, n_inv)
+        if w != w:  # an armed term failed: recorded, the others' minimum
+            w = watch_value(tab, m, t, xs, wf, wi)
         if wi[fail] != 0:
             curve_at(tb, t0, t1, wf, wi)
             return EV_FAILED, tb, w

@@ -148,8 +148,6 @@ def record_grid(fns: Fns, pts: Array2, oi: Ints, lo: float, hi: float, inclusive
                 wi: Ints) -> bool:  # fmt: skip
     """Store the ``dt`` grid points in ``(lo, hi)`` (``hi`` too if ``inclusive``); False if full."""
     d = wi[W_D]
-    y = wf[wi[W_Y] : wi[W_Y] + d]
-    q = wf[wi[W_Q] : wi[W_Q] + 4 * d].reshape((d, 4))
     xs = wf[wi[W_XS] : wi[W_XS] + d]
     start, dt = cfg_f[CF_T_START], cfg_f[CF_DT]
     k0 = math.floor((lo - start) / dt)
@@ -157,7 +155,7 @@ def record_grid(fns: Fns, pts: Array2, oi: Ints, lo: float, hi: float, inclusive
     for k in range(k0, k1 + 1):
         g = start + dt * k
         if g > lo and (g <= hi if inclusive else g < hi):
-            dense_eval(g, t_old, h, y, q, xs)
+            dense_eval(g, t_old, h, wf, wi, xs)
             if not record_point(fns, pts, oi, g, j, m, xs, wf, wi):
                 return False
     return True
@@ -210,8 +208,7 @@ def flow_stay(fns: Fns, step: StepFn, search: SearchFn, decide: DecideFn, tab: I
     f = wf[wi[W_F] : wi[W_F] + d]
     y_new = wf[wi[W_YNEW] : wi[W_YNEW] + d]
     xs = wf[wi[W_XS] : wi[W_XS] + d]
-    K = wf[wi[W_K] : wi[W_K] + 7 * d].reshape((7, d))
-    q = wf[wi[W_Q] : wi[W_Q] + 4 * d].reshape((d, 4))
+    k_last = wf[wi[W_K] + 6 * d : wi[W_K] + 7 * d]  # K[6]: the derivative at the step's end
     pe = wf[wi[W_PE] :]
     decide(ASK_WATCH, fns, tab, m, t0, x, wf, wi)
     if wi[fail] != 0:
@@ -276,7 +273,7 @@ def flow_stay(fns: Fns, step: StepFn, search: SearchFn, decide: DecideFn, tab: I
                 x[i] = xs[i]
         if gridded and not record_grid(fns, pts, oi, t, stop, going_on, t, h, j, m, cfg_f, wf, wi):
             return STAY_DONE, t, -1
-        if dense and not record_step(sts, oi, t, h, stop, j, stay, y, q):
+        if dense and not record_step(sts, oi, t, h, stop, j, stay, y, wf[wi[W_Q] : wi[W_Q] + 4 * d]):
             return STAY_DONE, t, -1
         if kind != EV_NONE:
             if not record_point(fns, pts, oi, t_event, j, m, x, wf, wi):
@@ -314,6 +311,6 @@ def flow_stay(fns: Fns, step: StepFn, search: SearchFn, decide: DecideFn, tab: I
         wf[sc + S_LAST_STEP] = h
         for i in range(d):
             y[i] = y_new[i]
-            f[i] = K[6, i]
+            f[i] = k_last[i]
         t = t_new
         of[F_NOW] = t

@@ -125,7 +125,7 @@ def record_jump(tab: Ints, jps: Array2, oi: Ints, t: float, j: int, m: int, tr: 
 
 
 def record_step(sts: Array2, oi: Ints, t_old: float, h: float, t_valid: float, j: int,
-                stay: int, y_old: Array, q: Array2) -> bool:  # fmt: skip
+                stay: int, y_old: Array, q: Array) -> bool:  # fmt: skip
     """Store one step's interpolant (``dense=True``), valid on ``[t_old, t_valid]``."""
     n = oi[I_STORED_STEPS]
     if n >= sts.shape[0]:
@@ -141,7 +141,7 @@ def record_step(sts: Array2, oi: Ints, t_old: float, h: float, t_valid: float, j
     for i in range(d):
         row[Q_Y + i] = y_old[i]
         for c in range(4):
-            row[Q_Y + d + 4 * i + c] = q[i, c]
+            row[Q_Y + d + 4 * i + c] = q[4 * i + c]
     oi[I_STORED_STEPS] = n + 1
     return True
 

@@ -47,7 +47,7 @@ from hybrid.simulation.native.buffers import (
 from hybrid.simulation.native.decide import band, note_failure, value_checked
 from hybrid.simulation.native.kernel_types import Array, Fns, Ints, at
 
-__all__ = ["arm_at", "pending", "watch_start", "watch_terms", "watch_value"]
+__all__ = ["arm_at", "armed_min", "pending", "watch_at", "watch_start", "watch_terms", "watch_value"]
 
 # --- kernel ---
 
@@ -127,6 +127,44 @@ def watch_value(tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints) -> f
                 v = w
             elif w != w:
                 note_failure(F_INVARIANT, inv0 + k, m, t, x, wf, wi)
+    return v
+
+
+def armed_min(wf: Array, wi: Ints, terms: int, tr_armed: int, n_tr: int, inv_armed: int,
+              n_inv: int) -> float:  # fmt: skip
+    """:func:`watch_value`'s minimum from offsets found once per stay; NaN if an armed term is NaN.
+
+    The hot path of the search (every sample, every root-finding step): small
+    enough to be inlined. On NaN the caller asks :func:`watch_value`, which
+    records the failure and returns the minimum of the other terms.
+    """
+    v = math.inf
+    for k in range(n_tr):
+        if wi[tr_armed + k] != 0:
+            w = wf[terms + k]
+            if w < v:
+                v = w
+            elif w != w:
+                return math.nan
+    for k in range(n_inv):
+        if wi[inv_armed + k] != 0:
+            w = -wf[terms + n_tr + k]
+            if w < v:
+                v = w
+            elif w != w:
+                return math.nan
+    return v
+
+
+def watch_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints) -> float:
+    """The watch at ``(t, x)``: :func:`watch_terms` then :func:`watch_value` (its fast path first)."""
+    fns(OP_WATCH, m, t, at(x, 0), at(wf, wi[W_PE]), at(wf, wi[W_TERMS]))
+    first = tab[tab[T_MODE_TR] + m]
+    inv0 = tab[tab[T_MODE_INV] + m]
+    v = armed_min(wf, wi, wi[W_TERMS], wi[W_TRARMED], tab[tab[T_MODE_TR] + m + 1] - first,
+                  wi[W_INVARMED], tab[tab[T_MODE_INV] + m + 1] - inv0)  # fmt: skip
+    if v != v:
+        return watch_value(tab, m, t, x, wf, wi)
     return v
 
 
