@@ -145,12 +145,27 @@ def simulate(
     tracker = None
     if progress is not None:
         tracker = Tracker("simulate", total=t_end, unit="s", start=t_start, report=progress)
+    progressed = _updater(tracker)
     if settings.backend == "compiled":
-        run = _simulate_compiled(model, settings, initial, inputs, handle_sigint, _updater(tracker))
-        run.settings["start"] = start
-        if tracker is not None:
-            tracker.finish(run.termination.t, jumps=len(run.jumps), points=len(run))
-        return run
+        run = _simulate_compiled(model, settings, initial, inputs, handle_sigint, progressed)
+    else:
+        run = _simulate_scipy(model, settings, initial, inputs, handle_sigint, progressed)
+    run.settings["start"] = start
+    termination = run.termination
+    if tracker is not None:
+        tracker.finish(termination.t, jumps=len(run.jumps), points=len(run))
+    return run
+
+
+def _simulate_scipy(
+    model: Automaton | System,
+    settings: Settings,
+    initial: Mapping[str, float] | None,
+    inputs: Mapping[str, Callable[[float], float]] | None,
+    handle_sigint: bool,
+    progress: Callable[[float, int, int], None] | None,
+) -> Run:
+    """A run on the scipy backend: the event loop, or components apart when independent."""
     compiled = _compiled(model, inputs)
     x0 = np.array(_initial_vector(model, compiled, initial), dtype=float)
     # a solution that blows up overflows inside the solver's linear algebra; the run
@@ -175,13 +190,9 @@ def simulate(
             run = simulate_apart(model, groups, x0, settings, run_group)
             run.requirements = cut_results(parts, run, settings)
         else:
-            loop = EventLoop(compiled, settings, interrupts, _updater(tracker))
+            loop = EventLoop(compiled, settings, interrupts, progress)
             loop.recorder.monitor = _monitor(compiled, settings)
             run = loop.recorder.run(model.name, loop.run(settings.t_start, x0))
-    run.settings["start"] = start
-    termination = run.termination
-    if tracker is not None:
-        tracker.finish(termination.t, jumps=len(run.jumps), points=len(run))
     return run
 
 
@@ -196,26 +207,19 @@ def _simulate_compiled(
     """A run on the compiled backend; requirements monitored over its steps afterwards."""
     from hybrid.simulation.native.engine import compiled_native, simulate_compiled
 
-    if not _has_requirements(model):
-        return simulate_compiled(
-            model,
-            settings,
-            initial=initial,
-            inputs=inputs,
-            handle_sigint=handle_sigint,
-            progress=progress,
-        )
-    from hybrid.simulation.native.monitoring import replay
-
-    reference = _compiled(model, None)
-    monitor = _monitor(reference, settings)
-    kept = settings if settings.dense else replace(settings, dense=True)  # every step's curve
+    # the scipy backend's compiled form only for a model with requirements (its monitor):
+    # a run without any pays nothing for them
+    reference = _compiled(model, None) if _has_requirements(model) else None
+    monitor = None if reference is None else _monitor(reference, settings)
+    kept = settings if monitor is None or settings.dense else replace(settings, dense=True)
     run = simulate_compiled(
         model, kept, initial=initial, inputs=inputs, handle_sigint=handle_sigint, progress=progress
     )
-    if monitor is not None:
+    if monitor is not None and reference is not None:  # shown every step's curve
+        from hybrid.simulation.native.monitoring import replay
+
         run.requirements = replay(monitor, reference, compiled_native(model).layout, run)
-    if not settings.dense:
+    if kept is not settings:
         run.segments = []
         run.settings["dense"] = False
     return run
