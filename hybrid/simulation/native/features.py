@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from hybrid.compose import System
 from hybrid.errors import UsageError
+from hybrid.simulation.margins import watched_requirements
 
 __all__ = ["refuse_requirements", "refuse_unsupported"]
 
@@ -57,9 +58,7 @@ def refuse_unsupported(system: System) -> None:
 
 def refuse_requirements(system: System) -> None:
     """Raise :class:`UsageError` if ``system`` has requirements (the ensemble does not monitor them)."""
-    requirements = [r.name for r in system.requirements] + [
-        r.name for c in system.components for r in c.automaton.requirements
-    ]
+    requirements = [w.name for w in watched_requirements(system)]
     if requirements:
         raise UsageError(
             f"the compiled ensemble cannot run {system.name}: it does not monitor requirements "
