@@ -35,7 +35,7 @@ Inputs = Mapping[str, Callable[[float], float]] | None
 JumpFields = dict[str, Any]
 """A :class:`Jump`'s fields in order, ``t``, ``j``, ``before`` and ``after`` to be filled in."""
 
-PACKED_WIDTH = 32
+PACKED_WIDTH = b.PACKED_WIDTH
 """Most transitions a mode may have for a jump's enabled flags to be packed into an int key."""
 
 
@@ -58,6 +58,9 @@ class Layout:
     bits: NDArray[np.int64]
     """``1 << k`` for each flag column of a jump (as many as a mode has transitions, at most
     :data:`PACKED_WIDTH`)."""
+    packed: bool
+    """Whether the compiled loop's ``J_KEY`` holds each jump's key exactly (at most
+    :data:`PACKED_WIDTH` flag columns, and every key below ``2**53``)."""
 
     @classmethod
     def of(cls, native: NativeModel) -> Layout:
@@ -74,8 +77,9 @@ class Layout:
         )  # fmt: skip
         width = max(1, *(len(mode.transitions) for mode in native.modes))  # jps' flag columns
         bits = np.left_shift(1, np.arange(min(width, PACKED_WIDTH), dtype=np.int64))
+        packed = width <= PACKED_WIDTH and len(rows) << width <= 1 << 53
         return cls(names, tuple(rows), tuple(first), describe, {}, tuple(native.modes),
-                   tuple(native.state_names), bits)  # fmt: skip
+                   tuple(native.state_names), bits, packed)  # fmt: skip
 
     def enabled(self, tr: int, flags: bytes) -> tuple[tuple[str, ...], str]:
         """The names of the transitions enabled with ``tr`` chosen, and how it was chosen."""
@@ -103,9 +107,11 @@ class Layout:
         return [(t, data[k * width : (k + 1) * width]) for k, t in enumerate(tr.tolist())]
 
     def fields(self, key: Any, width: int) -> JumpFields:
-        """The fields of a jump of a :meth:`jump_keys` key but its time and states (None)."""
-        if isinstance(key, int):
-            tr, flags = key >> width, bytes((key >> k) & 1 for k in range(width))
+        """The fields of a jump of a :meth:`jump_keys` key (or the loop's ``J_KEY``, a float)
+        but its time and states (None)."""
+        if isinstance(key, (int, float)):
+            packed = int(key)
+            tr, flags = packed >> width, bytes((packed >> k) & 1 for k in range(width))
         else:
             tr, flags = key
         edge, label, source, target = self.describe[tr]
@@ -141,12 +147,13 @@ def _jumps(layout: Layout, buf: b.RunArrays) -> list[Jump]:
     """The :class:`Jump` records of the run in ``buf``, equal to the reference engine's.
 
     Costs about as much as the compiled run of a short model, so it is kept
-    lean: the arrays become lists once (``tolist``), the states' dicts are built
-    in bulk (:func:`_state_dicts`), each jump's fields are a copy of its
-    transition's (:attr:`Layout.choices`: edge, label, modes, enabled
-    transitions, ``chosen_by``, in field order) with its time and states set,
-    and are set at once (Jump is a frozen dataclass without slots, and its
-    generated ``__init__`` costs an ``object.__setattr__`` per field).
+    lean: the columns become lists at once (one ``tolist``), the states' dicts
+    are built in bulk (:func:`_state_dicts`), each jump's fields are a copy of
+    its key's (:attr:`Layout.choices`: edge, label, modes, enabled transitions,
+    ``chosen_by``, in field order; the key the loop packed in ``J_KEY``) with
+    its time and states set, and are set at once (Jump is a frozen dataclass
+    without slots, and its generated ``__init__`` costs an
+    ``object.__setattr__`` per field).
     """
     n = int(buf.oi[b.I_JUMPS])
     if n == 0:
@@ -155,16 +162,16 @@ def _jumps(layout: Layout, buf: b.RunArrays) -> list[Jump]:
     x, y, z = b.J_X, b.J_X + len(names), b.J_X + 2 * len(names)
     rows = buf.jps[:n]
     width = rows.shape[1] - z
-    keys = layout.jump_keys(rows[:, b.J_TR], rows[:, z:])
-    befores = _state_dicts(names, rows[:, x:y].tolist())
-    afters = _state_dicts(names, rows[:, y:z].tolist())
+    columns = rows[:, :z].T.tolist()
+    keys = columns[b.J_KEY] if layout.packed else layout.jump_keys(rows[:, b.J_TR], rows[:, z:])
+    befores = _state_dicts(names, columns[x:y], n)
+    afters = _state_dicts(names, columns[y:z], n)
     seen, fields_of = layout.choices, layout.fields
     new, set_field = object.__new__, object.__setattr__
     jumps: list[Jump] = []
     append = jumps.append
-    for t, j, key, before, after in zip(rows[:, b.J_T].tolist(),
-                                        rows[:, b.J_J].astype(np.int64).tolist(),
-                                        keys, befores, afters, strict=True):  # fmt: skip
+    for t, j, key, before, after in zip(columns[b.J_T], map(int, columns[b.J_J]), keys,
+                                        befores, afters, strict=True):  # fmt: skip
         fields = (seen.get(key) or fields_of(key, width)).copy()
         fields["t"], fields["j"], fields["before"], fields["after"] = t, j, before, after
         jump = new(Jump)
@@ -173,15 +180,19 @@ def _jumps(layout: Layout, buf: b.RunArrays) -> list[Jump]:
     return jumps
 
 
-def _state_dicts(names: tuple[str, ...], rows: list[list[float]]) -> list[dict[str, float]]:
-    """``dict(zip(names, row))`` per row; for one or two names a dict display (a third of the cost)."""
+def _state_dicts(names: tuple[str, ...], columns: list[list[float]],
+                 n: int) -> list[dict[str, float]]:  # fmt: skip
+    """``dict(zip(names, row))`` per row of the ``n`` rows of ``columns`` (one list per name);
+    for one or two names a dict display (a third of the cost)."""
     if len(names) == 1:
         (a,) = names
-        return [{a: v} for (v,) in rows]
+        return [{a: v} for v in columns[0]]
     if len(names) == 2:
         a, c = names
-        return [{a: u, c: v} for u, v in rows]
-    return [dict(zip(names, row)) for row in rows]  # noqa: B905 (each row holds len(names) values)
+        return [{a: u, c: v} for u, v in zip(*columns, strict=True)]
+    if not names:
+        return [{} for _ in range(n)]
+    return [dict(zip(names, row)) for row in zip(*columns, strict=True)]  # noqa: B905 (each row holds len(names) values)
 
 
 def settings_record(settings: Settings) -> dict[str, Any]:

@@ -16,7 +16,7 @@ Examples
 --------
 >>> b = allocate(n_states=2, n_signals=1, max_transitions=1, points=4, jumps=2)
 >>> b.pts.shape, b.jps.shape, int(b.oi[I_CAUSE])
-((4, 6), (2, 8), -1)
+((4, 6), (2, 9), -1)
 """
 
 from __future__ import annotations
@@ -91,6 +91,7 @@ __all__ = [
     "I_STEPS",
     "I_STORED_STEPS",
     "J_J",
+    "J_KEY",
     "J_T",
     "J_TR",
     "J_X",
@@ -107,6 +108,7 @@ __all__ = [
     "OP_TRUTH",
     "OP_VALUE",
     "OP_WATCH",
+    "PACKED_WIDTH",
     "P_J",
     "P_M",
     "P_T",
@@ -237,7 +239,11 @@ ZENO_SIZE = 17  # last t, start gap, counts (2), 7 gaps, 6 ratios
 
 # columns of the recorded arrays
 P_T, P_J, P_M, P_X = 0, 1, 2, 3  # pts: t, j, mode, state..., signals...
-J_T, J_J, J_TR, J_X = 0, 1, 2, 3  # jps: t, j, transition, before..., after..., enabled...
+# jps: t, j, transition, key (transition and enabled flags packed), before..., after..., enabled...
+J_T, J_J, J_TR, J_KEY, J_X = 0, 1, 2, 3, 4
+PACKED_WIDTH = 32
+"""Most enabled flags a jump's ``J_KEY`` packs: ``transition * 2**width`` plus ``2**k`` per
+enabled flag ``k`` (``width`` flag columns); -1 for wider rows."""
 Q_T0, Q_H, Q_TV, Q_J, Q_STAY, Q_Y = 0, 1, 2, 3, 4, 5  # sts: t_old, h, valid to, j, stay, y, q
 
 
@@ -246,7 +252,8 @@ class RunArrays:
     """What one run records (one row of each per run in an ensemble chunk).
 
     ``pts``: points ``(t, j, mode, x..., signals...)``; ``jps``: jumps ``(t, j,
-    transition, before..., after..., enabled flags...)``; ``sts``: dense steps
+    transition, key, before..., after..., enabled flags...)`` (the key packs the
+    transition and its flags, :data:`PACKED_WIDTH`); ``sts``: dense steps
     ``(t_old, h, valid to, j, stay, y_old..., q...)``; ``oi`` and ``of``: the
     counts and the termination (slots ``I_*`` and ``F_*``), the point of an
     evaluation failure in ``of[N_OUT_F:]``.

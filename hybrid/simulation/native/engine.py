@@ -153,20 +153,16 @@ class CompiledNative:
         )
 
     def scratch(self, points: int, jumps: int, steps: int) -> b.RunArrays:
-        """:meth:`buffers` of these sizes, this thread's own, reset as :func:`~.buffers.allocate` leaves them.
+        """:meth:`buffers` of these sizes, this thread's own, as the last run left them.
 
-        Allocating costs more than resetting; the caller must be done with the
-        arrays (every value copied out) before it asks for them again.
+        The compiled loop resets what it counts on (``oi``, ``of``) itself,
+        which costs less than resetting from Python; the caller must be done with
+        the arrays (every value copied out) before it asks for them again.
         """
         arrays: b.RunArrays | None = getattr(self._scratch, "arrays", None)
         if arrays is None or self._scratch.sizes != (points, jumps, steps):
             arrays = self._scratch.arrays = self.buffers(points, jumps, steps)
             self._scratch.sizes = (points, jumps, steps)
-            return arrays
-        arrays.jps.fill(0.0)
-        arrays.oi.fill(0)
-        arrays.oi[b.I_CAUSE] = -1
-        arrays.of.fill(np.nan)
         return arrays
 
     def initial_mode(self, model: Automaton | System) -> int:

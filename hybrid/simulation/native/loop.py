@@ -47,6 +47,7 @@ from hybrid.simulation.native.buffers import (
     FP_SEARCH,
     FP_STAY,
     FP_STEP,
+    I_CAUSE,
     N_SCALARS,
     OP_RESET,
     S_FLOW_FAIL,
@@ -233,7 +234,15 @@ def run_one(fp: Ints, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f:
     """Simulate from ``(t0, x0)`` in mode ``m0`` until the run ends; all of it into the arrays.
 
     ``fp`` holds the addresses of the model and of the kernel's pieces (``FP_*``).
+    ``oi`` and ``of`` are reset first (as :func:`~hybrid.simulation.native.buffers.allocate`
+    leaves them), so a run may reuse the arrays of the last; rows of ``pts``, ``jps``
+    and ``sts`` are written whole before they are counted.
     """
+    for i in range(oi.shape[0]):
+        oi[i] = 0
+    oi[I_CAUSE] = -1
+    for i in range(of.shape[0]):
+        of[i] = math.nan
     fns = function_at(fp[FP_MODEL], fp[FP_MODEL + 1], MODEL_FN_T)
     step = function_at(fp[FP_STEP], fp[FP_STEP + 1], STEP_FN_T)
     search = function_at(fp[FP_SEARCH], fp[FP_SEARCH + 1], SEARCH_FN_T)

@@ -33,6 +33,7 @@ from hybrid.simulation.native.buffers import (
     I_POINTS,
     I_STORED_STEPS,
     J_J,
+    J_KEY,
     J_T,
     J_TR,
     J_X,
@@ -42,6 +43,7 @@ from hybrid.simulation.native.buffers import (
     P_M,
     P_T,
     P_X,
+    PACKED_WIDTH,
     Q_H,
     Q_J,
     Q_STAY,
@@ -103,7 +105,12 @@ def record_point(fns: Fns, pts: Array2, oi: Ints, t: float, j: int, m: int, x: A
 
 def record_jump(tab: Ints, jps: Array2, oi: Ints, t: float, j: int, m: int, tr: int,
                 before: Array, after: Array, wi: Ints) -> bool:  # fmt: skip
-    """Store a jump of global transition ``tr`` from mode ``m`` (enabled flags from ``wi``)."""
+    """Store a jump of global transition ``tr`` from mode ``m`` (enabled flags from ``wi``).
+
+    ``J_KEY`` packs the transition and the flags (as
+    :meth:`~hybrid.simulation.native.assemble.Layout.jump_keys` does) up to
+    ``PACKED_WIDTH`` flag columns, so the assembler reads one number per jump.
+    """
     n = oi[I_JUMPS]
     if n >= jps.shape[0]:
         oi[I_OVERFLOW] = 1
@@ -118,8 +125,14 @@ def record_jump(tab: Ints, jps: Array2, oi: Ints, t: float, j: int, m: int, tr: 
         row[J_X + d + i] = after[i]
     count = tab[tab[T_MODE_TR] + m + 1] - tab[tab[T_MODE_TR] + m]
     enabled = wi[W_ENABLED]
-    for k in range(row.shape[0] - J_X - 2 * d):
-        row[J_X + 2 * d + k] = 1.0 if (k < count and wi[enabled + k] != 0) else 0.0
+    width = row.shape[0] - J_X - 2 * d
+    key = float(tr) * float(1 << width) if width <= PACKED_WIDTH else -1.0
+    for k in range(width):
+        on = k < count and wi[enabled + k] != 0
+        row[J_X + 2 * d + k] = 1.0 if on else 0.0
+        if on and width <= PACKED_WIDTH:
+            key += float(1 << k)
+    row[J_KEY] = key
     oi[I_JUMPS] = n + 1
     return True
 

@@ -249,6 +249,35 @@ def test_jump_keys_name_the_edge_the_enabled_set_and_how_it_was_chosen(n: int) -
         assert layout.fields((tr, bytes(int(f) for f in row)), n) == fields  # either key form
 
 
+
+@pytest.mark.parametrize("n", [5, PACKED_WIDTH + 3])
+def test_the_loops_packed_key_is_the_key_of_its_transition_and_flags(n: int) -> None:
+    """``J_KEY``, packed by the compiled loop, equals :meth:`Layout.jump_keys` of the row (-1 when
+    too wide), and the jump it names is the scipy backend's."""
+    from hybrid.simulation.native import buffers as b
+    from hybrid.simulation.native.engine import compiled_native, run_arrays
+    from hybrid.simulation.settings import Settings
+
+    model = _fanned(n)
+    compiled = compiled_native(model)
+    settings = Settings(t_end=2.0, max_jumps=1)
+    p = np.array(compiled.native.parameter_vector(model))
+    x0 = np.array(model.initial_vector())
+    arrays = run_arrays(compiled, p, x0, compiled.initial_mode(model), settings, False)
+    rows = arrays.jps[: int(arrays.oi[b.I_JUMPS])]
+    assert rows.shape[0] == 1
+    z = b.J_X + 2 * len(compiled.native.state_names)
+    expected = compiled.layout.jump_keys(rows[:, b.J_TR], rows[:, z:])
+    assert compiled.layout.packed == (n <= PACKED_WIDTH)
+    if n <= PACKED_WIDTH:
+        assert rows[:, b.J_KEY].tolist() == expected
+    else:
+        assert rows[:, b.J_KEY].tolist() == [-1.0]
+    ours = hybrid.simulate(model, t_end=2.0, max_jumps=1, **TOL).jumps
+    reference = hybrid.simulate(model, t_end=2.0, max_jumps=1, handle_sigint=False).jumps
+    assert ours == reference
+    assert ours[0].enabled == tuple(f"e{k}" for k in range(0, n, 3))  # x >= k % 3 at x = 0
+
 CTRL_C = """
 import os, signal, threading, time
 import hybrid
