@@ -51,13 +51,24 @@ def run(repeats: int = 9, ensemble_size: int = 10_000) -> list[Comparison]:
     return results
 
 
+IN_A_ROW = 10
+"""Calls of one backend timed together (their mean) in each repeat of the single runs."""
+
+
 def single_runs(repeats: int = 9) -> list[Comparison]:
     """The bouncing ball for 40 bounces and the thermostat for 10 periods, compiled / scipy.
 
-    Both with ``handle_sigint=False``; the extra ``compiled_handle_sigint_median_s``
-    is the compiled call with the default ``handle_sigint=True`` (its loop on the
-    worker thread while the main thread watches Ctrl-C), timed the same way.
-    ``python -m bench.native_backend single`` runs these two alone.
+    Both with ``handle_sigint=False``. Each repeat times :data:`IN_A_ROW` calls
+    of one backend, then as many of the other (the order alternating), so a
+    timing is a loop of runs after a warm-up call: the first compiled call of
+    each follows the scipy calls, which leave the processor's caches cold, and
+    the rest find the compiled code and Python's objects cached. Also, in the
+    same run (extras): ``cold_call_ratio_median``, each compiled call timed
+    alone right after a scipy call (the caches always cold; the harness's
+    ``inner=1``), and ``compiled_handle_sigint_median_s``, the compiled call
+    with the default ``handle_sigint=True`` (its loop on the worker thread while
+    the main thread watches Ctrl-C). ``python -m bench.native_backend single``
+    runs these two alone.
     """
     ball = hybrid.load(ROOT / "specs" / "bouncing_ball.yaml", parameters={"e": 0.95})
     thermo = hybrid.load(ROOT / "specs" / "thermostat.yaml")
@@ -66,18 +77,22 @@ def single_runs(repeats: int = 9) -> list[Comparison]:
         ("bouncing ball, 40 bounces", ball, {"t_end": 1e3, "max_jumps": 40}),
         ("thermostat, 10 periods", thermo, {"t_end": 1e4, "max_jumps": 20}),
     ):
-        c = compare(
-            f"compiled backend: {name}",
+        sides = (
             ("backend='compiled'", lambda m=model, k=kwargs: _jumps(m, "compiled", **k)),
             ("backend='scipy'", lambda m=model, k=kwargs: _jumps(m, "scipy", **k)),
-            repeats=repeats,
         )
+        c = compare(f"compiled backend: {name}, {IN_A_ROW} calls in a row", *sides,
+                    repeats=repeats, inner=IN_A_ROW)  # fmt: skip
+        cold = compare(name, *sides, repeats=repeats)
         ours, reference = _jumps(model, "compiled", **kwargs), _jumps(model, "scipy", **kwargs)
         watched = [time_call(lambda m=model, k=kwargs: _jumps(m, "compiled", True, **k))
                    for _ in range(repeats)]  # fmt: skip
         c.extra = {
             "jumps": len(ours),
             "max_jump_time_difference_s": max(abs(a - b) for a, b in zip(ours, reference, strict=True)),
+            "cold_call_ratio_median": cold.ratio_median,
+            "cold_call_ratio_min": cold.ratio_min,
+            "cold_call_compiled_median_s": cold.contender_median_s,
             "compiled_handle_sigint_median_s": statistics.median(watched),
         }
         results.append(c)

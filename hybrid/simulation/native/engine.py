@@ -321,15 +321,16 @@ def run_arrays(
     thread's :meth:`CompiledNative.scratch` arrays: the caller copies out what
     it keeps before the next run. A worker's arrays are always its own (after a
     second Ctrl-C an abandoned worker may still be writing). ``cfg``: ``config(settings)``.
-    ``progress(t, jumps, points)`` is called while the loop runs on the worker
-    (in the main thread only), with the time reached (never going back, also
-    when a run is repeated with more room).
+    ``progress(t, jumps, points)`` is called in the calling thread while the
+    loop runs on another (:func:`~hybrid.simulation.native.worker.run_in_worker`),
+    with the time reached (never going back, also when a run is repeated with
+    more room).
     """
     cfg = config(settings) if cfg is None else cfg
     points, jumps = 256, 64
     steps = 256 if settings.dense else 1
     main = threading.current_thread() is threading.main_thread()
-    in_worker = (handle_sigint or progress is not None) and main
+    in_worker = (handle_sigint and main) or progress is not None
     reached: list[float] = [settings.t_start, 0, 0]  # time, jumps, points: see _ticker
     while True:
         if reuse and not in_worker:

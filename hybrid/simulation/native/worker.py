@@ -40,10 +40,16 @@ def run_in_worker(
     process's worker thread (:func:`_worker_jobs`) while the main thread waits,
     turning Ctrl-C into the flag (see the module's docstring) and calling
     ``tick()`` every :data:`TICK` seconds (progress read from the run's arrays).
+    With ``tick`` in another thread (only the main thread sees Ctrl-C), ``call``
+    runs on a thread of its own while the calling thread ticks
+    (:func:`_run_beside`): threads that run at once each keep their own loop.
     """
     flag = np.zeros(1, dtype=np.int64) if flag is None else flag
-    wanted = handle_sigint or tick is not None
-    if not wanted or threading.current_thread() is not threading.main_thread():
+    main = threading.current_thread() is threading.main_thread()
+    if tick is not None and not main:
+        _run_beside(call, flag, tick)
+        return False
+    if not (handle_sigint or tick is not None) or not main:
         call(flag)
         return False
     done: _Done = queue.SimpleQueue()
@@ -68,6 +74,34 @@ def run_in_worker(
     if error is not None:
         raise error
     return bool(flag[0])
+
+
+def _run_beside(
+    call: Callable[[NDArray[np.int64]], None], flag: NDArray[np.int64], tick: Callable[[], None]
+) -> None:
+    """``call(flag)`` on a new thread while this one calls ``tick()`` every :data:`TICK` seconds.
+
+    A thread per run costs about a short run; a run that reports progress is not short.
+    """
+    done: _Done = queue.SimpleQueue()
+
+    def job() -> None:
+        try:
+            call(flag)
+        except BaseException as exc:  # re-raised in the waiting thread
+            done.put(exc)
+        else:
+            done.put(None)
+
+    threading.Thread(target=job, name="hybrid-compiled-run", daemon=True).start()
+    while True:
+        try:
+            error = done.get(timeout=TICK)
+            break
+        except queue.Empty:
+            tick()
+    if error is not None:
+        raise error
 
 
 _Done = queue.SimpleQueue[BaseException | None]

@@ -47,3 +47,29 @@ def test_a_long_compiled_run_reports_progress_while_it_runs(handle_sigint: bool)
     assert jumps == sorted(jumps) and jumps[-1] == len(run.jumps) == 1999
     for status in statuses[:-1]:  # the time reached and the jumps taken agree, to a second
         assert abs(dict(status.counters)["jumps"] - status.done) <= 1.0
+
+
+def test_a_compiled_run_in_another_thread_reports_progress_there_while_it_runs() -> None:
+    # the same run from a thread that is not the main one (a GUI's or a server's):
+    # Ctrl-C is the main thread's, but progress comes while the loop runs, in the caller
+    model = hybrid.load_text(OSCILLATOR)
+    seen: list[tuple[Status, threading.Thread]] = []
+    runs: list[hybrid.Run] = []
+
+    def report(status: Status) -> None:
+        seen.append((status, threading.current_thread()))
+
+    def simulate() -> None:
+        runs.append(hybrid.simulate(model, t_end=1999.5, max_step=0.002, backend="compiled",
+                                    progress=report, max_jumps=10**6))  # fmt: skip
+
+    caller = threading.Thread(target=simulate)
+    caller.start()
+    caller.join(timeout=120)
+    (run,) = runs
+    assert run.termination.cause == "t_end" and len(run.jumps) == 1999
+    assert all(thread is caller for _, thread in seen)
+    statuses = [s for s, _ in seen]
+    assert len(statuses) >= 2 and 0.0 < statuses[0].done < 1999.5, "reported while running"
+    assert [s.done for s in statuses] == sorted(s.done for s in statuses)
+    assert statuses[-1].final and statuses[-1].done == 1999.5
