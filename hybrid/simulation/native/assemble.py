@@ -1,19 +1,14 @@
 """A :class:`~hybrid.simulation.result.Run` from the arrays a compiled run filled.
 
 The counterpart of :meth:`hybrid.simulation.recorder.Recorder.run` (columns,
-jumps, segments) and of the messages :class:`hybrid.simulation.loop.EventLoop`
-writes into a :class:`~hybrid.simulation.result.Termination`: the texts are
-the same, so a user reads the same thing from either backend. An evaluation
-failure is described by running the reference engine's compiled function at
-the failing point (:func:`hybrid.simulation.failures.describe_failure`), so
-the message names the expression and its arguments exactly as it does there.
+jumps, segments); the names come from the model's
+:class:`~hybrid.simulation.native.layout.Layout`, the termination and its words
+from :mod:`~hybrid.simulation.native.ending`.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Hashable, Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -22,105 +17,13 @@ from numpy.typing import NDArray
 from hybrid.compose import System
 from hybrid.model import Automaton
 from hybrid.simulation.native import buffers as b
+from hybrid.simulation.native.ending import Inputs, termination_of
+from hybrid.simulation.native.layout import Layout
 from hybrid.simulation.native.structure import NativeModel
-from hybrid.simulation.result import Jump, Run, Termination
+from hybrid.simulation.result import Jump, Run
 from hybrid.simulation.settings import Settings
 
-__all__ = ["PACKED_WIDTH", "DenseSegment", "Inputs", "JumpFields", "Layout", "run_from",
-           "settings_record"]  # fmt: skip
-
-Inputs = Mapping[str, Callable[[float], float]] | None
-"""The reference engine's inputs of a model (to word a failure as the reference does)."""
-
-JumpFields = dict[str, Any]
-"""A :class:`Jump`'s fields in order, ``t``, ``j``, ``before`` and ``after`` to be filled in."""
-
-PACKED_WIDTH = b.PACKED_WIDTH
-"""Most transitions a mode may have for a jump's enabled flags to be packed into an int key."""
-
-
-@dataclass(frozen=True)
-class Layout:
-    """Names by index: modes, transitions (global order of the tables), invariants."""
-
-    mode_names: NDArray[np.str_]
-    transitions: tuple[tuple[int, int, Any], ...]
-    """Per global transition: (source mode, place in its mode, NativeTransition)."""
-    invariant_first: tuple[int, ...]
-    """Per mode, the global index of its first invariant (as ``MODE_INV``)."""
-    describe: tuple[tuple[str, str | None, str, str], ...]
-    """Per global transition: its name, label, source and target mode names."""
-    choices: dict[Hashable, JumpFields]
-    """The fields of a jump but its time and states, per :meth:`jump_keys` key seen so far."""
-    modes: tuple[Any, ...]
-    """The modes (:class:`~hybrid.simulation.native.structure.NativeMode`)."""
-    state_names: tuple[str, ...]
-    bits: NDArray[np.int64]
-    """``1 << k`` for each flag column of a jump (as many as a mode has transitions, at most
-    :data:`PACKED_WIDTH`)."""
-    packed: bool
-    """Whether the compiled loop's ``J_KEY`` holds each jump's key exactly (at most
-    :data:`PACKED_WIDTH` flag columns, and every key below ``2**53``)."""
-
-    @classmethod
-    def of(cls, native: NativeModel) -> Layout:
-        rows: list[tuple[int, int, Any]] = []
-        first = [0]
-        for m, mode in enumerate(native.modes):
-            rows += [(m, k, tr) for k, tr in enumerate(mode.transitions)]
-            first.append(first[-1] + len(mode.invariants))
-        names = np.array([mode.name for mode in native.modes], dtype=np.str_)
-        describe = tuple(
-            (tr.view.name, tr.view.label, native.modes[m].name,
-             native.modes[native.index[tr.view.target]].name)
-            for m, _, tr in rows
-        )  # fmt: skip
-        width = max(1, *(len(mode.transitions) for mode in native.modes))  # jps' flag columns
-        bits = np.left_shift(1, np.arange(min(width, PACKED_WIDTH), dtype=np.int64))
-        packed = width <= PACKED_WIDTH and len(rows) << width <= 1 << 53
-        return cls(names, tuple(rows), tuple(first), describe, {}, tuple(native.modes),
-                   tuple(native.state_names), bits, packed)  # fmt: skip
-
-    def enabled(self, tr: int, flags: bytes) -> tuple[tuple[str, ...], str]:
-        """The names of the transitions enabled with ``tr`` chosen, and how it was chosen."""
-        m, _, chosen = self.transitions[tr]
-        mode = self.modes[m]
-        on = [t for k, t in enumerate(mode.transitions) if flags[k]]
-        if len(on) <= 1:
-            how = "only"
-        else:
-            top = [t for t in on if t.view.priority == chosen.view.priority]
-            how = "priority" if len(top) == 1 else "file order"
-        return tuple(t.view.name for t in on), how
-
-    def jump_keys(self, transitions: NDArray[np.float64], flags: NDArray[np.float64]) -> list[Any]:
-        """A key per jump for :attr:`choices` from its transition and enabled flags (a row each):
-        up to :data:`PACKED_WIDTH` flags, ``tr << width`` plus bit ``k`` per enabled ``k``;
-        beyond, ``(tr, flags as bytes)``."""
-        on = flags != 0.0
-        tr = transitions.astype(np.int64)
-        width = on.shape[1]
-        if width <= PACKED_WIDTH:
-            bits = self.bits if self.bits.size == width else np.left_shift(1, np.arange(width))
-            return ((tr << width) | (on.astype(np.int64) @ bits)).tolist()  # type: ignore[no-any-return]
-        data = on.astype(np.uint8).tobytes()
-        return [(t, data[k * width : (k + 1) * width]) for k, t in enumerate(tr.tolist())]
-
-    def fields(self, key: Any, width: int) -> JumpFields:
-        """The fields of a jump of a :meth:`jump_keys` key (or the loop's ``J_KEY``, a float)
-        but its time and states (None)."""
-        if isinstance(key, (int, float)):
-            packed = int(key)
-            tr, flags = packed >> width, bytes((packed >> k) & 1 for k in range(width))
-        else:
-            tr, flags = key
-        edge, label, source, target = self.describe[tr]
-        enabled, how = self.enabled(tr, flags)
-        found = self.choices[key] = {
-            "t": None, "j": None, "edge": edge, "label": label, "source": source, "target": target,
-            "before": None, "after": None, "enabled": enabled, "chosen_by": how,
-        }  # fmt: skip
-        return found
+__all__ = ["DenseSegment", "run_from", "settings_record"]
 
 
 class DenseSegment:
@@ -249,163 +152,3 @@ def run_from(
         settings=settings_record(settings),
         segments=_segments(buf, d),
     )
-
-
-def termination_of(
-    native: NativeModel,
-    layout: Layout,
-    model: Automaton | System,
-    settings: Settings,
-    buf: b.RunArrays,
-    inputs: Inputs = None,
-) -> Termination:
-    """How the run in ``buf`` ended, worded as the reference engine words it."""
-    oi, of = buf.oi.tolist(), buf.of.tolist()  # Python numbers, read at once
-    cause = b.CAUSE_CODES[oi[b.I_CAUSE]]
-    t, j, m = of[b.F_T], oi[b.I_J], oi[b.I_MODE]
-    detail, index = oi[b.I_DETAIL], oi[b.I_DETAIL_INDEX]
-    mode = native.modes[m]
-    zeno_time = of[b.F_ZENO_TIME] if cause == "zeno" else None
-    if detail == b.D_INITIAL:
-        message = "initial state is not finite"
-    elif detail in (b.D_BLOCKED_ENTRY, b.D_BLOCKED_FLOW):
-        how = "does not hold" if detail == b.D_BLOCKED_ENTRY else "is about to be left"
-        message = f"invariant of {mode.invariants[index][0]} {how} and no transition is enabled"
-    elif detail == b.D_STALL:
-        message = (
-            "events keep firing at the same instant without any transition "
-            "becoming enabled (a guard touching its boundary?)"
-        )
-    elif detail == b.D_ZENO_INSTANT:
-        name = layout.transitions[index][2].view.name
-        message = (
-            f"{settings.max_jumps_per_instant} jumps at the same instant: a cycle of "
-            f"transitions takes no time (last: {name})"
-        )
-    elif detail == b.D_ZENO_GEOMETRIC:
-        message = (
-            "jumps accumulate (gaps shrink geometrically); estimated Zeno time "
-            f"{zeno_time:.12g}"
-        )
-    elif detail == b.D_RESET_NONFINITE:
-        message = f"reset of {layout.transitions[index][2].view.name} gave a non-finite state"
-    elif detail in (b.D_EVAL, b.D_FLOW):
-        fail_t = float(buf.of[b.F_FAIL_T])
-        described = describe_native_failure(native, layout, model, buf, inputs)
-        if described is None:
-            what = _reference_function(int(buf.oi[b.I_FAIL_KIND]), int(buf.oi[b.I_FAIL_INDEX]),
-                                       int(buf.oi[b.I_FAIL_MODE]), None, layout, native)[0]  # fmt: skip
-            described = f"{what} gave a non-finite value"
-        message = f"{described} (at t={fail_t:.9g})"
-        if detail == b.D_FLOW:
-            message += f"; the solution leaves the domain of the flow after t={t:.9g}"
-        if detail == b.D_EVAL:
-            t = fail_t
-    elif detail in (b.D_STEP_TOO_SMALL, b.D_STATE_NONFINITE):
-        why = (
-            "solver stopped: Required step size is less than spacing between numbers."
-            if detail == b.D_STEP_TOO_SMALL
-            else "the state became non-finite"
-        )
-        message = (
-            f"{why} (largest |state| {float(buf.of[b.F_PEAK]):.3g}; the solution may blow up "
-            "here, or try another --method or tighter tolerances)"
-        )
-    elif detail == b.D_NOT_ADVANCING:
-        message = (
-            "solver stopped advancing: its step size fell below the spacing of floating-point "
-            f"numbers at t={t:.9g} (largest |state| {float(buf.of[b.F_PEAK]):.3g}; the solution "
-            "may blow up here, or try another --method)"
-        )
-    elif detail == b.D_CRAWL:
-        message = _crawl_message(settings, t, buf)
-    elif detail == b.D_FLOW_START:
-        message = _flow_at_start(native, layout, model, buf, index, inputs)
-    elif cause == "t_end":
-        message = "reached t_end"
-    elif cause == "max_jumps":
-        message = f"reached max_jumps={settings.max_jumps}"
-    else:
-        message = "interrupted by the user"
-    return Termination(cause, t, j, message, zeno_time=zeno_time, location=mode.name)
-
-
-def _crawl_message(settings: Settings, t: float, buf: b.RunArrays) -> str:
-    """``StayIntegrator._crawled``'s words."""
-    from hybrid.simulation.stay import CRAWL_STEPS
-
-    pace, longest = float(buf.of[b.F_AUX0]), float(buf.of[b.F_AUX1])
-    remaining = (settings.t_end - t) / pace
-    return (
-        f"solver crawls: its last {CRAWL_STEPS} steps averaged {pace:.3g} (it took steps of "
-        f"{longest:.3g} before), so t_end is still {remaining:.2g} steps away (largest "
-        f"|state| {float(buf.of[b.F_PEAK]):.3g}); the solution may near a singularity here (a "
-        "derivative without bound) and chatter across it"
-    )
-
-
-def _flow_at_start(native: NativeModel, layout: Layout, model: Automaton | System,
-                   buf: b.RunArrays, index: int, inputs: Inputs) -> str:  # fmt: skip
-    """``StayIntegrator._start``'s words for a flow that fails or is not finite at the start."""
-    t = float(buf.of[b.F_FAIL_T])
-    described = describe_native_failure(native, layout, model, buf, inputs)
-    if described is not None:
-        return f"{described} (at t={t:.9g})"
-    x = np.array(buf.of[b.N_OUT_F : b.N_OUT_F + len(native.state_names)], dtype=float)
-    mode = native.modes[int(buf.oi[b.I_FAIL_MODE])]
-    derivative = _reference_mode(native, model, int(buf.oi[b.I_FAIL_MODE]), inputs)[1].rhs(t, x)
-    names = native.state_names
-    bad = next((k for k, v in enumerate(derivative) if not math.isfinite(v)), index)
-    return f"the flow of {mode.name} gives {names[bad]}' = {derivative[bad]} (at t={t:.9g})"
-
-
-def _reference_mode(native: NativeModel, model: Automaton | System, m: int,
-                    inputs: Inputs) -> tuple[Any, Any]:  # fmt: skip
-    """The reference engine's compiled model and its mode ``m`` (for the words of a failure)."""
-    from hybrid.simulation.compiled import CompiledModel
-
-    compiled = CompiledModel(model, inputs)
-    return compiled, compiled.mode(native.modes[m].key)
-
-
-def describe_native_failure(native: NativeModel, layout: Layout, model: Automaton | System,
-                            buf: b.RunArrays, inputs: Inputs = None) -> str | None:  # fmt: skip
-    """``<what> failed: <call(args)>: <error>``, found by the reference engine's functions.
-
-    None if the reference's function does not fail at that point (a value that
-    is not finite without an error).
-    """
-    from hybrid.simulation.failures import describe_failure
-
-    kind, index = int(buf.oi[b.I_FAIL_KIND]), int(buf.oi[b.I_FAIL_INDEX])
-    m = int(buf.oi[b.I_FAIL_MODE])
-    t = float(buf.of[b.F_FAIL_T])
-    x = np.array(buf.of[b.N_OUT_F : b.N_OUT_F + len(native.state_names)], dtype=float)
-    compiled, mode = _reference_mode(native, model, m, inputs)
-    _, call = _reference_function(kind, index, m, mode, layout)
-    call(t, x)
-    for failure in (compiled.failure, compiled.flow_failure):
-        if failure.error is not None:
-            return str(describe_failure(compiled, failure))
-    return None
-
-
-def _reference_function(kind: int, index: int, m: int, mode: Any, layout: Layout,
-                        native: NativeModel | None = None) -> Sequence[Any]:  # fmt: skip
-    """``(what, the reference's function)`` that failed (``mode`` None: the words only)."""
-    names = native.modes[m] if native is not None else mode
-    if kind in (b.F_GUARD, b.F_RESET):
-        k = layout.transitions[index][1]
-        name = names.transitions[k].view.name if native is not None else mode.transitions[k].name
-        what = f"the {'guard' if kind == b.F_GUARD else 'reset'} of {name}"
-        if mode is None:
-            return what, None
-        tr = mode.transitions[k]
-        return what, tr.rho if kind == b.F_GUARD else tr.reset
-    if kind == b.F_INVARIANT:
-        inv = index - layout.invariant_first[m]
-        name = names.invariants[inv][0] if native is not None else mode.invariants[inv].name
-        return f"the invariant of {name}", None if mode is None else mode.invariants[inv].rho
-    if kind == b.F_SIGNALS:
-        return f"the signals of {names.name}", None if mode is None else mode.outputs
-    return f"the flow of {names.name}", None if mode is None else mode.rhs

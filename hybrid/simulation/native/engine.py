@@ -29,9 +29,10 @@ from hybrid.compose import System
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.simulation.native import buffers as b
-from hybrid.simulation.native.assemble import Layout, run_from
+from hybrid.simulation.native.assemble import run_from
 from hybrid.simulation.native.cache import load_generated, require_numba
 from hybrid.simulation.native.kernel_types import PIECES
+from hybrid.simulation.native.layout import Layout
 from hybrid.simulation.native.source import generate, kernel_module
 from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.native.worker import run_in_worker
