@@ -21,7 +21,9 @@ atoms is watched in its oriented form: atom ``a == b`` reads
 ``s * (a - b) <= 0`` with ``s`` the sign of ``a - b`` when the guard is armed,
 so the term falls through 0 when the level is reached; an atom exactly at its
 level then (``s = 0``) reads ``a == b`` itself, which holds while the state
-stays on the level.
+stays on the level, until the state is beyond the band of the level: then it
+is oriented to the side the state is on (like arming), so that a return to the
+level is a crossing again.
 
 The watch function is generated from a template (:func:`watch_factory`) per
 pattern of terms, cached by the caller, and never contains user text.
@@ -152,16 +154,31 @@ class Watch:
         if factory is None and fns:
             factory = self.factories[key] = watch_factory(key)
         self.value = factory(fns, self.width) if factory is not None and fns else None
-        self.pending = None in self.signs or not all(self.inv_armed)
+        self.pending = (
+            None in self.signs
+            or not all(self.inv_armed)
+            or any(side is not None and 0 in side for side in self.signs)
+        )
         self.generation += 1
 
     def arm(self, t: float, x: Any, width: float) -> bool:
-        """Arm each disarmed term that is beyond ``width`` on its safe side; True if one was."""
+        """Arm each disarmed term that is beyond ``width`` on its safe side, and orient each
+        level atom read on its level (0) that the state is beyond ``width`` of; True if one was."""
         changed = False
         for i, tr in enumerate(self.mode.transitions):
-            if self.signs[i] is None and tr.rho(t, x) > width:
-                self.signs[i] = orientation(tr, t, x)
-                changed = True
+            side = self.signs[i]
+            if side is None:
+                if tr.rho(t, x) > width:
+                    self.signs[i] = orientation(tr, t, x)
+                    changed = True
+            elif 0 in side:
+                moved = tuple(
+                    s if s != 0 or not abs(value) > width else (1 if value > 0.0 else -1)
+                    for s, value in zip(side, (d(t, x) for d in tr.levels), strict=True)
+                )
+                if moved != side:
+                    self.signs[i] = moved
+                    changed = True
         for k, inv in enumerate(self.mode.invariants):
             if not self.inv_armed[k] and -inv.rho(t, x) > width:
                 self.inv_armed[k] = True

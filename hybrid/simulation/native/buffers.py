@@ -119,6 +119,7 @@ __all__ = [
     "Q_T0",
     "Q_TV",
     "Q_Y",
+    "S_B0",
     "S_FAIL_T",
     "S_FLOW_FAIL",
     "S_FLOW_T",
@@ -233,8 +234,9 @@ W_TRARMED, W_ENABLED, W_INVARMED, W_FAILI, W_SIGFAIL = 20, 21, 22, 23, 24
 W_NPE = 25
 WI_HEADER = 26
 # scalars in wf from wi[W_SCAL]
-S_FAIL_T, S_FLOW_FAIL, S_FLOW_T, S_LAST_STEP, S_SIG_T, S_GEN = range(6)
-N_SCALARS = 6
+# (S_B0: the band at the start of the stay, the shift of the watch's disarmed terms)
+S_FAIL_T, S_FLOW_FAIL, S_FLOW_T, S_LAST_STEP, S_SIG_T, S_GEN, S_B0 = range(7)
+N_SCALARS = 7
 ZENO_SIZE = 17  # last t, start gap, counts (2), 7 gaps, 6 ratios
 
 # columns of the recorded arrays

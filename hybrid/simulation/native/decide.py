@@ -2,8 +2,11 @@
 
 Function by function (docs/semantics.md, "Deciding a guard at a point"):
 
-- :func:`band` is ``boundary.band``; :func:`slope` is ``boundary.slope``;
-- :func:`holds_now` is ``boundary.holds_now`` (band, slope test, boolean form);
+- :func:`band` is ``boundary.band``; :func:`step_ahead` is ``boundary.ahead``
+  (the point the slope test looks at); :func:`slope` is ``boundary.slope``;
+- :func:`holds_now` is ``boundary.holds_now`` (band, slope test, boolean form;
+  a rho that is not 0 but is exactly 0 at the point ahead, a flat zero, is
+  decided by the boolean form there);
 - :func:`enabled_at_entry` is ``boundary.enabled_at_entry``;
 - :func:`enabled_at_event` is ``boundary.enabled_at_event``: an armed guard is
   decided *snapped* (each equality atom true where its two sides differ by at
@@ -74,6 +77,7 @@ __all__ = [
     "invariant_left_at",
     "note_failure",
     "slope",
+    "step_ahead",
     "value_checked",
 ]
 
@@ -115,10 +119,8 @@ def value_checked(
     return v
 
 
-def slope(
-    fns: Fns, f: int, kind: int, index: int, m: int, t: float, x: Array, wf: Array, wi: Ints,
-) -> float:  # fmt: skip
-    """d/dt of form ``f`` along the flow of mode ``m``, by a small forward difference."""
+def step_ahead(fns: Fns, m: int, t: float, x: Array, wf: Array, wi: Ints) -> float:
+    """The step ``h`` of the slope test; the point ``x + h x'`` it looks at into ``ahead``."""
     d = wi[W_D]
     rate = wf[wi[W_RATE] : wi[W_RATE] + d]
     ahead = wf[wi[W_AHEAD] : wi[W_AHEAD] + d]
@@ -128,6 +130,15 @@ def slope(
         if rate[i] != rate[i]:
             note_failure(F_FLOW, m, m, t, x, wf, wi)
         ahead[i] = x[i] + h * rate[i]
+    return h
+
+
+def slope(
+    fns: Fns, f: int, kind: int, index: int, m: int, t: float, x: Array, wf: Array, wi: Ints,
+) -> float:  # fmt: skip
+    """d/dt of form ``f`` along the flow of mode ``m``, by a small forward difference."""
+    h = step_ahead(fns, m, t, x, wf, wi)
+    ahead = wf[wi[W_AHEAD] : wi[W_AHEAD] + wi[W_D]]
     later = value_checked(fns, f, kind, index, m, t + h, ahead, wf, wi)
     return (later - value_checked(fns, f, kind, index, m, t, x, wf, wi)) / h
 
@@ -144,7 +155,16 @@ def holds_now(
         return False, True
     if not armed:
         return False, False
-    rate = slope(fns, rho_f, kind, index, m, t, x, wf, wi)
+    h = step_ahead(fns, m, t, x, wf, wi)
+    ahead = wf[wi[W_AHEAD] : wi[W_AHEAD] + wi[W_D]]
+    further = value_checked(fns, rho_f, kind, index, m, t + h, ahead, wf, wi)
+    if further == 0.0 and value != 0.0:
+        # rho comes down to exactly 0 (a flat zero: `max(h, v, 0)`, `x - x > 0 and ...`):
+        # its slope says nothing about the guard; the boolean form where the flow goes does
+        a_c = at(ahead, 0)
+        now = fns(OP_TRUTH, bool_f, t + h, a_c, at(wf, wi[W_PE]), a_c) != 0.0
+        return now, now
+    rate = (further - value) / h
     if rate < -width:
         return True, True
     if rate > width:

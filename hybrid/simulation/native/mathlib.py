@@ -43,6 +43,7 @@ __all__ = [
     "h_exp",
     "h_floor",
     "h_hypot",
+    "h_level_side",
     "h_log",
     "h_log10",
     "h_max",
@@ -176,6 +177,13 @@ def h_floor(a: float) -> float:
 
 def h_ceil(a: float) -> float:
     return float(np.ceil(a))
+
+
+def h_level_side(s: float, d: float) -> float:
+    """An oriented level atom's rho: ``s * d`` (``s`` = 1 or -1, the side it was on), ``|d|`` on it (0)."""
+    if s != 0.0:
+        return s * d
+    return abs(d)
 
 
 def h_sign(a: float) -> float:

@@ -29,6 +29,7 @@ from hybrid.expr import ir
 from hybrid.expr.dependencies import evaluation_order
 from hybrid.expr.functions import BUILTINS
 from hybrid.expr.printer import PRECEDENCE, SourcePrinter
+from hybrid.simulation.native.structure import LEVEL_SIDE
 
 __all__ = ["NativePrinter", "body_lines"]
 
@@ -51,6 +52,8 @@ class NativePrinter(SourcePrinter):
         return "_INF" if value > 0 else "(-_INF)"
 
     def function(self, name: str) -> str:
+        if name == LEVEL_SIDE:
+            return "h_level_side"
         return f"h_{name}" if name in BUILTINS else f"_lib_{name}"
 
     def emit(self, node: ir.Expr) -> tuple[str, int]:

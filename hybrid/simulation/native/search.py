@@ -11,11 +11,13 @@ The rule (docs/semantics.md, "First crossings inside a step"), function by funct
   examined by :func:`dip`;
 - :func:`locate` is ``crossing._locate``: ``brentq`` (scipy's C code, tolerances
   ``4 eps``, 100 iterations; a NaN, a bad bracket or no convergence keeps the
-  safe end);
+  safe end) on "at or below 0", an exact 0 counting as below (:data:`BELOW`),
+  so a watch that comes down to 0 and stays there is located where it arrives;
 - :func:`dip` is ``crossing._dip``: the parabola test, then the watch minimised
   between the neighbours by :func:`fminbound` (scipy's
   ``_minimize_scalar_bounded``, line for line); a minimum below 0 is a
-  crossing, one from 0 to the band a touch;
+  crossing, one of exactly 0 a touch located as a crossing, one above 0 within
+  the band a touch at the minimum;
 - :func:`curve_at` is ``StepCurve.at`` (exactly the step's ends at ``t0``, ``t1``).
 
 Constants: ``SAMPLES_PER_STEP`` and ``HORIZON_SAMPLES`` are ``crossing``'s (a
@@ -29,6 +31,7 @@ from __future__ import annotations
 import math
 
 from hybrid.simulation.native.buffers import (
+    S_B0,
     S_GEN,
     T_MODE_INV,
     T_MODE_TR,
@@ -48,14 +51,15 @@ from hybrid.simulation.native.integrator import dense_eval
 from hybrid.simulation.native.kernel_types import Array, Fns, Ints
 from hybrid.simulation.native.watch import (
     arm_at,
-    armed_min,
     pending,
     watch_at,
+    watch_min,
     watch_terms,
     watch_value,
 )
 
 __all__ = [
+    "BELOW",
     "EV_CROSSING",
     "EV_FAILED",
     "EV_NONE",
@@ -79,6 +83,8 @@ HORIZON_SAMPLES = 1000
 EPS = 2.220446049250313e-16
 TOL = 4.0 * EPS
 EV_NONE, EV_CROSSING, EV_TOUCH, EV_FAILED = 0, 1, 2, 3
+BELOW = -5e-324
+"""What a watch value of exactly 0 counts as while the first instant at or below 0 is bracketed."""
 
 
 def parts(h: float, spacing: float) -> int:
@@ -133,10 +139,11 @@ def watch_on_curve(fns: Fns, tab: Ints, m: int, t: float, t0: float, t1: float, 
 
 def locate(fns: Fns, tab: Ints, m: int, a: float, wa: float, b: float, wb: float, t0: float,
            t1: float, wf: Array, wi: Ints) -> float:  # fmt: skip
-    """The zero of the watch in ``[a, b]`` (``wa > 0 >= wb``): ``brentq``, else ``b``."""
-    if wb == 0.0 or not (wa > 0.0 and math.isfinite(wa) and math.isfinite(wb)):
+    """The first instant in ``[a, b]`` where the watch is at or below 0 (``wa > 0 >= wb``):
+    ``brentq`` on that predicate (an exact 0 counts as :data:`BELOW`), else ``b``."""
+    if not (wa > 0.0 and math.isfinite(wa) and math.isfinite(wb)):
         return b
-    xpre, xcur, fpre, fcur = a, b, wa, wb
+    xpre, xcur, fpre, fcur = a, b, wa, BELOW if wb == 0.0 else wb
     xblk, fblk, spre, scur = 0.0, 0.0, 0.0, 0.0
     for _ in range(100):
         if fpre != 0.0 and fcur != 0.0 and (fpre < 0.0) != (fcur < 0.0):
@@ -173,6 +180,8 @@ def locate(fns: Fns, tab: Ints, m: int, a: float, wa: float, b: float, wb: float
             fcur = wb
         else:
             fcur = watch_on_curve(fns, tab, m, xcur, t0, t1, wf, wi)
+        if fcur == 0.0:
+            fcur = BELOW
         if fcur != fcur:
             return b  # scipy refuses a NaN (ValueError): the safe end
     return b  # no convergence (RuntimeError): the safe end
@@ -277,6 +286,8 @@ def dip(fns: Fns, tab: Ints, m: int, ta: float, wa: float, tb: float, wb: float,
         return EV_NONE, math.nan
     if w_min < 0.0:
         return EV_CROSSING, locate(fns, tab, m, ta, wa, t_min, w_min, t0, t1, wf, wi)
+    if w_min == 0.0:  # a touch of exactly 0, or a flat zero: where the watch arrives at 0
+        return EV_TOUCH, locate(fns, tab, m, ta, wa, t_min, w_min, t0, t1, wf, wi)
     d = wi[W_D]
     curve_at(t_min, t0, t1, wf, wi)
     if w_min <= band(wf[wi[W_XS] : wi[W_XS] + d]):
@@ -297,18 +308,19 @@ def first_event(fns: Fns, tab: Ints, m: int, t0: float, t1: float, w0: float, sp
     xs = wf[wi[W_XS] : wi[W_XS] + d]
     gen = wi[W_SCAL] + S_GEN
     fail = wi[W_FAILI]
-    arming = pending(tab, m, wi)
+    arming = pending(tab, m, wf, wi)
     terms, tr_armed, inv_armed = wi[W_TERMS], wi[W_TRARMED], wi[W_INVARMED]
     first, inv0 = tab[tab[T_MODE_TR] + m], tab[tab[T_MODE_INV] + m]
     n_tr = tab[tab[T_MODE_TR] + m + 1] - first
     n_inv = tab[tab[T_MODE_INV] + m + 1] - inv0
+    b0 = wf[wi[W_SCAL] + S_B0]
     ta, wa, ga = t0, math.inf, -1.0
     tb, wb, gb = t0, w0, wf[gen]
     for i in range(1, n + 1):
         t = sample(i, n, t0, t1, wf, wi)
         watch_terms(fns, m, t, xs, wf, wi)
-        w = armed_min(wf, wi, terms, tr_armed, n_tr, inv_armed, n_inv)
-        if w != w:  # an armed term failed: recorded, the others' minimum
+        w = watch_min(wf, wi, terms, tr_armed, n_tr, inv_armed, n_inv, b0)
+        if w != w:  # a term failed: recorded, the others' minimum
             w = watch_value(tab, m, t, xs, wf, wi)
         if wi[fail] != 0:
             curve_at(tb, t0, t1, wf, wi)
@@ -327,7 +339,7 @@ def first_event(fns: Fns, tab: Ints, m: int, t0: float, t1: float, w0: float, sp
         if arming and arm_at(fns, tab, m, t, xs, wf, wi):
             watch_terms(fns, m, t, xs, wf, wi)
             w = watch_value(tab, m, t, xs, wf, wi)
-            arming = pending(tab, m, wi)
+            arming = pending(tab, m, wf, wi)
         ta, wa, ga = tb, wb, gb
         tb, wb, gb = t, w, wf[gen]
     return EV_NONE, math.nan, wb

@@ -48,6 +48,7 @@ from hybrid.simulation.native.features import refuse_unsupported
 
 __all__ = [
     "COMPILED_FORM",
+    "LEVEL_SIDE",
     "MAX_MODES",
     "NativeMode",
     "NativeModel",
@@ -63,6 +64,11 @@ MAX_MODES = 4096
 
 COMPILED_FORM = "hybrid_compiled"
 """The attribute of a library function that holds its numba-compilable implementation."""
+
+
+LEVEL_SIDE = "#level_side"
+"""The internal function of an oriented atom: ``S * d``, or ``|d|`` where ``S`` is 0
+(:func:`hybrid.simulation.native.mathlib.h_level_side`; ``#`` keeps it from any user's name)."""
 
 
 def slot_name(k: int) -> str:
@@ -103,13 +109,15 @@ class NativeTransition:
     levels: tuple[ir.Expr, ...]
 
     def oriented_rho(self, first: int) -> ir.Expr:
-        """Rho with atom ``i`` read as ``S_(first+i) * (a - b) <= 0`` (the plain rho without levels)."""
+        """Rho with atom ``i`` read as ``S_(first+i) * (a - b) <= 0``, or as ``a == b`` where
+        ``S_(first+i)`` is 0 (``level_side``); the plain rho without levels (or all ``S`` 0)."""
         if not self.levels:
             return guard_to_rho(self.guard)
 
         def one_sided(index: int, difference: ir.Expr, col: int) -> ir.Expr:
             sign = ir.Var(sign_name(first + index), ir.PARAM, col)
-            return ir.Cmp(("<=",), (ir.Bin("*", sign, difference, col), ir.Num(0.0, col)), col)
+            side = ir.Call(LEVEL_SIDE, (sign, difference), col)
+            return ir.Cmp(("<=",), (side, ir.Num(0.0, col)), col)
 
         return guard_to_rho(replace_levels(self.guard, one_sided))
 

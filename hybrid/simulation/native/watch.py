@@ -1,20 +1,25 @@
 """Kernel source: the watch of a stay, as :class:`hybrid.simulation.events.Watch` keeps it.
 
-The watch is the smallest of every armed guard's rho, in its *oriented* form
-(each equality atom ``a == b`` read one-sided, ``S * (a - b) <= 0``, ``S`` the
-sign of ``a - b`` when the guard armed: the sign slots of the run's parameter
-vector), and every armed invariant's ``-rho``; ``inf`` when nothing is armed.
-A term that cannot be evaluated is left out (the failure is recorded).
-Function by function:
+The watch is the smallest of every guard's rho and every invariant's ``-rho``;
+``inf`` when the mode has neither. An *armed* guard takes part in its
+*oriented* form (each equality atom ``a == b`` read one-sided, ``S * (a - b) <= 0``,
+``S`` the sign of ``a - b`` when the guard armed: the sign slots of the run's
+parameter vector; ``S = 0``, a state exactly on the level then, reads the atom
+itself, ``|a - b|``), an armed invariant with its ``-rho``. A *disarmed* term
+is watched from the far edge of the band (docs/semantics.md, "Re-arming"): a
+guard as its plain rho plus ``b0`` (its sign slots 0, so its oriented form is
+its plain rho), an invariant as ``-rho + b0``, ``b0`` the band at the start of
+the stay (``S_B0``). A term that cannot be evaluated is left out (the failure
+is recorded). Function by function:
 
 - :func:`watch_start` is ``Watch.__init__``: the guards armed at entry
-  (``tr_armed``, set by ``enabled_at_entry``) oriented at the start point, a
-  guard with some ``a - b`` exactly 0 left disarmed; invariants armed when
-  their rho is below the band;
+  (``tr_armed``, set by ``enabled_at_entry``) oriented at the start point;
+  invariants armed when their rho is below the band; ``b0``;
 - :func:`watch_terms` and :func:`watch_value` are the watch function (one
   call of the model's ``OP_WATCH`` for every term, then the minimum);
 - :func:`arm_at` is ``Watch.arm``: a disarmed guard whose plain rho is beyond
-  the band, and none of whose ``a - b`` is 0, is armed with the signs there; a
+  the band is armed with the orientation there; a level of an armed guard read
+  on it (``S = 0``) is oriented once the state is beyond the band of it; a
   disarmed invariant whose ``-rho`` is beyond the band is armed;
 - :func:`pending` is ``Watch.pending``. The generation counter ``S_GEN``
   (``Watch.generation``) changes each time the watch does.
@@ -31,6 +36,7 @@ from hybrid.simulation.native.buffers import (
     F_INVARIANT,
     OP_ARM,
     OP_WATCH,
+    S_B0,
     S_GEN,
     T_INV_RHO,
     T_MODE_INV,
@@ -47,7 +53,8 @@ from hybrid.simulation.native.buffers import (
 from hybrid.simulation.native.decide import band, note_failure, value_checked
 from hybrid.simulation.native.kernel_types import Array, Fns, Ints, at
 
-__all__ = ["arm_at", "armed_min", "pending", "watch_at", "watch_start", "watch_terms", "watch_value"]
+__all__ = ["arm_at", "orientation", "pending", "watch_at", "watch_min", "watch_start", "watch_terms",
+           "watch_value"]
 
 # --- kernel ---
 
@@ -65,33 +72,41 @@ def watch_start(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
         fns(OP_ARM, m, t, at(x, 0), at(wf, wi[W_PE]), at(wf, wi[W_ARMV]))
     for k in range(n_tr):
         tr = first + k
-        if wi[wi[W_TRARMED] + k] == 0:
-            continue
+        armed = wi[wi[W_TRARMED] + k] != 0
         for a in range(tab[tab[T_TR_LV] + tr] - lv0, tab[tab[T_TR_LV] + tr + 1] - lv0):
-            value = armv[n_tr + a]
-            if value > 0.0:
-                wf[signs + a] = 1.0
-            elif value < 0.0:
-                wf[signs + a] = -1.0
-            else:
-                if value != value:
-                    note_failure(F_GUARD, tr, m, t, x, wf, wi)
-                wi[wi[W_TRARMED] + k] = 0
-                break
+            wf[signs + a] = orientation(armv[n_tr + a], tr, m, t, x, wf, wi) if armed else 0.0
     inv0 = tab[tab[T_MODE_INV] + m]
     for k in range(tab[tab[T_MODE_INV] + m + 1] - inv0):
         inv = inv0 + k
         rho = value_checked(fns, tab[tab[T_INV_RHO] + inv], F_INVARIANT, inv, m, t, x, wf, wi)
         wi[wi[W_INVARMED] + k] = 1 if rho < -width else 0
+    wf[wi[W_SCAL] + S_B0] = width
     wf[wi[W_SCAL] + S_GEN] += 1.0
 
 
-def pending(tab: Ints, m: int, wi: Ints) -> bool:
-    """Whether some guard or invariant of the watch is disarmed."""
+def orientation(value: float, tr: int, m: int, t: float, x: Array, wf: Array, wi: Ints) -> float:
+    """The side of a level ``a - b = value``: 1, -1, or 0 exactly on it (a NaN is recorded)."""
+    if value > 0.0:
+        return 1.0
+    if value < 0.0:
+        return -1.0
+    if value != value:
+        note_failure(F_GUARD, tr, m, t, x, wf, wi)
+    return 0.0
+
+
+def pending(tab: Ints, m: int, wf: Array, wi: Ints) -> bool:
+    """Whether some guard or invariant of the watch is disarmed, or a level read on it (0)."""
     first = tab[tab[T_MODE_TR] + m]
+    lv0 = tab[tab[T_TR_LV] + first]
+    signs = wi[W_PE] + tab[T_N_PARAMS]
     for k in range(tab[tab[T_MODE_TR] + m + 1] - first):
         if wi[wi[W_TRARMED] + k] == 0:
             return True
+        tr = first + k
+        for a in range(tab[tab[T_TR_LV] + tr] - lv0, tab[tab[T_TR_LV] + tr + 1] - lv0):
+            if wf[signs + a] == 0.0:
+                return True
     inv0 = tab[tab[T_MODE_INV] + m]
     for k in range(tab[tab[T_MODE_INV] + m + 1] - inv0):  # noqa: SIM110 (compiled: a plain loop)
         if wi[wi[W_INVARMED] + k] == 0:
@@ -105,34 +120,33 @@ def watch_terms(fns: Fns, m: int, t: float, x: Array, wf: Array, wi: Ints) -> No
 
 
 def watch_value(tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints) -> float:
-    """The watch from ``terms`` (``inf``: nothing armed); the first failing armed term is recorded."""
+    """The watch from ``terms`` (``inf``: no term); the first failing term is recorded."""
     first = tab[tab[T_MODE_TR] + m]
     n_tr = tab[tab[T_MODE_TR] + m + 1] - first
     inv0 = tab[tab[T_MODE_INV] + m]
     n_inv = tab[tab[T_MODE_INV] + m + 1] - inv0
     terms = wi[W_TERMS]
     tr_armed, inv_armed = wi[W_TRARMED], wi[W_INVARMED]
+    b0 = wf[wi[W_SCAL] + S_B0]
     v = math.inf
     for k in range(n_tr):
-        if wi[tr_armed + k] != 0:
-            w = wf[terms + k]
-            if w < v:
-                v = w
-            elif w != w:
-                note_failure(F_GUARD, first + k, m, t, x, wf, wi)
+        w = wf[terms + k] if wi[tr_armed + k] != 0 else wf[terms + k] + b0
+        if w < v:
+            v = w
+        elif w != w:
+            note_failure(F_GUARD, first + k, m, t, x, wf, wi)
     for k in range(n_inv):
-        if wi[inv_armed + k] != 0:
-            w = -wf[terms + n_tr + k]
-            if w < v:
-                v = w
-            elif w != w:
-                note_failure(F_INVARIANT, inv0 + k, m, t, x, wf, wi)
+        w = -wf[terms + n_tr + k] if wi[inv_armed + k] != 0 else b0 - wf[terms + n_tr + k]
+        if w < v:
+            v = w
+        elif w != w:
+            note_failure(F_INVARIANT, inv0 + k, m, t, x, wf, wi)
     return v
 
 
-def armed_min(wf: Array, wi: Ints, terms: int, tr_armed: int, n_tr: int, inv_armed: int,
-              n_inv: int) -> float:  # fmt: skip
-    """:func:`watch_value`'s minimum from offsets found once per stay; NaN if an armed term is NaN.
+def watch_min(wf: Array, wi: Ints, terms: int, tr_armed: int, n_tr: int, inv_armed: int,
+              n_inv: int, b0: float) -> float:  # fmt: skip
+    """:func:`watch_value`'s minimum from offsets found once per stay; NaN if a term is NaN.
 
     The hot path of the search (every sample, every root-finding step): small
     enough to be inlined. On NaN the caller asks :func:`watch_value`, which
@@ -140,19 +154,17 @@ def armed_min(wf: Array, wi: Ints, terms: int, tr_armed: int, n_tr: int, inv_arm
     """
     v = math.inf
     for k in range(n_tr):
-        if wi[tr_armed + k] != 0:
-            w = wf[terms + k]
-            if w < v:
-                v = w
-            elif w != w:
-                return math.nan
+        w = wf[terms + k] if wi[tr_armed + k] != 0 else wf[terms + k] + b0
+        if w < v:
+            v = w
+        elif w != w:
+            return math.nan
     for k in range(n_inv):
-        if wi[inv_armed + k] != 0:
-            w = -wf[terms + n_tr + k]
-            if w < v:
-                v = w
-            elif w != w:
-                return math.nan
+        w = -wf[terms + n_tr + k] if wi[inv_armed + k] != 0 else b0 - wf[terms + n_tr + k]
+        if w < v:
+            v = w
+        elif w != w:
+            return math.nan
     return v
 
 
@@ -161,15 +173,17 @@ def watch_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Int
     fns(OP_WATCH, m, t, at(x, 0), at(wf, wi[W_PE]), at(wf, wi[W_TERMS]))
     first = tab[tab[T_MODE_TR] + m]
     inv0 = tab[tab[T_MODE_INV] + m]
-    v = armed_min(wf, wi, wi[W_TERMS], wi[W_TRARMED], tab[tab[T_MODE_TR] + m + 1] - first,
-                  wi[W_INVARMED], tab[tab[T_MODE_INV] + m + 1] - inv0)  # fmt: skip
+    v = watch_min(wf, wi, wi[W_TERMS], wi[W_TRARMED], tab[tab[T_MODE_TR] + m + 1] - first,
+                  wi[W_INVARMED], tab[tab[T_MODE_INV] + m + 1] - inv0,
+                  wf[wi[W_SCAL] + S_B0])  # fmt: skip
     if v != v:
         return watch_value(tab, m, t, x, wf, wi)
     return v
 
 
 def arm_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints) -> bool:
-    """Arm the disarmed terms beyond the band on their safe side at ``(t, x)``; True if one was.
+    """Arm the disarmed terms beyond the band on their safe side at ``(t, x)``, and orient the
+    levels read on them (0) that the state is beyond the band of; True if one was.
 
     ``terms`` must hold the watch's terms at ``(t, x)`` (the invariants' rho are read there).
     """
@@ -183,9 +197,19 @@ def arm_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints)
     evaluated = False
     armv = wf[wi[W_ARMV] :]
     for k in range(n_tr):
-        if wi[tr_armed + k] != 0:
-            continue
         tr = first + k
+        lo, hi = tab[tab[T_TR_LV] + tr] - lv0, tab[tab[T_TR_LV] + tr + 1] - lv0
+        if wi[tr_armed + k] != 0:  # armed: orient a level read on it (0) once beyond the band
+            for a in range(lo, hi):
+                if wf[signs + a] == 0.0:
+                    if not evaluated:
+                        fns(OP_ARM, m, t, at(x, 0), at(wf, wi[W_PE]), at(wf, wi[W_ARMV]))
+                        evaluated = True
+                    value = armv[n_tr + a]
+                    if abs(value) > width:
+                        wf[signs + a] = 1.0 if value > 0.0 else -1.0
+                        changed = True
+            continue
         if not evaluated:
             fns(OP_ARM, m, t, at(x, 0), at(wf, wi[W_PE]), at(wf, wi[W_ARMV]))
             evaluated = True
@@ -194,19 +218,8 @@ def arm_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints)
             note_failure(F_GUARD, tr, m, t, x, wf, wi)
         if not rho > width:
             continue
-        lo, hi = tab[tab[T_TR_LV] + tr] - lv0, tab[tab[T_TR_LV] + tr + 1] - lv0
-        at_level = False
         for a in range(lo, hi):
-            value = armv[n_tr + a]
-            if not (value > 0.0 or value < 0.0):
-                if value != value:
-                    note_failure(F_GUARD, tr, m, t, x, wf, wi)
-                at_level = True
-                break
-        if at_level:
-            continue
-        for a in range(lo, hi):
-            wf[signs + a] = 1.0 if armv[n_tr + a] > 0.0 else -1.0
+            wf[signs + a] = orientation(armv[n_tr + a], tr, m, t, x, wf, wi)
         wi[tr_armed + k] = 1
         changed = True
     inv0 = tab[tab[T_MODE_INV] + m]
