@@ -142,8 +142,9 @@ def _reference_mode(native: NativeModel, model: Automaton | System, m: int,
                     inputs: Inputs) -> tuple[Any, Any]:  # fmt: skip
     """The reference engine's compiled model and its mode ``m`` (for the words of a failure)."""
     from hybrid.simulation.compiled import CompiledModel
+    from hybrid.simulation.start import held_inputs
 
-    compiled = CompiledModel(model, inputs)
+    compiled = CompiledModel(model, {**held_inputs(model, inputs), **(inputs or {})})
     return compiled, compiled.mode(native.modes[m].key)
 
 

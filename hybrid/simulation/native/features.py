@@ -11,14 +11,18 @@ Examples
 >>> from hybrid.compose import as_system
 >>> tank = hybrid.load_text('''
 ... automaton: tank
-... inputs: {u: {range: [0.5, 1.5]}}
+... inputs: {u: {}}
 ... state: {h: {initial: 2.0}}
 ... locations: {fill: {flow: {h: u}}}
 ... ''')
 >>> refuse_unsupported(as_system(tank))
 Traceback (most recent call last):
 ...
-hybrid.errors.UsageError: the compiled backend cannot run tank: input 'u' is free (the scipy backend holds it at its nominal value or takes inputs={'u': f}); use backend='scipy', or compose tank with an automaton that defines 'u'
+hybrid.errors.UsageError: input 'u' of tank needs a value, and the compiled backend cannot take inputs given as Python functions: use backend='scipy' with inputs={'u': f}, or compose tank with an automaton that defines 'u'
+
+A free input with a ``range`` is held at its nominal value, as the scipy
+backend holds it (a slot of the run's parameter vector,
+:class:`~hybrid.simulation.native.structure.NativeModel`).
 """
 
 from __future__ import annotations
@@ -33,18 +37,13 @@ __all__ = ["refuse_requirements", "refuse_unsupported"]
 def refuse_unsupported(system: System) -> None:
     """Raise :class:`UsageError` if ``system`` uses a construct the compiled backend lacks."""
     name = system.name
-    free = system.free_inputs
-    if free and free[0] not in system.input_ranges():
+    ranges = system.input_ranges()
+    unheld = [n for n in system.free_inputs if n not in ranges]
+    if unheld:
         raise UsageError(
-            f"input '{free[0]}' of {name} needs a value, and the compiled backend cannot take "
-            f"inputs given as Python functions: use backend='scipy' with inputs={{'{free[0]}': f}}, "
-            f"or compose {name} with an automaton that defines '{free[0]}'"
-        )
-    if free:
-        raise UsageError(
-            f"the compiled backend cannot run {name}: input '{free[0]}' is free (the scipy "
-            f"backend holds it at its nominal value or takes inputs={{'{free[0]}': f}}); use "
-            f"backend='scipy', or compose {name} with an automaton that defines '{free[0]}'"
+            f"input '{unheld[0]}' of {name} needs a value, and the compiled backend cannot take "
+            f"inputs given as Python functions: use backend='scipy' with inputs={{'{unheld[0]}': f}}, "
+            f"or compose {name} with an automaton that defines '{unheld[0]}'"
         )
     for c in system.components:
         for location in c.automaton.locations.values():

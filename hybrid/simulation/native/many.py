@@ -164,8 +164,9 @@ class Ensemble(Sequence[Run]):
 
     def model_of(self, i: int) -> Automaton | System:
         """The model with run ``i``'s parameter values."""
-        names = self.compiled.native.slot_names
-        return self.model.with_parameters(dict(zip(names, self.params[i].tolist(), strict=True)))
+        names = self.compiled.native.slot_names  # the held inputs' slots after them
+        values = self.params[i].tolist()[: len(names)]
+        return self.model.with_parameters(dict(zip(names, values, strict=True)))
 
 
 def simulate_many(

@@ -193,7 +193,7 @@ def generate(model: NativeModel) -> Generated:
     """The source of the module that runs ``model`` compiled."""
     states = model.state_names
     modes = model.modes
-    n_params = len(model.slot_names)
+    n_params = model.n_slots
     max_lv = max(1, *(sum(len(t.levels) for t in m.transitions) for m in modes))
     names = {s: f"x[{i}]" for i, s in enumerate(states)}
     names.update({slot_name(k): f"p[{k}]" for k in range(n_params)})

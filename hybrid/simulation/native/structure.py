@@ -5,7 +5,9 @@ The counterpart of :class:`hybrid.simulation.compiled.CompiledModel` and of
 parameter of each component becomes a slot of the parameter vector ``p``
 (``Var("#p3")`` in the IR, printed ``p[3]``), so the generated source depends
 on the model's structure only, and a sweep over parameters or initial values
-compiles once.
+compiles once. A free input with a range, which the scipy backend holds at
+its nominal value, is a slot too, after the parameters (:attr:`NativeModel.held`),
+set to that value for each run.
 
 Modes: every location of a plain automaton (so ``initial_location`` is a
 run-time choice too); for a system, the modes reachable from its initial mode
@@ -160,8 +162,13 @@ class NativeModel:
                 values.append(float(value))
         self.slots = slots
         self.slot_names = tuple(labels)
+        """The parameters' slots, in order (``comp.name`` in a system)."""
         self.values = tuple(values)
-        self.renamed = _renamed_system(self.system, slots)
+        self.held = tuple(self.system.input_ranges())
+        """The free inputs with a range, held at their nominal values: slots after the parameters."""
+        self.n_slots = len(labels) + len(self.held)
+        held = {name: slot_name(len(labels) + k) for k, name in enumerate(self.held)}
+        self.renamed = _renamed_system(self.system, slots, held)
         self.state_names = self.system.state_names
         self.columns = self.system.signal_columns
         self.modes = [self._mode(key) for key in self._mode_keys()]
@@ -242,41 +249,52 @@ class NativeModel:
         return functions
 
     def parameter_vector(self, model: Automaton | System) -> list[float]:
-        """The slot values of ``model`` (this model, possibly with other parameter values)."""
+        """The slot values of ``model`` (this model, possibly with other parameter values):
+        its parameters, then the nominal values of its held inputs."""
         automata = (
             (model,) if isinstance(model, Automaton) else tuple(c.automaton for c in model.components)
         )  # as_system(model)'s components, without building the system
         values = list(self.values)
         for (i, name), k in self.slots.items():
             values[k] = float(automata[i].parameters[name])
+        if self.held:
+            ranges = model.input_ranges()
+            values += [float(ranges[name].nominal) for name in self.held]
         return values
 
 
-def _rename(node: ir.Expr, names: Mapping[str, str]) -> ir.Expr:
-    """Every parameter renamed to its slot (recursion is safe: depth is capped on parsing)."""
+def _rename(node: ir.Expr, names: Mapping[str, str], held: Mapping[str, str]) -> ir.Expr:
+    """Every parameter and held input renamed to its slot (recursion is safe: depth is
+    capped on parsing)."""
     if isinstance(node, ir.Var):
-        return replace(node, name=names[node.name]) if node.kind == ir.PARAM else node
+        if node.kind == ir.PARAM:
+            return replace(node, name=names[node.name])
+        if node.kind == ir.INPUT and node.name in held:
+            return replace(node, name=held[node.name], kind=ir.PARAM)
+        return node
     if isinstance(node, ir.Call):
-        return replace(node, args=tuple(_rename(a, names) for a in node.args))
+        return replace(node, args=tuple(_rename(a, names, held) for a in node.args))
     if isinstance(node, ir.Unary | ir.Not):
-        return replace(node, operand=_rename(node.operand, names))
+        return replace(node, operand=_rename(node.operand, names, held))
     if isinstance(node, ir.Bin):
-        return replace(node, left=_rename(node.left, names), right=_rename(node.right, names))
+        return replace(node, left=_rename(node.left, names, held), right=_rename(node.right, names, held))
     if isinstance(node, ir.Cmp):
-        return replace(node, operands=tuple(_rename(a, names) for a in node.operands))
+        return replace(node, operands=tuple(_rename(a, names, held) for a in node.operands))
     if isinstance(node, ir.BoolOp):
-        return replace(node, values=tuple(_rename(a, names) for a in node.values))
+        return replace(node, values=tuple(_rename(a, names, held) for a in node.values))
     return node
 
 
-def _renamed_system(system: System, slots: Mapping[tuple[int, str], int]) -> System:
+def _renamed_system(
+    system: System, slots: Mapping[tuple[int, str], int], held: Mapping[str, str]
+) -> System:
     parts = []
     for i, c in enumerate(system.components):
         a = c.automaton
         names = {name: slot_name(slots[(i, name)]) for name in a.parameters}
 
         def ren(node: ir.Expr, names: Mapping[str, str] = names) -> ir.Expr:
-            return _rename(node, names)
+            return _rename(node, names, held)
 
         locations = {
             name: _renamed_location(loc, ren) for name, loc in a.locations.items()

@@ -73,20 +73,27 @@ def test_independent_components_merged_in_hybrid_time() -> None:
     assert {j.edge for j in run.jumps} >= {"tank.full", "other.full", "other.empty"}
 
 
+def test_a_free_input_with_a_range_is_held_at_its_nominal_value() -> None:
+    # u in [0.5, 1.5], no nominal given: held at the midpoint 1, so h = 2 + t reaches 4 at
+    # t = 2, then h = 4 - 2 (t - 2) reaches 1 at t = 3.5; alone, and beside another tank
+    run = agree(hybrid.load_text(INPUT))
+    assert run.jump_times[:2] == pytest.approx([2.0, 3.5], abs=1e-9)
+    assert run.settings["start"]["inputs"] == {"u": 1.0}
+    nominal = INPUT.replace("range: [0.5, 1.5]", "range: [0.5, 1.5], nominal: 0.5")
+    assert agree(hybrid.load_text(nominal)).jump_times[0] == pytest.approx(4.0, abs=1e-9)
+    system = agree(compose(hybrid.load_text(INPUT), hybrid.load_text(OTHER), name="open"))
+    assert next(j.t for j in system.jumps if j.edge == "tank.full") == pytest.approx(2.0, abs=1e-9)
+
+
 @pytest.mark.parametrize(
     ("model", "named"),
     [
-        (lambda: hybrid.load_text(INPUT), "input 'u' is free"),
-        (
-            lambda: compose(hybrid.load_text(INPUT), hybrid.load_text(OTHER), name="open"),
-            "input 'u' is free",
-        ),
         (
             lambda: hybrid.load_text(TANK.replace("drain: {flow", "drain: {urgent: true, flow")),
             "location 'drain' is urgent",
         ),
     ],
-    ids=["bounded-input", "free-input-of-a-system", "urgent"],
+    ids=["urgent"],
 )
 def test_refused_with_the_feature_named(model: object, named: str) -> None:
     built = model()  # type: ignore[operator]
@@ -95,3 +102,11 @@ def test_refused_with_the_feature_named(model: object, named: str) -> None:
         hybrid.simulate(built, t_end=1.0, backend="compiled", handle_sigint=False)
     assert named in str(refused.value)
     assert str(refused.value).startswith(("the compiled backend cannot run",))
+
+
+def test_a_free_input_without_a_range_needs_a_value_on_both_backends() -> None:
+    unbounded = hybrid.load_text(INPUT.replace("{u: {range: [0.5, 1.5]}}", "{u: {}}"))
+    with pytest.raises(UsageError, match="input 'u' needs a value"):
+        hybrid.simulate(unbounded, t_end=1.0, handle_sigint=False)
+    with pytest.raises(UsageError, match=r"input 'u' of tank needs a value.*backend='scipy'"):
+        hybrid.simulate(unbounded, t_end=1.0, backend="compiled", handle_sigint=False)
