@@ -10,6 +10,7 @@ compose and simulate as the closed forms say.
 
 from __future__ import annotations
 
+import importlib.util
 import math
 from pathlib import Path
 
@@ -122,8 +123,17 @@ edges:
 """
 
 
-def test_an_urgent_location_is_left_at_once() -> None:
-    run = hybrid.simulate(hybrid.load_text(URGENT.replace("LEVEL", "0")), t_end=5.0, **TOL)
+BACKENDS = [
+    "scipy",
+    pytest.param("compiled", marks=pytest.mark.skipif(
+        importlib.util.find_spec("numba") is None, reason="the fast extra (numba)")),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_an_urgent_location_is_left_at_once(backend: str) -> None:
+    run = hybrid.simulate(hybrid.load_text(URGENT.replace("LEVEL", "0")), t_end=5.0,
+                          backend=backend, **TOL)  # fmt: skip
     # charge 1 s, decide and fire at the same instant, discharge 1 s, ...
     times = [j.t for j in run.jumps]
     assert [j.edge for j in run.jumps[:4]] == ["full", "go", "back", "full"]
@@ -131,8 +141,10 @@ def test_an_urgent_location_is_left_at_once() -> None:
     assert run.termination.cause == "t_end"
 
 
-def test_an_urgent_location_with_no_edge_enabled_blocks_at_once() -> None:
-    run = hybrid.simulate(hybrid.load_text(URGENT.replace("LEVEL", "1")), t_end=5.0, **TOL)
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_an_urgent_location_with_no_edge_enabled_blocks_at_once(backend: str) -> None:
+    run = hybrid.simulate(hybrid.load_text(URGENT.replace("LEVEL", "1")), t_end=5.0,
+                          backend=backend, **TOL)  # fmt: skip
     assert [j.edge for j in run.jumps] == ["full"]
     term = run.termination
     assert term.cause == "blocked" and term.t == pytest.approx(1.0, abs=1e-12)

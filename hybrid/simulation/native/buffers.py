@@ -55,6 +55,7 @@ __all__ = [
     "D_STALL",
     "D_STATE_NONFINITE",
     "D_STEP_TOO_SMALL",
+    "D_URGENT",
     "D_ZENO_GEOMETRIC",
     "D_ZENO_INSTANT",
     "FP_DECIDE",
@@ -135,6 +136,7 @@ __all__ = [
     "T_MAX_TR",
     "T_MODE_INV",
     "T_MODE_TR",
+    "T_MODE_URGENT",
     "T_N_PARAMS",
     "T_N_SIGNALS",
     "T_N_STATES",
@@ -199,6 +201,7 @@ N_CFG_I = 4
 D_NONE, D_INITIAL, D_BLOCKED_ENTRY, D_BLOCKED_FLOW, D_STALL = 0, 1, 2, 3, 4
 D_ZENO_INSTANT, D_ZENO_GEOMETRIC, D_RESET_NONFINITE, D_EVAL, D_FLOW = 5, 6, 7, 8, 9
 D_STEP_TOO_SMALL, D_STATE_NONFINITE, D_FLOW_START, D_NOT_ADVANCING, D_CRAWL = 10, 11, 12, 13, 14
+D_URGENT = 15
 
 # which compiled function could not be evaluated (out_i[I_FAIL_KIND])
 F_NONE, F_GUARD, F_INVARIANT, F_SIGNALS, F_RESET, F_FLOW = 0, 1, 2, 3, 4, 5
@@ -217,11 +220,11 @@ ASK_ENTRY, ASK_EVENT, ASK_LEFT, ASK_WATCH = 0, 1, 2, 3
 # the model's tables (one int64 array, ``tab``): sizes, then where each table starts
 T_N_STATES, T_N_SIGNALS, T_MAX_TR, T_MAX_LV, T_MAX_INV, T_N_PARAMS = 0, 1, 2, 3, 4, 5
 T_MODE_TR, T_MODE_INV, T_TR_TARGET, T_TR_PRIORITY, T_TR_RHO, T_TR_BOOL = 6, 7, 8, 9, 10, 11
-T_TR_SRHO, T_TR_SBOOL, T_TR_LV, T_INV_RHO, T_INV_BOOL = 12, 13, 14, 15, 16
-TAB_HEADER = 17
+T_TR_SRHO, T_TR_SBOOL, T_TR_LV, T_INV_RHO, T_INV_BOOL, T_MODE_URGENT = 12, 13, 14, 15, 16, 17
+TAB_HEADER = 18
 TABLES = (
     "MODE_TR", "MODE_INV", "TR_TARGET", "TR_PRIORITY", "TR_RHO", "TR_BOOL",
-    "TR_SRHO", "TR_SBOOL", "TR_LV", "INV_RHO", "INV_BOOL",
+    "TR_SRHO", "TR_SBOOL", "TR_LV", "INV_RHO", "INV_BOOL", "MODE_URGENT",
 )  # fmt: skip
 """The tables in ``tab`` order (from ``T_MODE_TR`` on)."""
 

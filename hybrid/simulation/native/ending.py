@@ -50,6 +50,11 @@ def termination_of(
     elif detail in (b.D_BLOCKED_ENTRY, b.D_BLOCKED_FLOW):
         how = "does not hold" if detail == b.D_BLOCKED_ENTRY else "is about to be left"
         message = f"invariant of {mode.invariants[index][0]} {how} and no transition is enabled"
+    elif detail == b.D_URGENT:
+        message = (
+            f"urgent location {', '.join(mode.urgent)}: no time may pass there and no "
+            "transition is enabled"
+        )
     elif detail == b.D_STALL:
         message = (
             "events keep firing at the same instant without any transition "

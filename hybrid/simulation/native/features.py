@@ -45,14 +45,6 @@ def refuse_unsupported(system: System) -> None:
             f"inputs given as Python functions: use backend='scipy' with inputs={{'{unheld[0]}': f}}, "
             f"or compose {name} with an automaton that defines '{unheld[0]}'"
         )
-    for c in system.components:
-        for location in c.automaton.locations.values():
-            if location.urgent:
-                where = location.name if system.single else f"{c.name}.{location.name}"
-                raise UsageError(
-                    f"the compiled backend cannot run {name}: location '{where}' is urgent "
-                    "(no time may pass there), which it does not implement; use backend='scipy'"
-                )
 
 
 def refuse_requirements(system: System) -> None:

@@ -6,7 +6,8 @@ Function by function:
   enabled there fires at once), else flow until the watch stops the stay;
   ``max_jumps``, the per-instant cap (a zero-time cycle ends as ``zeno``), the
   stall counter (events without an enabled transition, ``solver_failure``),
-  ``blocked`` at entry, non-finite resets, Zeno by geometric accumulation;
+  ``blocked`` at entry (an urgent mode where no transition fires at once, or an
+  invariant that does not hold), non-finite resets, Zeno by geometric accumulation;
 - :func:`jump` is ``EventLoop._jump`` (reset on pre-jump values, record the
   jump and the post-jump point);
 - :func:`zeno_update` is :meth:`hybrid.simulation.zeno.ZenoDetector.update`
@@ -39,6 +40,7 @@ from hybrid.simulation.native.buffers import (
     D_NONE,
     D_RESET_NONFINITE,
     D_STALL,
+    D_URGENT,
     D_ZENO_GEOMETRIC,
     D_ZENO_INSTANT,
     F_RESET,
@@ -55,6 +57,7 @@ from hybrid.simulation.native.buffers import (
     T_MAX_INV,
     T_MAX_LV,
     T_MAX_TR,
+    T_MODE_URGENT,
     T_N_PARAMS,
     T_N_STATES,
     T_TR_TARGET,
@@ -272,6 +275,9 @@ def run_one(fp: Ints, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f:
         chosen = decide(ASK_ENTRY, fns, tab, m, t, x, wf, wi)
         if failed(wi):
             continue  # ends as nonfinite above
+        if chosen < 0 and tab[tab[T_MODE_URGENT] + m] != 0:  # no time may pass here
+            finish(oi, of, L_BLOCKED, t, j, m, D_URGENT, 0, math.nan, wf, wi)
+            return
         if chosen < 0:
             left = decide(ASK_LEFT, fns, tab, m, t, x, wf, wi)
             if left >= 0:

@@ -214,6 +214,7 @@ def generate(model: NativeModel) -> Generated:
         out_cases.append(pre + [f"out[{c}] = {v}" for c, v in enumerate(items)])
         tables["MODE_TR"].append(len(tables["TR_TARGET"]))
         tables["MODE_INV"].append(len(tables["INV_RHO"]))
+        tables["MODE_URGENT"].append(1 if mode.urgent else 0)
         oriented: list[ir.Expr] = []
         raw: list[ir.Expr] = []
         differences: list[ir.Expr] = []

@@ -144,6 +144,8 @@ class NativeMode:
     signals: Mapping[str, ir.Expr]
     invariants: tuple[tuple[str, ir.Expr], ...]
     transitions: tuple[NativeTransition, ...]
+    urgent: tuple[str, ...] = ()
+    """The urgent locations of the mode (qualified): no time may pass in it."""
 
 
 class NativeModel:
@@ -198,9 +200,12 @@ class NativeModel:
         flow: dict[str, ir.Expr] = {}
         signals: dict[str, ir.Expr] = {}
         invariants: list[tuple[str, ir.Expr]] = []
+        urgent: list[str] = []
         for i, (c, loc_name) in enumerate(zip(system.components, key, strict=True)):
             a = c.automaton
             loc = a.locations[loc_name]
+            if loc.urgent:
+                urgent.append(system.qualified(i, loc_name))
             for name in a.signal_names:
                 signals[name] = loc.signals.get(name, a.signals[name])
             flow.update(loc.flow)
@@ -217,6 +222,7 @@ class NativeModel:
             signals=MappingProxyType(signals),
             invariants=tuple(invariants),
             transitions=tuple(transitions),
+            urgent=tuple(urgent),
         )
 
     def expressions(self) -> Iterator[ir.Expr]:

@@ -85,23 +85,15 @@ def test_a_free_input_with_a_range_is_held_at_its_nominal_value() -> None:
     assert next(j.t for j in system.jumps if j.edge == "tank.full") == pytest.approx(2.0, abs=1e-9)
 
 
-@pytest.mark.parametrize(
-    ("model", "named"),
-    [
-        (
-            lambda: hybrid.load_text(TANK.replace("drain: {flow", "drain: {urgent: true, flow")),
-            "location 'drain' is urgent",
-        ),
-    ],
-    ids=["urgent"],
-)
-def test_refused_with_the_feature_named(model: object, named: str) -> None:
-    built = model()  # type: ignore[operator]
-    hybrid.simulate(built, t_end=1.0, handle_sigint=False)  # the scipy backend runs it
-    with pytest.raises(UsageError, match="backend='scipy'") as refused:
-        hybrid.simulate(built, t_end=1.0, backend="compiled", handle_sigint=False)
-    assert named in str(refused.value)
-    assert str(refused.value).startswith(("the compiled backend cannot run",))
+URGENT = TANK.replace("drain: {flow", "drain: {urgent: true, flow")
+
+
+def test_an_urgent_location_blocks_at_once_where_no_edge_fires() -> None:
+    # h = 2 + t reaches 4 at t = 2; drain is urgent and `empty` (h <= 1) is false there
+    run = agree(hybrid.load_text(URGENT))
+    assert run.jump_times == pytest.approx([2.0], abs=1e-9)
+    assert run.termination.cause == "blocked" and run.termination.t == pytest.approx(2.0, abs=1e-9)
+    assert "urgent location drain" in run.termination.message
 
 
 def test_a_free_input_without_a_range_needs_a_value_on_both_backends() -> None:
