@@ -84,16 +84,8 @@ def _run_beside(
     A thread per run costs about a short run; a run that reports progress is not short.
     """
     done: _Done = queue.SimpleQueue()
-
-    def job() -> None:
-        try:
-            call(flag)
-        except BaseException as exc:  # re-raised in the waiting thread
-            done.put(exc)
-        else:
-            done.put(None)
-
-    threading.Thread(target=job, name="hybrid-compiled-run", daemon=True).start()
+    threading.Thread(target=_run_into, args=(call, flag, done), name="hybrid-compiled-run",
+                     daemon=True).start()  # fmt: skip
     while True:
         try:
             error = done.get(timeout=TICK)
@@ -140,6 +132,18 @@ def _reset_after_fork() -> None:
 os.register_at_fork(after_in_child=_reset_after_fork)
 
 
+def _run_into(
+    call: Callable[[NDArray[np.int64]], None], flag: NDArray[np.int64], done: _Done
+) -> None:
+    """``call(flag)``, then None or its exception into ``done`` (re-raised by the waiting thread)."""
+    try:
+        call(flag)
+    except BaseException as exc:
+        done.put(exc)
+    else:
+        done.put(None)
+
+
 def _serve(jobs: queue.SimpleQueue[_Job]) -> None:
     """The worker: each job's ``call(flag)``, then None or its exception into its ``done`` queue.
 
@@ -147,12 +151,7 @@ def _serve(jobs: queue.SimpleQueue[_Job]) -> None:
     """
     while True:
         call, flag, done = jobs.get()
-        try:
-            call(flag)
-        except BaseException as exc:  # re-raised in the waiting thread
-            done.put(exc)
-        else:
-            done.put(None)
+        _run_into(call, flag, done)
         del call, flag, done  # hold nothing of a finished run while waiting for the next
         with _WORKER_LOCK:
             if not _WORKER or _WORKER[0][1] is not threading.current_thread():
