@@ -59,6 +59,17 @@ __all__ = ["arm_at", "orientation", "pending", "watch_at", "watch_min", "watch_s
 # --- kernel ---
 
 
+def orientation(value: float, tr: int, m: int, t: float, x: Array, wf: Array, wi: Ints) -> float:
+    """The side of a level ``a - b = value``: 1, -1, or 0 exactly on it (a NaN is recorded)."""
+    if value > 0.0:
+        return 1.0
+    if value < 0.0:
+        return -1.0
+    if value != value:
+        note_failure(F_GUARD, tr, m, t, x, wf, wi)
+    return 0.0
+
+
 def watch_start(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
                 wi: Ints) -> None:  # fmt: skip
     """The watch of a stay starting at ``(t, x)`` (``Watch.__init__``)."""
@@ -82,17 +93,6 @@ def watch_start(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
         wi[wi[W_INVARMED] + k] = 1 if rho < -width else 0
     wf[wi[W_SCAL] + S_B0] = width
     wf[wi[W_SCAL] + S_GEN] += 1.0
-
-
-def orientation(value: float, tr: int, m: int, t: float, x: Array, wf: Array, wi: Ints) -> float:
-    """The side of a level ``a - b = value``: 1, -1, or 0 exactly on it (a NaN is recorded)."""
-    if value > 0.0:
-        return 1.0
-    if value < 0.0:
-        return -1.0
-    if value != value:
-        note_failure(F_GUARD, tr, m, t, x, wf, wi)
-    return 0.0
 
 
 def pending(tab: Ints, m: int, wf: Array, wi: Ints) -> bool:

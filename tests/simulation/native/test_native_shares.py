@@ -141,3 +141,19 @@ def test_without_workers_this_process_compiles_every_piece(
     module = _load(path, "hybrid_native_shares_alone")
     assert (module.first(1.0), module.second(1.0)) == (4.0, 6.0)
     assert (_hits(module.first), _hits(module.second)) == (0, 0)
+
+
+def test_every_kernel_function_is_defined_after_the_kernel_functions_it_calls() -> None:
+    # compiled in this order, each eagerly with its signature: a callee defined later is an
+    # untyped global when its caller compiles (a first compile in one process failed so)
+    code, names = kernel_source(KERNEL_MODULES)
+    kernel = set(names)
+    defined: set[str] = set()
+    for node in ast.parse(code).body:
+        if not isinstance(node, ast.FunctionDef):
+            continue
+        calls = {c.func.id for c in ast.walk(node)
+                 if isinstance(c, ast.Call) and isinstance(c.func, ast.Name)}  # fmt: skip
+        later = sorted((calls & kernel) - defined - {node.name})
+        assert not later, f"{node.name} calls {later}, defined after it"
+        defined.add(node.name)
