@@ -67,12 +67,7 @@ def test_generated_models_agree(
     model = MODEL.with_parameters(values)
     common = {"t_end": 6.0, "max_jumps": 40, "rtol": 1e-10, "atol": 1e-12, "dt": dt,
               "initial": {"x": x0, "y": y0}, "handle_sigint": False}  # fmt: skip
-    compiled = hybrid.simulate(model, backend="compiled", **common)  # type: ignore[arg-type]
-    reference = hybrid.simulate(model, **common)  # type: ignore[arg-type]
-    assert [(j.edge, j.target) for j in compiled.jumps] == [(j.edge, j.target) for j in reference.jumps]
-    np.testing.assert_allclose(compiled.jump_times, reference.jump_times, rtol=1e-10, atol=1e-9)
-    assert compiled.termination.cause == reference.termination.cause
-    assert compiled.termination.location == reference.termination.location
+    compiled, reference = both_backends(model, common)
     if dt is not None:  # the grid's points away from the jumps, at the same times and states
         # (a grid point that falls on a jump's time is kept or not as the two event times,
         # equal to an ulp or so, fall on either side of it)
@@ -82,6 +77,17 @@ def test_generated_models_agree(
             np.testing.assert_allclose(
                 compiled[name][mine], reference[name][theirs], rtol=1e-7, atol=1e-8
             )
+
+
+def both_backends(model: hybrid.Automaton, common: dict[str, object]) -> tuple[hybrid.Run, hybrid.Run]:
+    """``(compiled, scipy)`` runs of ``model``, held to the same jumps, times and end."""
+    compiled = hybrid.simulate(model, backend="compiled", **common)  # type: ignore[arg-type]
+    reference = hybrid.simulate(model, **common)  # type: ignore[arg-type]
+    assert [(j.edge, j.target) for j in compiled.jumps] == [(j.edge, j.target) for j in reference.jumps]
+    np.testing.assert_allclose(compiled.jump_times, reference.jump_times, rtol=1e-10, atol=1e-9)
+    assert compiled.termination.cause == reference.termination.cause
+    assert compiled.termination.location == reference.termination.location
+    return compiled, reference
 
 
 def _away_from_jumps(run: hybrid.Run) -> np.ndarray:
@@ -131,11 +137,6 @@ def test_models_starting_on_their_boundaries_agree(
     model = EDGE_MODELS[which].with_parameters({"c": c, "g": g, "e": e})
     common = {"t_end": 4.05, "max_jumps": 60, "rtol": 1e-10, "atol": 1e-12,
               "initial": {"x": c + x_off, "y": y0}, "handle_sigint": False}  # fmt: skip
-    compiled = hybrid.simulate(model, backend="compiled", **common)  # type: ignore[arg-type]
-    reference = hybrid.simulate(model, **common)  # type: ignore[arg-type]
-    assert [(j.edge, j.target) for j in compiled.jumps] == [(j.edge, j.target) for j in reference.jumps]
-    np.testing.assert_allclose(compiled.jump_times, reference.jump_times, rtol=1e-10, atol=1e-9)
-    assert compiled.termination.cause == reference.termination.cause
-    assert compiled.termination.location == reference.termination.location
+    compiled, _ = both_backends(model, common)
     if which < 3:  # never through the floor by more than its band (1e-10 (1 + |state|))
         assert float(np.min(compiled["x"] - c)) >= -1e-9 * (1.0 + abs(c))
