@@ -59,7 +59,7 @@ fuzz: $(STAMP_TEST)
 		$(BIN)/python -m pytest -q -s -p no:cacheprovider \
 		tests/fuzz/test_fuzz_simulation.py tests/cli/test_cli_simulate_interrupts.py
 	HYBRID_FUZZ=1 $(BIN)/python -m pytest -q -p no:cacheprovider \
-		tests/simulation/native/test_native_property.py
+		tests/simulation/native/test_native_property.py tests/simulation/native/test_native_spaceex.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .mypy_cache .ruff_cache docs/_build docs/api docs/_generated
