@@ -169,10 +169,13 @@ def _synchronised(
     )
 
 
-def mode_of(system: System, key: Mode, *, binder: Binder | None = None) -> ModeView:
+def mode_of(
+    system: System, key: Mode, *, bind: bool = True, binder: Binder | None = None
+) -> ModeView:
     """Flows, signals, invariants and transitions of mode ``key``, parameters bound.
 
-    ``binder`` (a :class:`Binder`) reuses the bound expressions of earlier calls.
+    ``binder`` (a :class:`Binder`) reuses the bound expressions of earlier calls;
+    ``bind=False`` leaves the parameters as names (the compiled backend's slots).
     """
     flow: dict[str, ir.Expr] = {}
     signals: dict[str, ir.Expr] = {}
@@ -184,12 +187,12 @@ def mode_of(system: System, key: Mode, *, binder: Binder | None = None) -> ModeV
         if loc.urgent:
             urgent.append(system.qualified(i, loc_name))
         for name in a.signal_names:
-            signals[name] = _bound(system, i, loc.signals.get(name, a.signals[name]), True, binder)
+            signals[name] = _bound(system, i, loc.signals.get(name, a.signals[name]), bind, binder)
         for var, expr in loc.flow.items():
-            flow[var] = _bound(system, i, expr, True, binder)
+            flow[var] = _bound(system, i, expr, bind, binder)
         if not (isinstance(loc.invariant, ir.BoolConst) and loc.invariant.value):
             invariants.append(
-                (system.qualified(i, loc_name), _bound(system, i, loc.invariant, True, binder))
+                (system.qualified(i, loc_name), _bound(system, i, loc.invariant, bind, binder))
             )
     return ModeView(
         key=key,
@@ -197,6 +200,6 @@ def mode_of(system: System, key: Mode, *, binder: Binder | None = None) -> ModeV
         flow=MappingProxyType(flow),
         signals=MappingProxyType(signals),
         invariants=tuple(invariants),
-        transitions=transitions_of(system, key, binder=binder),
+        transitions=transitions_of(system, key, bind=bind, binder=binder),
         urgent=tuple(urgent),
     )

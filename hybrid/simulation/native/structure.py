@@ -45,7 +45,7 @@ from hybrid.expr import ir
 from hybrid.expr.functions import BUILTINS, Function
 from hybrid.expr.rho import _rewrite, guard_to_rho, levels
 from hybrid.model import Automaton, Location
-from hybrid.modes import Mode, TransitionView, transitions_of
+from hybrid.modes import Mode, TransitionView, mode_of, transitions_of
 from hybrid.simulation.native.features import refuse_unsupported
 
 __all__ = [
@@ -195,34 +195,18 @@ class NativeModel:
         return keys
 
     def _mode(self, key: Mode) -> NativeMode:
-        """:func:`hybrid.modes.mode_of` without binding parameters."""
-        system = self.renamed
-        flow: dict[str, ir.Expr] = {}
-        signals: dict[str, ir.Expr] = {}
-        invariants: list[tuple[str, ir.Expr]] = []
-        urgent: list[str] = []
-        for i, (c, loc_name) in enumerate(zip(system.components, key, strict=True)):
-            a = c.automaton
-            loc = a.locations[loc_name]
-            if loc.urgent:
-                urgent.append(system.qualified(i, loc_name))
-            for name in a.signal_names:
-                signals[name] = loc.signals.get(name, a.signals[name])
-            flow.update(loc.flow)
-            if not (isinstance(loc.invariant, ir.BoolConst) and loc.invariant.value):
-                invariants.append((system.qualified(i, loc_name), loc.invariant))
-        transitions = [
-            NativeTransition(view, view.guard, view.reset, levels(view.guard))
-            for view in transitions_of(system, key, bind=False)
-        ]
+        """:func:`hybrid.modes.mode_of` without binding parameters (slots stay names)."""
+        view = mode_of(self.renamed, key, bind=False)
         return NativeMode(
             key=key,
-            name=system.mode_name(key),
-            flow=MappingProxyType(flow),
-            signals=MappingProxyType(signals),
-            invariants=tuple(invariants),
-            transitions=tuple(transitions),
-            urgent=tuple(urgent),
+            name=view.name,
+            flow=view.flow,
+            signals=view.signals,
+            invariants=view.invariants,
+            transitions=tuple(
+                NativeTransition(tr, tr.guard, tr.reset, levels(tr.guard)) for tr in view.transitions
+            ),
+            urgent=view.urgent,
         )
 
     def expressions(self) -> Iterator[ir.Expr]:
