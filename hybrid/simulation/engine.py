@@ -31,7 +31,7 @@ from hybrid.simulation.monitor import Monitor
 from hybrid.simulation.monitor_apart import cut_results, join_groups, with_group_requirements
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import MAX_JUMPS_PER_INSTANT, Settings, finite_number
-from hybrid.simulation.start import describe_start, held_inputs
+from hybrid.simulation.start import describe_start, run_inputs
 
 __all__ = ["simulate"]
 
@@ -289,10 +289,10 @@ def _compiled(
     Compiling a mode's functions costs far more than a jump; a parameter sweep or
     a benchmark simulates one model many times. Models given external inputs are
     compiled afresh (the inputs are bound into the code); free inputs given none
-    are held at their nominal values (:func:`held_inputs`).
+    are held at their nominal values (:func:`run_inputs`).
     """
     if inputs:
-        return CompiledModel(model, {**held_inputs(model, inputs), **inputs})
+        return CompiledModel(model, run_inputs(model, inputs))
     cache: dict[int, tuple[Automaton | System, CompiledModel]] = (
         getattr(_CACHE, "models", None) or {}
     )
@@ -303,7 +303,7 @@ def _compiled(
         hit[1].failure.clear()
         hit[1].flow_failure.clear()
         return hit[1]
-    compiled = CompiledModel(model, held_inputs(model, None))
+    compiled = CompiledModel(model, run_inputs(model, None))
     if len(cache) >= _CACHE_SIZE:
         cache.pop(next(iter(cache)))
     cache[id(model)] = (model, compiled)

@@ -40,7 +40,7 @@ from typing import Any
 from hybrid.compose import System, as_system
 from hybrid.model import Automaton, Range
 
-__all__ = ["Held", "describe_start", "held_inputs"]
+__all__ = ["Held", "describe_start", "held_inputs", "run_inputs"]
 
 
 class Held:
@@ -62,6 +62,13 @@ def held_inputs(
     """The free inputs with a range that ``given`` leaves out, each held at its nominal value."""
     ranges = as_system(model).input_ranges()
     return {name: Held(r.nominal) for name, r in ranges.items() if name not in (given or {})}
+
+
+def run_inputs(
+    model: Automaton | System, given: Mapping[str, Callable[[float], float]] | None
+) -> dict[str, Callable[[float], float]]:
+    """The inputs a run of ``model`` reads: those ``given``, and the others held (:func:`held_inputs`)."""
+    return {**held_inputs(model, given), **(given or {})}
 
 
 def _how(r: Range) -> str:

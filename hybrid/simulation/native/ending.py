@@ -147,9 +147,9 @@ def _reference_mode(native: NativeModel, model: Automaton | System, m: int,
                     inputs: Inputs) -> tuple[Any, Any]:  # fmt: skip
     """The reference engine's compiled model and its mode ``m`` (for the words of a failure)."""
     from hybrid.simulation.compiled import CompiledModel
-    from hybrid.simulation.start import held_inputs
+    from hybrid.simulation.start import run_inputs
 
-    compiled = CompiledModel(model, {**held_inputs(model, inputs), **(inputs or {})})
+    compiled = CompiledModel(model, run_inputs(model, inputs))
     return compiled, compiled.mode(native.modes[m].key)
 
 
