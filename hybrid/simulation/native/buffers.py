@@ -1,9 +1,9 @@
 """The arrays a compiled run fills, and the codes it leaves in them.
 
 Python allocates :class:`RunArrays` per run (or per chunk of an ensemble, one
-row per run) and reads them back when the compiled loop returns; the loop
-keeps its scratch space in two arrays it allocates itself (``wf``, ``wi``),
-and reads the model's tables from one integer array (``tab``). A few plain
+row per run) and reads them back when the compiled loop returns, and the
+loop's scratch space beside them (``wf``, ``wi``: the compiled code allocates
+nothing, so it runs without numba's reference counting), and reads the model's tables from one integer array (``tab``). A few plain
 arrays, not structures: numba compiles functions of a few array arguments
 many times faster than functions of records of many arrays. This module
 imports no numba: the Python side reads the layouts below without it, and
@@ -168,6 +168,7 @@ __all__ = [
     "W_SIGX",
     "W_TERMS",
     "W_TRARMED",
+    "W_X",
     "W_XNEW",
     "W_XS",
     "W_Y",
@@ -177,6 +178,7 @@ __all__ = [
     "ZENO_SIZE",
     "RunArrays",
     "allocate",
+    "work_ints",
 ]
 
 CAUSE_CODES = ("t_end", "max_jumps", "zeno", "blocked", "nonfinite", "solver_failure", "interrupted")
@@ -234,8 +236,8 @@ W_D, W_NT = 0, 1
 W_K, W_Y, W_F, W_YNEW, W_YTMP, W_XS, W_Q, W_RATE, W_AHEAD, W_XNEW = 2, 3, 4, 5, 6, 7, 8, 9, 10, 11
 W_PE, W_TERMS, W_ARMV, W_ZENO, W_FAILX, W_FLOWX, W_SIGX, W_SCAL = 12, 13, 14, 15, 16, 17, 18, 19
 W_TRARMED, W_ENABLED, W_INVARMED, W_FAILI, W_SIGFAIL = 20, 21, 22, 23, 24
-W_NPE = 25
-WI_HEADER = 26
+W_NPE, W_X = 25, 26  # W_X: the run's state (a float piece)
+WI_HEADER = 27
 # scalars in wf from wi[W_SCAL]
 # (S_B0: the band at the start of the stay, the shift of the watch's disarmed terms)
 S_FAIL_T, S_FLOW_FAIL, S_FLOW_T, S_LAST_STEP, S_SIG_T, S_GEN, S_B0 = range(7)
@@ -261,7 +263,8 @@ class RunArrays:
     transition and its flags, :data:`PACKED_WIDTH`); ``sts``: dense steps
     ``(t_old, h, valid to, j, stay, y_old..., q...)``; ``oi`` and ``of``: the
     counts and the termination (slots ``I_*`` and ``F_*``), the point of an
-    evaluation failure in ``of[N_OUT_F:]``.
+    evaluation failure in ``of[N_OUT_F:]``; ``wf`` and ``wi``: the loop's scratch
+    space (laid out by :func:`~hybrid.simulation.native.loop.lay_out_work`).
     """
 
     pts: NDArray[np.float64]
@@ -269,10 +272,18 @@ class RunArrays:
     sts: NDArray[np.float64]
     oi: NDArray[np.int64]
     of: NDArray[np.float64]
+    wf: NDArray[np.float64]
+    wi: NDArray[np.int64]
 
     def row(self, r: int) -> RunArrays:
         """Run ``r`` of a chunk."""
-        return RunArrays(self.pts[r], self.jps[r], self.sts[r], self.oi[r], self.of[r])
+        return RunArrays(self.pts[r], self.jps[r], self.sts[r], self.oi[r], self.of[r],
+                         self.wf[r], self.wi[r])  # fmt: skip
+
+
+def work_ints(tab: NDArray[np.int64]) -> int:
+    """The length of a run's integer scratch ``wi``: the header, then the flags."""
+    return WI_HEADER + 2 * int(tab[T_MAX_TR]) + int(tab[T_MAX_INV]) + 6
 
 
 def allocate(
@@ -283,8 +294,12 @@ def allocate(
     jumps: int,
     steps: int = 1,
     runs: int | None = None,
+    work: tuple[int, int] = (0, 0),
 ) -> RunArrays:
-    """Empty arrays for one run, or with ``runs`` a leading axis of one row per run."""
+    """Empty arrays for one run, or with ``runs`` a leading axis of one row per run.
+
+    ``work``: the lengths of the scratch space (``wf``, ``wi``) a run needs.
+    """
     lead: tuple[int, ...] = () if runs is None else (runs,)
     d, s, width = n_states, n_signals, max(1, max_transitions)
     oi = np.zeros((*lead, N_OUT_I), dtype=np.int64)
@@ -295,4 +310,6 @@ def allocate(
         sts=np.empty((*lead, steps, Q_Y + 5 * d)),
         oi=oi,
         of=np.full((*lead, N_OUT_F + d), np.nan),
+        wf=np.zeros((*lead, work[0])),
+        wi=np.zeros((*lead, work[1]), dtype=np.int64),
     )

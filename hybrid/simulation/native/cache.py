@@ -36,7 +36,7 @@ from pathlib import Path
 from types import ModuleType
 
 from hybrid.errors import UsageError
-from hybrid.simulation.native.source import Generated
+from hybrid.simulation.native.kernel_text import Generated
 from hybrid.version import install_hint
 
 __all__ = ["CACHE_ENV", "cache_key", "cache_root", "load_generated", "require_numba"]

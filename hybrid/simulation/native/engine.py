@@ -31,9 +31,12 @@ from hybrid.model import Automaton
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import run_from
 from hybrid.simulation.native.cache import load_generated, require_numba
+from hybrid.simulation.native.kernel_text import kernel_module
 from hybrid.simulation.native.kernel_types import PIECES
 from hybrid.simulation.native.layout import Layout
-from hybrid.simulation.native.source import generate, kernel_module
+from hybrid.simulation.native.loop import lay_out_work
+from hybrid.simulation.native.shares import compiling_beside
+from hybrid.simulation.native.source import generate
 from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.native.worker import run_in_worker
 from hybrid.simulation.result import Run
@@ -96,7 +99,8 @@ class CompiledNative:
         self.native = NativeModel(model)
         self.layout = Layout.of(self.native)
         self.generated = generate(self.native)
-        kernel(wait=False)  # the first time, worker processes compile the rest meanwhile
+        with compiling_beside(self.generated.compile_estimate):
+            kernel(wait=False)  # the first time, worker processes compile the rest meanwhile
         try:
             self.module: ModuleType = load_generated(self.generated)
         except Exception as exc:  # numba refusing a library's compiled form, say
@@ -112,6 +116,9 @@ class CompiledNative:
         """The addresses the compiled loop calls: the model (a ``cfunc``), then the pieces."""
         assert self.fp.size == b.N_FP
         self.tab = self.generated.tab
+        layout = np.zeros(b.work_ints(self.tab), dtype=np.int64)
+        self.work = (int(lay_out_work(self.tab, layout)), layout.size)
+        """The lengths of a run's scratch space (``wf``, ``wi``): Python allocates it."""
         self.max_transitions = max(1, *(len(m.transitions) for m in self.native.modes))
         self._one = _entry_point(self.kernel.run_one)
         self._many: Callable[..., None] | None = None
@@ -125,7 +132,7 @@ class CompiledNative:
         so nothing is typed or compiled here and numba has nothing to warn about.
         """
         self._one(self.fp, self.tab, p, x0, t0, m0, cfg[0], cfg[1], arrays.pts, arrays.jps,
-                  arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
+                  arrays.sts, arrays.oi, arrays.of, flag, arrays.wf, arrays.wi)  # fmt: skip
 
     def run_many(self, ps: Any, x0s: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
                  flag: Any) -> None:  # fmt: skip
@@ -140,7 +147,7 @@ class CompiledNative:
                    flag: Any) -> None:  # fmt: skip
         assert self._many is not None
         self._many(self.fp, self.tab, ps, x0s, t0, m0, cfg[0], cfg[1], arrays.pts, arrays.jps,
-                   arrays.sts, arrays.oi, arrays.of, flag)  # fmt: skip
+                   arrays.sts, arrays.oi, arrays.of, flag, arrays.wf, arrays.wi)  # fmt: skip
 
     def buffers(self, points: int, jumps: int, steps: int, runs: int | None = None) -> b.RunArrays:
         return b.allocate(
@@ -151,6 +158,7 @@ class CompiledNative:
             jumps,
             steps,
             runs,
+            self.work,
         )
 
     def scratch(self, points: int, jumps: int, steps: int) -> b.RunArrays:

@@ -33,9 +33,9 @@ prange = range  # the generated module binds numba's prange here
 
 def run_many(fp: Ints, tab: Ints, params: Array2, x0s: Array2, t0: float, m0: int,
              cfg_f: Array, cfg_i: Ints, pts: Array3, jps: Array3, sts: Array3, oi: Ints2,
-             of: Array2, flag: Ints) -> None:  # fmt: skip
+             of: Array2, flag: Ints, wf: Array2, wi: Ints2) -> None:  # fmt: skip
     """Run ``len(params)`` simulations; run ``r`` fills row ``r`` of every array."""
     run = function_at(fp[FP_RUN], fp[FP_RUN + 1], RUN_FN_T)
     for r in prange(params.shape[0]):
         run(fp, tab, params[r], x0s[r], t0, m0, cfg_f, cfg_i, pts[r], jps[r], sts[r], oi[r],
-            of[r], flag)  # fmt: skip
+            of[r], flag, wf[r], wi[r])  # fmt: skip

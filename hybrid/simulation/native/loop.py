@@ -12,8 +12,9 @@ Function by function:
   jump and the post-jump point);
 - :func:`zeno_update` is :meth:`hybrid.simulation.zeno.ZenoDetector.update`
   (window 6, spread 2 %, shrink 1e-3), its state in ``wf``;
-- :func:`new_work` allocates the scratch space (``wf``, ``wi``) of a run, the
-  run's parameter vector with the level slots after the parameters among it.
+- :func:`lay_out_work` sizes the scratch space (``wf``, ``wi``) of a run (Python
+  allocates it, so that nothing compiled allocates), :func:`start_work` fills it:
+  the run's parameter vector with the level slots after the parameters among it.
 
 The flow of a stay is :func:`~hybrid.simulation.native.stay.flow_stay`; the
 decisions at a point are :mod:`~hybrid.simulation.native.decide`'s.
@@ -24,8 +25,6 @@ Copied into the kernel module (below the ``kernel`` marker).
 from __future__ import annotations
 
 import math
-
-import numpy as np
 
 from hybrid.simulation.native.buffers import (
     ASK_ENTRY,
@@ -81,6 +80,7 @@ from hybrid.simulation.native.buffers import (
     W_SIGX,
     W_TERMS,
     W_TRARMED,
+    W_X,
     W_XNEW,
     W_XS,
     W_Y,
@@ -108,7 +108,7 @@ from hybrid.simulation.native.search import HORIZON_SAMPLES
 from hybrid.simulation.native.stay import STAY_EVENT, end_run, failed
 from hybrid.simulation.native.store import finish, record_jump, record_point
 
-__all__ = ["jump", "new_work", "run_one", "zeno_update"]
+__all__ = ["jump", "lay_out_work", "run_one", "start_work", "zeno_update"]
 
 # --- kernel ---
 
@@ -123,31 +123,46 @@ L_T_END, L_MAX_JUMPS, L_ZENO, L_BLOCKED, L_NONFINITE, L_SOLVER_FAILURE, L_INTERR
 )  # fmt: skip  # CAUSE_CODES
 
 
-def new_work(tab: Ints, p: Array, wi: Ints) -> Array:
-    """The float scratch space of a run, with ``wi`` (``WI_HEADER`` + flags) laid out."""
+def lay_out_work(tab: Ints, wi: Ints) -> int:
+    """``wi``'s header (where each piece of the scratch starts); returns the length ``wf`` needs.
+
+    Python calls it too, uncompiled, to allocate ``wf`` and ``wi`` once per model
+    (:meth:`~hybrid.simulation.native.engine.CompiledNative.buffers`): the compiled
+    loop allocates nothing, so it needs no reference counting (numba's runtime).
+    """
     d, max_tr, max_lv, max_inv = tab[T_N_STATES], tab[T_MAX_TR], tab[T_MAX_LV], tab[T_MAX_INV]
     n_pe = tab[T_N_PARAMS] + 2 * max_lv + 1
     sizes = (
         (W_K, 7 * d), (W_Y, d), (W_F, d), (W_YNEW, d), (W_YTMP, d), (W_XS, d), (W_Q, 4 * d),
         (W_RATE, d), (W_AHEAD, d), (W_XNEW, d), (W_TERMS, max_tr + max_inv),
         (W_ARMV, max_tr + max_lv), (W_ZENO, ZENO_SIZE), (W_FAILX, d), (W_FLOWX, d),
-        (W_SIGX, d), (W_SCAL, N_SCALARS), (W_PE, n_pe),
+        (W_SIGX, d), (W_SCAL, N_SCALARS), (W_PE, n_pe), (W_X, d),
     )  # fmt: skip
     at = 0
     for slot, size in sizes:
         wi[slot] = at
         at += size
-    wf = np.zeros(at)
+    floats = at
     at = WI_HEADER
     for slot, size in ((W_TRARMED, max_tr), (W_ENABLED, max_tr), (W_INVARMED, max_inv),
                        (W_FAILI, 3), (W_SIGFAIL, 3)):  # fmt: skip
         wi[slot] = at
         at += size
-    for i in range(WI_HEADER, wi.shape[0]):
-        wi[i] = 0
     wi[W_D] = d
     wi[W_NT] = max_tr + max_inv
     wi[W_NPE] = n_pe
+    return floats
+
+
+def start_work(tab: Ints, p: Array, wf: Array, wi: Ints) -> None:
+    """The scratch space (``wf``, ``wi``, sized by :func:`lay_out_work`) as a run starts:
+    laid out, the run's parameter vector with the level slots after the parameters among it."""
+    lay_out_work(tab, wi)
+    for i in range(WI_HEADER, wi.shape[0]):
+        wi[i] = 0
+    for i in range(wf.shape[0]):
+        wf[i] = 0.0
+    n_pe = wi[W_NPE]
     pe = wi[W_PE]
     for i in range(p.shape[0]):
         wf[pe + i] = p[i]
@@ -163,7 +178,6 @@ def new_work(tab: Ints, p: Array, wi: Ints) -> Array:
         wf[sc + i] = math.nan
     wf[sc + S_FLOW_FAIL] = 0.0
     wf[sc + S_GEN] = 0.0
-    return wf
 
 
 def zeno_update(z: Array, t: float) -> float:
@@ -233,13 +247,14 @@ def jump(fns: Fns, tab: Ints, pts: Array2, jps: Array2, oi: Ints, m: int, tr: in
 
 def run_one(fp: Ints, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f: Array,
             cfg_i: Ints, pts: Array2, jps: Array2, sts: Array2, oi: Ints, of: Array,
-            flag: Ints) -> None:  # fmt: skip
+            flag: Ints, wf: Array, wi: Ints) -> None:  # fmt: skip
     """Simulate from ``(t0, x0)`` in mode ``m0`` until the run ends; all of it into the arrays.
 
     ``fp`` holds the addresses of the model and of the kernel's pieces (``FP_*``).
     ``oi`` and ``of`` are reset first (as :func:`~hybrid.simulation.native.buffers.allocate`
     leaves them), so a run may reuse the arrays of the last; rows of ``pts``, ``jps``
-    and ``sts`` are written whole before they are counted.
+    and ``sts`` are written whole before they are counted. ``wf`` and ``wi`` are the
+    run's scratch space, sized by :func:`lay_out_work` (the run's state is kept there).
     """
     for i in range(oi.shape[0]):
         oi[i] = 0
@@ -251,9 +266,10 @@ def run_one(fp: Ints, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f:
     search = function_at(fp[FP_SEARCH], fp[FP_SEARCH + 1], SEARCH_FN_T)
     decide = function_at(fp[FP_DECIDE], fp[FP_DECIDE + 1], DECIDE_FN_T)
     stay_fn = function_at(fp[FP_STAY], fp[FP_STAY + 1], STAY_FN_T)
-    wi = np.zeros(WI_HEADER + 2 * tab[T_MAX_TR] + tab[T_MAX_INV] + 6, np.int64)
-    wf = new_work(tab, p, wi)
-    x = x0.copy()
+    start_work(tab, p, wf, wi)
+    x = wf[wi[W_X] : wi[W_X] + x0.shape[0]]
+    for i in range(x0.shape[0]):
+        x[i] = x0[i]
     t, m, j = t0, m0, 0
     t_end = cfg_f[CF_T_END]
     spacing = (t_end - cfg_f[CF_T_START]) / HORIZON_SAMPLES

@@ -1,6 +1,6 @@
 """The kernel compiled in shares by several processes, when numba's cache misses it.
 
-Compiling the kernel (:func:`~hybrid.simulation.native.source.kernel_module`)
+Compiling the kernel (:func:`~hybrid.simulation.native.kernel_text.kernel_module`)
 costs about 14 s of one core, almost all of it numba's own typing and lowering
 and LLVM, spread over the whole kernel (no function dominates, and no
 optimisation level short of none saves much: measured in docs/performance.md).
@@ -14,30 +14,40 @@ leaves its pieces to this process (compiled here, as without workers).
 
 How many processes: ``$HYBRID_NATIVE_COMPILE_PROCESSES`` if set (``1``: all
 in this process), else the CPUs this process may use, at most one per piece.
+Which pieces each compiles (:func:`shares`): the split that finishes first,
+counting what each function costs to compile (from its size,
+:func:`function_costs`) once per process that needs it, a worker's start, and
+what this process compiles besides (the model it was asked for,
+:func:`compiling_beside`).
 
 Examples
 --------
->>> shares({"a": 4.0, "b": 3.5, "c": 3.0, "d": 2.0, "e": 1.5}, 2, startup=1.0)
-[['a', 'c'], ['b', 'd', 'e']]
->>> shares({"a": 4.0, "b": 3.5}, 1)
-[['a', 'b']]
+>>> costs = {"a": 3.0, "b": 3.0, "c": 2.0, "h": 2.0}  # a and b both call h
+>>> needs = {"a": ("h",), "b": ("h",), "c": ()}
+>>> shares(costs, needs, 2, startup=1.0)
+[['a', 'c'], ['b']]
+>>> shares(costs, needs, 2, startup=1.0, beside=3.0)
+[['a'], ['b', 'c']]
 """
 
 from __future__ import annotations
 
 import ast
+import itertools
 import json
 import os
 import subprocess
 import sys
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from typing import Any
 
 __all__ = [
-    "PIECE_COSTS",
     "PROCESSES_ENV",
     "SHARE_ENV",
     "compile_kernel",
+    "compiling_beside",
+    "function_costs",
     "maybe_cached",
     "piece_callees",
     "processes",
@@ -48,17 +58,15 @@ PROCESSES_ENV = "HYBRID_NATIVE_COMPILE_PROCESSES"
 SHARE_ENV = "HYBRID_NATIVE_COMPILE_SHARE"
 """Set in a worker: the pieces it compiles (comma-separated); it compiles nothing else."""
 
-PIECE_COSTS = {
-    "flow_stay": 4.0,
-    "first_event": 3.5,
-    "run_one": 3.0,
-    "decide": 2.2,
-    "rk45_step": 1.5,
-}
-"""Seconds of one core to compile each piece with the functions it calls (measured, numba 0.68)."""
+SECONDS_PER_NODE = 0.0011
+"""Seconds of one core to compile a kernel function, per node of its syntax tree (measured
+function by function, numba 0.68: the fit's correlation 0.92; its callees linked in and
+numba's first compile in a process besides)."""
 
-WORKER_STARTUP_S = 1.2
+WORKER_STARTUP_S = 1.0
 """What a worker spends before compiling (importing hybrid and numba), in the costs' unit."""
+
+_BESIDE = [0.0]
 
 WORKER_TIMEOUT_S = 900.0
 
@@ -134,21 +142,58 @@ def maybe_cached(path: str, module: str, pieces: Sequence[str]) -> bool:
     return all(any(f.startswith(f"{module}.{piece}-") for f in files) for piece in pieces)
 
 
-def shares(
-    costs: Mapping[str, float], count: int, startup: float = WORKER_STARTUP_S
-) -> list[list[str]]:
-    """The pieces split into ``count`` shares of about equal cost, this process's first.
+def function_costs(code: str, names: Sequence[str]) -> dict[str, float]:
+    """The estimated seconds to compile each function ``names`` of ``code`` (by its size)."""
+    sizes = {
+        node.name: sum(1 for _ in ast.walk(node))
+        for node in ast.parse(code).body
+        if isinstance(node, ast.FunctionDef)
+    }
+    return {name: round(SECONDS_PER_NODE * sizes.get(name, 0), 3) for name in names}
 
-    Largest first, each to the share that would finish first; a worker's share
-    starts at ``startup`` (this process's at 0).
+
+@contextmanager
+def compiling_beside(seconds: float) -> Iterator[None]:
+    """Within: a kernel compiled now is split knowing this process compiles ``seconds`` more."""
+    _BESIDE[0] = seconds
+    try:
+        yield
+    finally:
+        _BESIDE[0] = 0.0
+
+
+def shares(
+    costs: Mapping[str, float],
+    needs: Mapping[str, Iterable[str]],
+    count: int,
+    startup: float = WORKER_STARTUP_S,
+    beside: float = 0.0,
+) -> list[list[str]]:
+    """The pieces (``needs``' keys) in at most ``count`` shares, this process's first.
+
+    The split whose last share finishes first (then its next to last...): a
+    share compiles its pieces and every function they call (``needs``) once,
+    at ``costs`` each; this process's share starts at ``beside``, a worker's
+    at ``startup``. Every split is tried (at most 5**5 here); of equal ones the
+    first (this process's share first); a worker with nothing to compile is
+    not started.
     """
-    loads = [0.0] + [startup] * (count - 1)
-    out: list[list[str]] = [[] for _ in range(count)]
-    for name in sorted(costs, key=lambda n: -costs[n]):
-        k = min(range(count), key=lambda i: loads[i])
-        out[k].append(name)
-        loads[k] += costs[name]
-    return [share for share in out if share] or [[]]
+    pieces = list(needs)
+    closure = [frozenset((p, *needs[p])) for p in pieces]
+    starts = [beside] + [startup] * (max(1, count) - 1)
+    best: tuple[tuple[float, ...], tuple[int, ...]] | None = None
+    for plan in itertools.product(range(len(starts)), repeat=len(pieces)):
+        finishes = []
+        for k, start in enumerate(starts):
+            wanted = frozenset().union(*(c for c, owner in zip(closure, plan, strict=True) if owner == k))
+            if wanted or k == 0:
+                finishes.append(round(start + sum(costs.get(f, 0.0) for f in wanted), 9))
+        key = tuple(sorted(finishes, reverse=True))
+        if best is None or key < best[0]:
+            best = (key, plan)
+    assert best is not None
+    out = [[p for p, owner in zip(pieces, best[1], strict=True) if owner == k] for k in range(len(starts))]
+    return [out[0], *(share for share in out[1:] if share)]
 
 
 def _compile(namespace: dict[str, Any], jit: Callable[[str], Any], names: Sequence[str],
@@ -198,8 +243,8 @@ def compile_kernel(namespace: dict[str, Any], jit: Callable[[str], Any], names: 
 
     ``jit(name)`` compiles the function ``name`` of the module (or loads it
     from numba's cache); ``names`` lists them callees first; ``needs[piece]``
-    names the functions a piece calls; ``costs`` holds each piece's estimated
-    compile time. Returns ``finish``: this process's share is compiled now,
+    names the functions a piece calls; ``costs`` holds each function's estimated
+    compile time (:func:`function_costs`). Returns ``finish``: this process's share is compiled now,
     the workers' pieces are there once ``finish()`` returns (meanwhile this
     process may compile something else: a model). In a worker
     (``$HYBRID_NATIVE_COMPILE_SHARE`` set) only that share is compiled.
@@ -207,9 +252,9 @@ def compile_kernel(namespace: dict[str, Any], jit: Callable[[str], Any], names: 
     done: set[str] = set()
     share = os.environ.get(SHARE_ENV)
     if share is not None:
-        _compile(namespace, jit, names, needs, [p for p in share.split(",") if p in costs], done)
+        _compile(namespace, jit, names, needs, [p for p in share.split(",") if p in needs], done)
         return _nothing
-    plan = shares(costs, processes(len(costs)))
+    plan = shares(costs, needs, processes(len(needs)), beside=_BESIDE[0])
     workers = [_spawn(path, module, s) for s in plan[1:]]
     try:
         _compile(namespace, jit, names, needs, plan[0], done)

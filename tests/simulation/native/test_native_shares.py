@@ -13,8 +13,8 @@ from types import ModuleType
 import pytest
 
 from hybrid.simulation.native import shares as sh
+from hybrid.simulation.native.kernel_text import KERNEL_MODULES, kernel_module, kernel_source
 from hybrid.simulation.native.kernel_types import PIECES
-from hybrid.simulation.native.source import KERNEL_MODULES, kernel_module, kernel_source
 
 pytest.importorskip("numba")
 
@@ -73,13 +73,26 @@ def _hits(dispatcher: object) -> int:
     return sum(dispatcher.stats.cache_hits.values())  # type: ignore[attr-defined]
 
 
-def test_shares_balance_costs_this_process_first() -> None:
-    # by hand: 4 -> main (0); 3.5 -> worker (1.2 + 3.5 = 4.7); 3 -> main (7); 2.2 -> worker (6.9);
-    # 1.5 -> worker (8.4)
-    costs = {"a": 4.0, "b": 3.5, "c": 3.0, "d": 2.2, "e": 1.5}
-    assert sh.shares(costs, 2, startup=1.2) == [["a", "c"], ["b", "d", "e"]]
-    assert sh.shares(costs, 1) == [["a", "b", "c", "d", "e"]]
-    assert sorted(p for share in sh.shares(costs, 9) for p in share) == sorted(costs)
+def test_shares_finish_first_counting_shared_callees_once() -> None:
+    # by hand (a, b: 3 s each, both call h: 2 s; c: 2 s; a worker starts at 1 s):
+    # {a, b} | {c}: 8 s; {a, c} | {b}: 7 | 6; {a} | {b, c}: 5 | 8; all here: 10
+    costs = {"a": 3.0, "b": 3.0, "c": 2.0, "h": 2.0}
+    needs = {"a": ("h",), "b": ("h",), "c": ()}
+    assert sh.shares(costs, needs, 2, startup=1.0) == [["a", "c"], ["b"]]
+    # with a 3 s model here besides: {a} | {b, c}: 8 | 8; {a, c} | {b}: 10 | 6; {} | all: 3 | 11
+    assert sh.shares(costs, needs, 2, startup=1.0, beside=3.0) == [["a"], ["b", "c"]]
+    assert sh.shares(costs, needs, 1) == [["a", "b", "c"]]
+    # a 30 s model here: the workers take every piece, split as two would split them alone
+    # ({a, c} | {b}: 8 | 6 before {a, b} | {c}: 9 | 3)
+    assert sh.shares(costs, needs, 3, startup=1.0, beside=30.0) == [[], ["a", "c"], ["b"]]
+    # a worker with nothing to do is not started
+    assert sh.shares({"a": 1.0}, {"a": ()}, 4, startup=1.0) == [["a"]]
+
+
+def test_function_costs_follow_the_size_of_the_code() -> None:
+    code = "def small(x):\n    return x\n\ndef large(x):\n    y = x + 1\n    return y * y + x\n"
+    costs = sh.function_costs(code, ["small", "large"])
+    assert 0 < costs["small"] < costs["large"]
 
 
 def test_processes_follow_the_environment(monkeypatch: pytest.MonkeyPatch) -> None:
