@@ -135,6 +135,26 @@ def test_the_integrator_is_scipys_rk45() -> None:
     np.testing.assert_array_equal(b, [integrator.B1, 0, integrator.B3, integrator.B4, integrator.B5, integrator.B6])
     np.testing.assert_array_equal(e, [integrator.E1, 0, integrator.E3, integrator.E4, integrator.E5, integrator.E6, integrator.E7])
     np.testing.assert_allclose(integrator.P_DENSE, p, rtol=1e-15)
+    # the step loops over these tables: stage s at y + h * sum(TABLEAU[s, :s] K), the 7th at y_new
+    np.testing.assert_array_equal(integrator.TABLEAU[:6, :5], a)
+    np.testing.assert_array_equal(integrator.TABLEAU[6, :6], b)
+    np.testing.assert_array_equal(integrator.STAGE_C, [*RK45.C, 1.0])
+    np.testing.assert_array_equal(integrator.ERROR, e)
+
+
+def test_small_models_compile_as_one_function_large_ones_apart() -> None:
+    from hybrid.simulation.native.source import INLINE_LINES, generate
+    from hybrid.simulation.native.structure import NativeModel
+
+    def op_lines(source: str) -> int:  # the per-operation functions, before `model` itself
+        return len(source[source.index("def model_rhs") : source.index("def model(")].splitlines())
+
+    small = generate(NativeModel(hybrid.load(REPO / "specs" / "thermostat.yaml")))
+    large = generate(NativeModel(hybrid.load(REPO / "specs" / "uvms_mission_2.yaml")))
+    assert op_lines(small.source) < INLINE_LINES < op_lines(large.source)
+    assert "inline='always'" in small.source and "inline=" not in large.source
+    # the estimate that plans the first compile grows with the model (measured 0.5 s and 35 s)
+    assert 0.3 < small.compile_estimate < 1.5 < 20.0 < large.compile_estimate < 60.0
 
 
 def test_cause_codes_follow_the_reference() -> None:
