@@ -3,7 +3,8 @@
 Python allocates :class:`RunArrays` per run (or per chunk of an ensemble, one
 row per run) and reads them back when the compiled loop returns, and the
 loop's scratch space beside them (``wf``, ``wi``: the compiled code allocates
-nothing, so it runs without numba's reference counting), and reads the model's tables from one integer array (``tab``). A few plain
+nothing, so it runs without numba's reference counting); the loop reads the
+model's tables from one integer array (``tab``). A few plain
 arrays, not structures: numba compiles functions of a few array arguments
 many times faster than functions of records of many arrays. This module
 imports no numba: the Python side reads the layouts below without it, and
@@ -178,7 +179,6 @@ __all__ = [
     "ZENO_SIZE",
     "RunArrays",
     "allocate",
-    "work_ints",
 ]
 
 CAUSE_CODES = ("t_end", "max_jumps", "zeno", "blocked", "nonfinite", "solver_failure", "interrupted")
@@ -279,11 +279,6 @@ class RunArrays:
         """Run ``r`` of a chunk."""
         return RunArrays(self.pts[r], self.jps[r], self.sts[r], self.oi[r], self.of[r],
                          self.wf[r], self.wi[r])  # fmt: skip
-
-
-def work_ints(tab: NDArray[np.int64]) -> int:
-    """The length of a run's integer scratch ``wi``: the header, then the flags."""
-    return WI_HEADER + 2 * int(tab[T_MAX_TR]) + int(tab[T_MAX_INV]) + 6
 
 
 def allocate(

@@ -116,8 +116,8 @@ class CompiledNative:
         """The addresses the compiled loop calls: the model (a ``cfunc``), then the pieces."""
         assert self.fp.size == b.N_FP
         self.tab = self.generated.tab
-        layout = np.zeros(b.work_ints(self.tab), dtype=np.int64)
-        self.work = (int(lay_out_work(self.tab, layout)), layout.size)
+        floats, ints = lay_out_work(self.tab, np.zeros(b.WI_HEADER, dtype=np.int64))
+        self.work = (int(floats), int(ints))
         """The lengths of a run's scratch space (``wf``, ``wi``): Python allocates it."""
         self.max_transitions = max(1, *(len(m.transitions) for m in self.native.modes))
         self._one = _entry_point(self.kernel.run_one)

@@ -123,10 +123,11 @@ L_T_END, L_MAX_JUMPS, L_ZENO, L_BLOCKED, L_NONFINITE, L_SOLVER_FAILURE, L_INTERR
 )  # fmt: skip  # CAUSE_CODES
 
 
-def lay_out_work(tab: Ints, wi: Ints) -> int:
-    """``wi``'s header (where each piece of the scratch starts); returns the length ``wf`` needs.
+def lay_out_work(tab: Ints, wi: Ints) -> tuple[int, int]:
+    """``wi``'s header (where each piece of the scratch starts); the lengths ``wf`` and ``wi`` need.
 
-    Python calls it too, uncompiled, to allocate ``wf`` and ``wi`` once per model
+    It writes the header only (``WI_HEADER`` slots), so Python calls it too,
+    uncompiled, on a header alone, to allocate ``wf`` and ``wi`` once per model
     (:meth:`~hybrid.simulation.native.engine.CompiledNative.buffers`): the compiled
     loop allocates nothing, so it needs no reference counting (numba's runtime).
     """
@@ -151,7 +152,7 @@ def lay_out_work(tab: Ints, wi: Ints) -> int:
     wi[W_D] = d
     wi[W_NT] = max_tr + max_inv
     wi[W_NPE] = n_pe
-    return floats
+    return floats, at
 
 
 def start_work(tab: Ints, p: Array, wf: Array, wi: Ints) -> None:

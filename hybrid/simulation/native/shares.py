@@ -33,6 +33,7 @@ Examples
 from __future__ import annotations
 
 import ast
+import functools
 import itertools
 import json
 import os
@@ -95,25 +96,28 @@ def processes(pieces: int) -> int:
     return max(1, min(wanted, pieces))
 
 
+@functools.lru_cache(maxsize=2)
+def _functions(code: str) -> tuple[ast.FunctionDef, ...]:
+    """The functions ``code`` defines at its top level (parsed once for both readers below)."""
+    return tuple(node for node in ast.parse(code).body if isinstance(node, ast.FunctionDef))
+
+
 def piece_callees(
     code: str, names: Sequence[str], pieces: Sequence[str]
 ) -> dict[str, tuple[str, ...]]:
     """Each piece's callees among ``names``, transitively (a call of a parameter or local is not one)."""
     known = set(names)
     direct: dict[str, set[str]] = {}
-    for node in ast.parse(code).body:
-        if isinstance(node, ast.FunctionDef):
-            params = {a.arg for a in node.args.args} | {
-                n.id
-                for n in ast.walk(node)
-                if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)
-            }
-            direct[node.name] = {
-                call.func.id
-                for call in ast.walk(node)
-                if isinstance(call, ast.Call) and isinstance(call.func, ast.Name)
-                and call.func.id in known and call.func.id not in params
-            }  # fmt: skip
+    for node in _functions(code):
+        params = {a.arg for a in node.args.args} | {
+            n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)
+        }
+        direct[node.name] = {
+            call.func.id
+            for call in ast.walk(node)
+            if isinstance(call, ast.Call) and isinstance(call.func, ast.Name)
+            and call.func.id in known and call.func.id not in params
+        }  # fmt: skip
     out = {}
     for piece in pieces:
         seen: set[str] = set()
@@ -144,11 +148,7 @@ def maybe_cached(path: str, module: str, pieces: Sequence[str]) -> bool:
 
 def function_costs(code: str, names: Sequence[str]) -> dict[str, float]:
     """The estimated seconds to compile each function ``names`` of ``code`` (by its size)."""
-    sizes = {
-        node.name: sum(1 for _ in ast.walk(node))
-        for node in ast.parse(code).body
-        if isinstance(node, ast.FunctionDef)
-    }
+    sizes = {node.name: sum(1 for _ in ast.walk(node)) for node in _functions(code)}
     return {name: round(SECONDS_PER_NODE * sizes.get(name, 0), 3) for name in names}
 
 
