@@ -263,9 +263,8 @@ def read_yaml_text(
             "(control characters other than tab and line breaks are refused)",
             Position(file, line, column),
         )
-    loader = _Loader(text)
     try:
-        node = loader.get_single_node()
+        node = _compose_checked(text)
     except _Refused as exc:
         raise SpecError(exc.message, _position(file, exc.mark)) from None
     except yaml.MarkedYAMLError as exc:
@@ -275,8 +274,6 @@ def read_yaml_text(
         raise SpecError(f"invalid YAML: {problem}", pos) from None
     except yaml.YAMLError as exc:
         raise SpecError(f"invalid YAML: {exc}", Position(file)) from None
-    finally:
-        loader.dispose()
     if node is None or (
         isinstance(node, yaml.ScalarNode)
         and node.tag == "tag:yaml.org,2002:null"
@@ -289,6 +286,32 @@ def read_yaml_text(
     positions = PositionMap(file)
     data = _convert(node, (), positions)
     return YamlDocument(data, positions)
+
+
+def _compose(loader_type: type, text: str) -> Any:
+    """The single document's node tree; our refusals surface as :class:`_Refused`."""
+    loader = loader_type(text)
+    try:
+        return loader.get_single_node()
+    finally:
+        loader.dispose()
+
+
+def _compose_checked(text: str) -> Any:
+    """The node tree, with our own limits acting before libyaml's.
+
+    libyaml's scanner reads up to 1024 characters of flow nesting ahead of the
+    composer and, from libyaml 0.2.6 (PyYAML 6.0.4's wheels), refuses at its own
+    depth limit of 1000 before our composer sees the 65th level. On that refusal
+    the pure-Python reader, whose composer asks for no more than it needs, reads
+    the text again, so the refusal is ours, at the place where it applies.
+    """
+    try:
+        return _compose(_Loader, text)
+    except yaml.MarkedYAMLError as exc:
+        if _Loader is _PyLoader or "nesting depth" not in f"{exc.problem} {exc.context}":
+            raise
+    return _compose(_PyLoader, text)
 
 
 def _convert(node: Any, path: Path_, positions: PositionMap) -> Any:

@@ -73,9 +73,9 @@ def navigation(
 
 def test_navigation_grid_zero_time_two_cycle_is_found_quickly():
     model = hybrid.load_text(navigation(), file="nav.yaml")
-    start = time.perf_counter()
+    start = time.process_time()
     report = check(model)
-    seconds = time.perf_counter() - start
+    cpu = time.process_time() - start
     cycles = report.by_rule("zero-time-cycle")
     # one strongly connected component: every boundary edge can chain with another at an instant
     assert len(cycles) == 1
@@ -87,7 +87,7 @@ def test_navigation_grid_zero_time_two_cycle_is_found_quickly():
     assert a.split("_") == list(reversed(b.split("_")))
     assert finding.witness[0][1] == finding.witness[-1][1]
     assert "more edge(s)" in finding.message  # the rest of the component is counted
-    assert seconds < 30  # a hang guard only; bench/zero_time.py measures the time
+    assert cpu < 30  # a bound on work (CPU seconds), not a speed test: bench/zero_time.py times it
 
 
 def test_every_boundary_pair_is_in_the_component():

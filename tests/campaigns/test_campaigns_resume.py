@@ -119,15 +119,13 @@ def test_ctrl_c_stops_cleanly_keeps_the_rows_and_says_how_to_resume(
     parts = out.with_name("results.csv.parts")
     process = _start(spec, out)
     _wait_for_a_chunk(parts, process)
-    sent = time.monotonic()
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=60)
-    assert time.monotonic() - sent < 10, "a Ctrl-C stops the campaign at once"
     assert_no_traceback(stderr)
     assert process.returncode == 1, stderr
     assert "interrupted" in stderr and "--resume" in stderr
     kept = _rows_on_disk(parts)
-    assert kept and not out.exists()
+    assert 0 < len(kept) < RUNS and not out.exists()  # stopped before its end, rows kept
     again = run_cli("sweep", spec, *ARGS, "--out", out, "--resume", timeout=120)
     assert f"resumed: {len(kept)} of {RUNS} runs were done" in again.stderr
     assert out.read_text() == reference

@@ -4,7 +4,9 @@ Each case is checked three ways:
 
 * the Python API (``hybrid.load`` on a file, and ``hybrid.load_text`` when the
   input is text): ``SpecError`` with ``.line``/``.column`` at the right place,
-  in well under a second (a sanity bound on hostile input, not a benchmark);
+  within a bound of this process's CPU time far above what any case takes
+  (a sanity bound on hostile input: never wall time, which a loaded machine
+  stretches; bench/ measures speed);
 * the command line in-process (``hybrid.cli.main``): exit code 2 and stderr
   starting with ``file:line:column:``;
 * the real command line as a subprocess (``python -m hybrid validate``), all
@@ -32,7 +34,8 @@ import hybrid
 from hybrid.cli import main as cli_main
 from hybrid.reader.yamlpos import MAX_FILE_BYTES
 
-TIME_LIMIT = 1.0
+CPU_LIMIT_S = 5.0
+"""Process CPU seconds one refusal may take (each takes well under 0.1 s)."""
 
 
 @dataclass(frozen=True)
@@ -345,12 +348,12 @@ def _check_error(err: hybrid.SpecError, case: Case, file: str) -> None:
 @pytest.mark.parametrize("case", CASES, ids=IDS)
 def test_api_load_refuses(case: Case, case_dir: Path) -> None:
     path = _case_path(case_dir, case)
-    start = time.perf_counter()
+    start = time.process_time()
     with pytest.raises(hybrid.SpecError) as info:
         hybrid.load(path)
-    elapsed = time.perf_counter() - start
+    cpu = time.process_time() - start
     _check_error(info.value, case, str(path))
-    assert elapsed < TIME_LIMIT, f"{case.id} took {elapsed:.2f} s"
+    assert cpu < CPU_LIMIT_S, f"{case.id} took {cpu:.2f} s of CPU"
     _no_marker(case_dir, case)
 
 
@@ -360,17 +363,17 @@ TEXT_CASES = [c for c in CASES if c.id not in ("not-utf8", "latin1-comment", "ut
 @pytest.mark.parametrize("case", TEXT_CASES, ids=[c.id for c in TEXT_CASES])
 def test_api_load_text_refuses(case: Case, case_dir: Path) -> None:
     source = case.content(str(case_dir / f"{case.id}.marker")).decode("utf-8")
-    start = time.perf_counter()
+    start = time.process_time()
     with pytest.raises(hybrid.SpecError) as info:
         hybrid.load_text(source, file="hostile.yaml")
-    elapsed = time.perf_counter() - start
+    cpu = time.process_time() - start
     if case.id == "file-20MB":  # as text, the cap counts characters
         assert info.value.message.startswith("spec is ")
         assert "over the limit" in info.value.message
         assert (info.value.line, info.value.column) == (1, 1)
     else:
         _check_error(info.value, case, "hostile.yaml")
-    assert elapsed < TIME_LIMIT, f"{case.id} took {elapsed:.2f} s"
+    assert cpu < CPU_LIMIT_S, f"{case.id} took {cpu:.2f} s of CPU"
     _no_marker(case_dir, case)
 
 

@@ -286,9 +286,8 @@ endless = dict(t_end=1e7, initial_location="moving", max_step=1e-4, backend="com
 hybrid.simulate(zoo, t_end=1.0, initial_location="moving", backend="compiled")  # compiled, warm
 for _ in range(2):  # the same worker thread serves the next run
     threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()
-    start = time.perf_counter()
     run = hybrid.simulate(zoo, **endless)
-    print(run.termination.cause, run.termination.t < 1e7, time.perf_counter() - start < 20)
+    print(run.termination.cause, run.termination.t < 1e7)
 after = hybrid.simulate(zoo, t_end=2.0, initial_location="moving", backend="compiled")
 print(after.termination.cause, after.termination.t)
 """
@@ -299,27 +298,30 @@ def test_ctrl_c_ends_compiled_runs_as_interrupted_and_the_next_run_normally() ->
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           cwd=REPO, timeout=120)  # fmt: skip
     assert done.returncode == 0, done.stderr
-    assert done.stdout.split("\n")[:3] == ["interrupted True True", "interrupted True True",
-                                           "t_end 2.0"]  # fmt: skip
+    assert done.stdout.split("\n")[:3] == ["interrupted True", "interrupted True", "t_end 2.0"]
 
 
 def test_an_abandoned_run_does_not_hold_up_the_next() -> None:
-    """A second Ctrl-C abandons a run still in the worker; the next run starts at once."""
+    """A second Ctrl-C abandons a run still in the worker; the next run does not wait for it."""
     import _thread
-    import time
 
     from hybrid.simulation.interrupts import Interrupts
     from hybrid.simulation.native.worker import run_in_worker
 
-    release = threading.Event()
+    release, finished = threading.Event(), threading.Event()
+
+    def stuck() -> None:
+        release.wait(60)
+        finished.set()
+
     stop = Interrupts()
     stop.press()  # a run was interrupted: in the writing phase the next Ctrl-C abandons
     with stop.installed(), stop.writing():
         threading.Timer(0.2, _thread.interrupt_main).start()
         with pytest.raises(KeyboardInterrupt):
-            run_in_worker(lambda flag: release.wait(10), True)  # ignores its flag: stuck
-    start = time.perf_counter()
+            run_in_worker(lambda flag: stuck(), True)  # ignores its flag
     ran: list[int] = []
     assert run_in_worker(lambda flag: ran.append(int(flag[0])), True) is False
-    assert ran == [0] and time.perf_counter() - start < 1.0
+    assert ran == [0]
+    assert not finished.is_set()  # the abandoned run still waits; the next one did not
     release.set()
