@@ -141,6 +141,9 @@ def run_sweep(args: argparse.Namespace) -> int:
         raise UsageError("--vary gives ranges to sample: add --sample N")
     grid = [parse_grid(text) for text in args.grid]
     vary = [parse_range(text) for text in args.vary]
+    from hybrid.export.outputs import writable_file
+
+    writable_file(args.out, "--out")
     line = terminal_reporter(args.quiet)
     interrupts = Interrupts(notify=_notifier(line))
     with interrupts.installed():
@@ -211,9 +214,9 @@ def run_falsify(args: argparse.Namespace) -> int:
     from hybrid.reader.loader import load
 
     vary = [parse_range(text) for text in args.vary]
-    out = Path(args.out) if args.out else None
-    if out is not None and out.exists() and not out.is_dir():
-        raise UsageError(f"--out: '{out}' exists and is not a directory")
+    from hybrid.export.outputs import writable_directory
+
+    out = writable_directory(args.out, "--out") if args.out else None
     line = terminal_reporter(args.quiet)
     interrupts = Interrupts(notify=_notifier(line))
     with interrupts.installed():
@@ -259,12 +262,10 @@ def run_falsify(args: argparse.Namespace) -> int:
 
 def _write_result(result: Any, out: Path) -> None:
     from hybrid.export.atomic import atomic_write
+    from hybrid.export.outputs import make_directory
     from hybrid.export.trajectory import write_csv, write_events
 
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise UsageError(f"cannot create the directory {out}: {exc.strerror or exc}") from None
+    make_directory(out, "--out")
     document = _finite(result.as_dict())
     with atomic_write(out / "falsification.json") as handle:
         handle.write((json.dumps(document, indent=2) + "\n").encode("utf-8"))

@@ -185,6 +185,10 @@ def run_graph(
         choices = (*writers, *RENDERED_FORMATS)
         raise ValueError(f"unknown format '{fmt}'; choose from {', '.join(choices)}")
     out = out or sys.stdout
+    if path is not None:
+        from hybrid.export.outputs import writable_file
+
+        writable_file(path, "--out")
     if fmt == "png" and path is None and out.isatty():
         raise UsageError("--format png is binary: write it with --out FILE or redirect stdout")
     graph = system_graph(load(file))

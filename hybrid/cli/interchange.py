@@ -45,19 +45,17 @@ def _write(path: Path, text: str) -> None:
 
 def run_import(args: argparse.Namespace) -> int:
     """``hybrid import spaceex``: exit 0, or a SpecError (exit 2) for a refused model."""
+    from hybrid.export.outputs import make_directory, writable_directory
     from hybrid.interchange import import_spaceex
 
     xml = Path(args.file)
+    writable_directory(args.out, "--out")
     cfg = Path(args.cfg) if args.cfg else None
     if cfg is None and xml.with_suffix(".cfg").is_file():
         cfg = xml.with_suffix(".cfg")
         print(f"{xml}: note: using the configuration {cfg}", file=sys.stderr)
     result = import_spaceex(xml, cfg, args.system)
-    out = Path(args.out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise UsageError(f"cannot create the directory {out}: {exc.strerror or exc}") from None
+    out = make_directory(Path(args.out), "--out")
     for name, text in result.files.items():
         _write(out / name, text)
     for note in result.notes:
@@ -68,13 +66,16 @@ def run_import(args: argparse.Namespace) -> int:
 
 def run_export(args: argparse.Namespace) -> int:
     """``hybrid export spaceex``: exit 0, or a SpecError (exit 2) for what SpaceEx lacks."""
+    from hybrid.export.outputs import writable_file
     from hybrid.interchange import export_spaceex
     from hybrid.reader.loader import load
 
-    result = export_spaceex(load(args.file))
     xml = Path(args.out)
     if xml.suffix.lower() != ".xml":
         raise UsageError(f"--out must name a .xml file, got '{xml}'")
+    writable_file(xml, "--out")
+    writable_file(xml.with_suffix(".cfg"), "--out (its .cfg)")
+    result = export_spaceex(load(args.file))
     _write(xml, result.xml)
     _write(xml.with_suffix(".cfg"), result.cfg)
     for note in result.notes:

@@ -222,6 +222,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_ABANDONED
     except BrokenPipeError:
         return EXIT_OK
+    except OSError as exc:  # an output that failed where it could not be known before
+        from hybrid.export.outputs import reason
+
+        where = f" '{exc.filename}'" if exc.filename else ""
+        print(f"hybrid: cannot write{where}: {reason(exc)}", file=sys.stderr)
+        return EXIT_INVALID
     return EXIT_INVALID
 
 

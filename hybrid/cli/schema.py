@@ -20,7 +20,6 @@ from __future__ import annotations
 import sys
 
 from hybrid.cli.exits import EXIT_OK
-from hybrid.errors import UsageError
 from hybrid.export.atomic import atomic_write
 from hybrid.reader.jsonschema import spec_schema_text
 
@@ -33,10 +32,9 @@ def run_schema(path: str | None = None) -> int:
     if path is None:
         sys.stdout.write(text)
         return EXIT_OK
-    from pathlib import Path
+    from hybrid.export.outputs import writable_file
 
-    if not Path(path).resolve().parent.is_dir():
-        raise UsageError(f"--out: directory of '{path}' does not exist")
+    writable_file(path, "--out")
     with atomic_write(path) as handle:
         handle.write(text.encode("utf-8"))
     return EXIT_OK

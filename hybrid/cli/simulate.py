@@ -31,12 +31,13 @@ OUTPUT_FLAGS = ("out", "events", "plot")
 
 def run_simulate(args: argparse.Namespace) -> int:
     """The ``simulate`` command; returns the exit code (0, 1, 2 or 130)."""
+    from hybrid.export.outputs import writable_file
     from hybrid.reader.loader import load
 
     outputs = [(flag, getattr(args, flag)) for flag in OUTPUT_FLAGS]
     for flag, path in outputs:
-        if path is not None and not Path(path).resolve().parent.is_dir():
-            raise UsageError(f"--{flag}: directory of '{path}' does not exist")
+        if path is not None:
+            writable_file(path, f"--{flag}")
     if args.out is not None and Path(args.out).suffix.lower() not in (".csv", ".npz"):
         raise UsageError(f"--out: use a .csv or .npz file name, got '{args.out}'")
     line = terminal_reporter(args.quiet)
@@ -164,19 +165,33 @@ def _inputs(
 def _write_outputs(
     run: Run, args: argparse.Namespace, written: list[str], line: TerminalLine | None
 ) -> None:
+    """Write each output asked for; one that fails at the end is kept elsewhere and named.
+
+    The paths were found writable before the run; a write can still fail (a disk
+    that filled during the run): the others are written all the same, the failed
+    one is written into a fresh temporary folder, and the error names it.
+    """
+    from hybrid.export.outputs import keep_elsewhere
     from hybrid.export.trajectory import write_csv, write_events, write_npz
 
+    writers: list[tuple[str, str, Callable[[Path], object]]] = []
     if args.out is not None:
-        if Path(args.out).suffix.lower() == ".npz":
-            write_npz(run, args.out, progress=line)
-        else:
-            write_csv(run, args.out, progress=line)
-        written.append(args.out)
+        npz = Path(args.out).suffix.lower() == ".npz"
+        write_trajectory = write_npz if npz else write_csv
+        writers.append(("out", args.out, lambda p: write_trajectory(run, p, progress=line)))
     if args.events is not None:
-        write_events(run, args.events, progress=line)
-        written.append(args.events)
+        writers.append(("events", args.events, lambda p: write_events(run, p, progress=line)))
     if args.plot is not None:
         from hybrid.export.plot import plot_run
 
-        plot_run(run, args.plot)
-        written.append(args.plot)
+        writers.append(("plot", args.plot, lambda p: plot_run(run, p)))
+    failed: list[UsageError] = []
+    for flag, path, write in writers:
+        try:
+            write(Path(path))
+        except OSError as exc:
+            failed.append(keep_elsewhere(path, write, exc, f"--{flag}"))
+        else:
+            written.append(path)
+    if failed:
+        raise UsageError("; ".join(str(e) for e in failed))

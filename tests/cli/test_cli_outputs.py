@@ -1,0 +1,133 @@
+"""Outputs that cannot be written: one message, exit 2, before the work, never a traceback.
+
+Every command that writes is run as a user types it (``python -m hybrid`` in a
+subprocess) with three kinds of bad output: a path in ``/proc`` (where no file
+can be created, even by root), a directory given as the output file, and a
+missing parent directory. Each must end with exit 2, one line naming the flag
+and the path, and nothing created. A write that fails only at the end (a disk
+that filled during the run) keeps what was computed in a folder the message
+names.
+"""
+
+from __future__ import annotations
+
+import errno
+from pathlib import Path
+
+import pytest
+from support import SPECS, assert_no_traceback, main_in_process, read_csv, run_cli
+
+THERMOSTAT = str(SPECS / "thermostat.yaml")
+BALL = str(SPECS / "bouncing_ball.yaml")
+
+# (command words before the output, the flag, how the output is named)
+COMMANDS = [
+    (["simulate", THERMOSTAT, "--t-end", "1"], "--out", ".csv"),
+    (["simulate", THERMOSTAT, "--t-end", "1"], "--events", ".json"),
+    (["simulate", THERMOSTAT, "--t-end", "1"], "--plot", ".png"),
+    (["sweep", THERMOSTAT, "--t-end", "1", "--grid", "init.T=18:20:2", "--quiet"], "--out", ".csv"),
+    (["schema"], "--out", ".json"),
+    (["graph", THERMOSTAT], "--out", ".dot"),
+    (["export", "spaceex", THERMOSTAT], "--out", ".xml"),
+]
+IDS = [f"{words[0]}-{flag}" for words, flag, _ in COMMANDS]
+
+
+def _bad_outputs(tmp_path: Path, suffix: str) -> dict[str, Path]:
+    folder = tmp_path / f"folder{suffix}"
+    folder.mkdir()
+    return {
+        "proc": Path(f"/proc/hybrid-test{suffix}"),
+        "directory": folder,
+        "missing-parent": tmp_path / "missing" / f"out{suffix}",
+    }
+
+
+@pytest.mark.parametrize(("words", "flag", "suffix"), COMMANDS, ids=IDS)
+def test_an_output_that_cannot_be_written_is_refused_before_the_work(
+    tmp_path: Path, words: list[str], flag: str, suffix: str
+) -> None:
+    for kind, bad in _bad_outputs(tmp_path, suffix).items():
+        before = sorted(tmp_path.rglob("*"))
+        done = run_cli(*words, flag, bad)
+        assert_no_traceback(done.stderr)
+        assert done.returncode == 2, (kind, done.stderr)
+        lines = done.stderr.strip().splitlines()
+        assert len(lines) == 1, (kind, done.stderr)
+        assert flag in lines[0] and str(bad) in lines[0], (kind, lines[0])
+        expected = {
+            "proc": "cannot write",
+            "directory": "is a directory",
+            "missing-parent": "does not exist",
+        }[kind]
+        assert expected in lines[0], (kind, lines[0])
+        assert sorted(tmp_path.rglob("*")) == before, f"{kind}: something was created"
+        assert done.stdout == "", (kind, done.stdout)
+
+
+@pytest.mark.parametrize(
+    "words",
+    [
+        ["falsify", THERMOSTAT, "--requirement", "r", "--vary", "init.T=18:20", "--budget", "2",
+         "--t-end", "1"],
+        ["import", "spaceex", str(Path(__file__).parents[1] / "data" / "spaceex" / "bball" / "bball.xml")],
+    ],
+    ids=["falsify", "import"],
+)  # fmt: skip
+def test_an_output_directory_that_cannot_be_made_is_refused(
+    tmp_path: Path, words: list[str]
+) -> None:
+    a_file = tmp_path / "a-file"
+    a_file.write_text("")
+    for bad, says in [
+        (Path("/proc/hybrid-test-dir"), "cannot write"),
+        (a_file, "exists and is not a directory"),
+        (a_file / "below", "is not a directory"),
+    ]:
+        done = run_cli(*words, "--out", bad)
+        assert_no_traceback(done.stderr)
+        assert done.returncode == 2, done.stderr
+        assert says in done.stderr and "--out" in done.stderr, done.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a-file"]
+
+
+def test_a_missing_output_directory_is_created_only_when_written(tmp_path: Path) -> None:
+    target = tmp_path / "new" / "deeper"
+    xml = Path(__file__).parents[1] / "data" / "spaceex" / "bball" / "bball.xml"
+    done = run_cli("import", "spaceex", xml, "--out", target)
+    assert done.returncode == 0, done.stderr
+    assert Path(done.stdout.strip()).is_file()
+    refused = run_cli("falsify", THERMOSTAT, "--requirement", "nope", "--vary", "init.T=18:20",
+                      "--budget", "2", "--t-end", "1", "--out", tmp_path / "never")  # fmt: skip
+    assert refused.returncode == 2
+    assert not (tmp_path / "never").exists()  # refused before anything was created
+
+
+def test_a_write_that_fails_at_the_end_keeps_the_output_elsewhere(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The disk fills during the run: --out is kept in a folder the message names, exit 2."""
+    import hybrid.export.trajectory as trajectory
+
+    out, events = tmp_path / "ball.csv", tmp_path / "ball.json"
+    real = trajectory.write_csv
+
+    def full_disk(run: object, path: str | Path, **kwargs: object) -> None:
+        if Path(path) == out:
+            raise OSError(errno.ENOSPC, "No space left on device", str(path))
+        real(run, path, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(trajectory, "write_csv", full_disk)
+    code = main_in_process("simulate", BALL, "--t-end", "3", "--out", out, "--events", events)
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert "No space left on device" in err and "kept in " in err
+    kept = Path(err.split("kept in ")[1].split()[0].rstrip(";"))
+    assert kept.name == "ball.csv" and not out.exists()
+    assert events.is_file()  # the other output was written all the same
+    header, rows = read_csv(kept)
+    assert header[:2] == ["t", "j"]
+    # the ball falls from 10 m: the first bounce at sqrt(2 h / g), kept like any other point
+    first_bounce = (2 * 10 / 9.81) ** 0.5
+    assert any(abs(float(r["t"]) - first_bounce) < 1e-6 for r in rows)
+    assert float(rows[-1]["t"]) == pytest.approx(3.0)
