@@ -20,7 +20,21 @@ from hybrid.version import install_hint
 pytest.importorskip("numba")
 
 
+def _thermostat_closed_form(t: float, location: str, t0: float, temp0: float) -> float:
+    """specs/thermostat.yaml between switches: an exponential towards T_out or T_heat."""
+    target = 10.0 if location == "off" else 30.0
+    return target + (temp0 - target) * np.exp(-0.1 * (t - t0))
+
+
 def test_cli_backend_compiled_writes_what_scipy_writes(tmp_path: Path) -> None:
+    """Both backends' files hold the same switches and points on the closed form.
+
+    Row k of one file is not compared with row k of the other: the two integrators
+    take the same steps only while their error estimates agree to the last bit,
+    and that estimate is a sum of nearly equal stage values whose rounding moves
+    with the summation order (numpy 2.4's ``dot`` against the kernel's loop moved a
+    step by 2e-7 s). Each point is held against the closed form at its own time.
+    """
     outputs = {}
     for backend in ("scipy", "compiled"):
         out, events = tmp_path / f"{backend}.csv", tmp_path / f"{backend}.json"
@@ -28,12 +42,19 @@ def test_cli_backend_compiled_writes_what_scipy_writes(tmp_path: Path) -> None:
                        "--atol", "1e-12", "--backend", backend, "--out", out, "--events", events)  # fmt: skip
         assert done.returncode == 0, done.stderr
         outputs[backend] = (read_csv(out), read_json(events))
-    (header_s, rows_s), events_s = outputs["scipy"]
-    (header_c, rows_c), events_c = outputs["compiled"]
-    assert header_c == header_s and len(rows_c) == len(rows_s)
-    assert [r["location"] for r in rows_c] == [r["location"] for r in rows_s]
-    np.testing.assert_allclose([float(r["T"]) for r in rows_c], [float(r["T"]) for r in rows_s], rtol=1e-9)
+    (header_s, _), events_s = outputs["scipy"]
+    (header_c, _), events_c = outputs["compiled"]
+    assert header_c == header_s
     assert [j["edge"] for j in events_c["jumps"]] == [j["edge"] for j in events_s["jumps"]]
+    np.testing.assert_allclose([j["t"] for j in events_c["jumps"]],
+                               [j["t"] for j in events_s["jumps"]], rtol=1e-9)  # fmt: skip
+    for (_, rows), doc in outputs.values():
+        jumps = doc["jumps"]
+        for row in rows:
+            t, j = float(row["t"]), int(row["j"])
+            t0, temp0 = (jumps[j - 1]["t"], jumps[j - 1]["after"]["T"]) if j else (0.0, 20.0)
+            expected = _thermostat_closed_form(t, row["location"], t0, temp0)
+            assert float(row["T"]) == pytest.approx(expected, abs=1e-8), row
     assert events_c["settings"]["backend"] == "compiled"
     assert events_c["termination"]["cause"] == events_s["termination"]["cause"] == "t_end"
 
