@@ -52,7 +52,8 @@ bench: $(STAMP_TEST)
 # Randomized tests at full size (well over an hour on 2 cores): every test marked `fuzz`,
 # with HYBRID_FUZZ=1 scaling the example counts (check vs simulate: 5,000 models; loader:
 # 100,000 mutated specs), and the simulation fuzz (2,000 generated models with every
-# solver method) with 20 Ctrl-C at random moments of a long run.
+# solver method) with 20 Ctrl-C at random moments of a long run, and 25 Ctrl-C at random
+# moments of each command plus kill -9 of simulate (both backends) and of a sweep resumed.
 fuzz: $(STAMP_TEST)
 	HYBRID_FUZZ=1 $(BIN)/python -m pytest -q -p no:cacheprovider -m fuzz tests
 	HYBRID_FUZZ_MODELS=2000 HYBRID_FUZZ_ALL_METHODS=1 HYBRID_INTERRUPT_MOMENTS=20 \
@@ -60,6 +61,8 @@ fuzz: $(STAMP_TEST)
 		tests/fuzz/test_fuzz_simulation.py tests/cli/test_cli_simulate_interrupts.py
 	HYBRID_FUZZ=1 $(BIN)/python -m pytest -q -p no:cacheprovider \
 		tests/simulation/native/test_native_property.py tests/simulation/native/test_native_spaceex.py
+	HYBRID_INTERRUPT_ANYWHERE=25 $(BIN)/python -m pytest -q -p no:cacheprovider \
+		tests/cli/test_cli_interrupt_anywhere.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .mypy_cache .ruff_cache docs/_build docs/api docs/_generated

@@ -16,11 +16,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from hybrid.compose import System, compose
 from hybrid.errors import HybridError, Position, SimulationError, SpecError, UsageError
 from hybrid.lazy import lazy_attributes
-from hybrid.model import Automaton, Range
-from hybrid.reader.loader import load, load_text
 from hybrid.version import __version__
 
 if TYPE_CHECKING:
@@ -29,6 +26,9 @@ if TYPE_CHECKING:
     from hybrid.campaigns.falsify import Falsification, falsify
     from hybrid.campaigns.sweep import sweep
     from hybrid.campaigns.table import SweepTable
+    from hybrid.compose import System, compose
+    from hybrid.model import Automaton, Range
+    from hybrid.reader.loader import load, load_text
     from hybrid.simulation.engine import simulate
     from hybrid.simulation.native.many import Ensemble, simulate_many
     from hybrid.simulation.result import Jump, Run, Termination
@@ -60,9 +60,16 @@ __all__ = [
     "sweep",
 ]
 
-# The simulator (scipy) and the analysis (networkx) load on first use, so that
-# `hybrid validate` and `import hybrid` stay quick.
+# Everything but the errors loads on first use: the reader (pydantic), the
+# simulator (scipy) and the analysis (networkx), so that `import hybrid` is quick
+# and the command line is inside its Ctrl-C handling before anything heavy runs.
 _LAZY = {
+    "System": "hybrid.compose",
+    "compose": "hybrid.compose",
+    "Automaton": "hybrid.model",
+    "Range": "hybrid.model",
+    "load": "hybrid.reader.loader",
+    "load_text": "hybrid.reader.loader",
     "Jump": "hybrid.simulation.result",
     "Run": "hybrid.simulation.result",
     "Termination": "hybrid.simulation.result",

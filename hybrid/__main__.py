@@ -1,5 +1,11 @@
 """``python -m hybrid``: the command line."""
 
-from hybrid.cli.main import main
+import sys
+
+try:
+    from hybrid.cli.main import main
+except KeyboardInterrupt:  # Ctrl-C while the command line itself is imported
+    print("hybrid: interrupted", file=sys.stderr)
+    raise SystemExit(130) from None
 
 raise SystemExit(main())

@@ -8,11 +8,11 @@ Exit codes: 0 success; 1 findings (check) or a run that ended before t-end
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
-from hybrid.analysis.formats import FORMATS as REPORT_FORMATS
 from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_INVALID, EXIT_OK
 from hybrid.errors import SimulationError, SpecError, UsageError
 from hybrid.version import __version__
@@ -76,6 +76,7 @@ def _count(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``hybrid`` command (the CLI reference is generated from it)."""
+    from hybrid.analysis.formats import FORMATS as REPORT_FORMATS
     from hybrid.export.diagrams import DIAGRAM_FORMATS
     from hybrid.export.pictures import RENDERED_FORMATS
     from hybrid.simulation.settings import BACKENDS, METHODS
@@ -176,7 +177,55 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit code."""
+    """Run the command line; returns the exit code.
+
+    Ctrl-C at any moment, from the first import to the last byte written, ends
+    in one line and exit 130 (commands that keep what they computed, such as
+    ``simulate``, ``sweep`` and ``falsify``, say so themselves first).
+    """
+    said = "interrupted"
+    try:
+        return _main(argv)
+    except KeyboardInterrupt as exc:
+        said = str(exc) or said  # what was stopped, when the code that stopped it knows
+    except Exception as exc:
+        if not _caused_by_interrupt(exc):
+            raise
+    with _no_further_interrupts():
+        print(f"hybrid: {said}", file=sys.stderr)
+    return EXIT_ABANDONED
+
+
+def _caused_by_interrupt(exc: BaseException) -> bool:
+    """Whether a Ctrl-C is behind ``exc``: an extension module whose initialisation
+    was interrupted raises ``ImportError: initialization failed`` from it."""
+    seen: set[int] = set()
+    cause: BaseException | None = exc
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return False
+
+
+@contextlib.contextmanager
+def _no_further_interrupts() -> Iterator[None]:
+    """A second Ctrl-C while the exit message is printed is ignored (no traceback)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _main(argv: Sequence[str] | None) -> int:
     args = build_parser().parse_args(argv)
     try:
         if args.command == "validate":
@@ -217,8 +266,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (UsageError, SimulationError) as exc:
         print(f"{getattr(args, 'file', 'hybrid')}: {exc}", file=sys.stderr)
         return EXIT_INVALID
-    except KeyboardInterrupt:
-        print("hybrid: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:
+        print(f"hybrid: {str(exc) or 'interrupted'}", file=sys.stderr)
         return EXIT_ABANDONED
     except BrokenPipeError:
         return EXIT_OK

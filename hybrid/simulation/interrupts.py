@@ -37,7 +37,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
-__all__ = ["ABANDON_HINT", "Interrupts", "sigint_watch"]
+__all__ = ["ABANDON_HINT", "Interrupts", "immediate", "sigint_watch"]
 
 ABANDON_HINT = "press Ctrl-C again to abandon them"
 
@@ -56,11 +56,14 @@ class Interrupts:
         self.presses = 0
         self.in_writing = False
         self.abandon_armed = False
+        self.in_immediate: str | None = None
         self.notify = notify
 
     def press(self) -> None:
         """One Ctrl-C: request a stop, or (while writing) warn, then abandon."""
         self.presses += 1
+        if self.in_immediate is not None:
+            raise KeyboardInterrupt(f"interrupted while {self.in_immediate}")
         if not self.in_writing:
             self.requested = True
             return
@@ -96,6 +99,38 @@ class Interrupts:
         finally:
             _ACTIVE.remove(self)
             signal.signal(signal.SIGINT, previous)
+
+
+@contextmanager
+def immediate(what: str) -> Iterator[None]:
+    """Work with no result to keep (``what``: "compiling the model"): Ctrl-C stops it at once.
+
+    Inside a command's :class:`Interrupts`, a Ctrl-C would otherwise only be
+    requested and seen by the next run's loop, after a compile of many seconds;
+    here it raises ``KeyboardInterrupt`` saying what was stopped (the command
+    line prints that and exits 130). Outside one, Python's own handler raises it.
+
+    Examples
+    --------
+    >>> stop = Interrupts()
+    >>> _ACTIVE.append(stop)
+    >>> with immediate("compiling the model"):
+    ...     try:
+    ...         stop.press()
+    ...     except KeyboardInterrupt:
+    ...         print("stopped at once")
+    stopped at once
+    >>> _ACTIVE.remove(stop)
+    """
+    if not _ACTIVE:
+        yield
+        return
+    active = _ACTIVE[-1]
+    before, active.in_immediate = active.in_immediate, what
+    try:
+        yield
+    finally:
+        active.in_immediate = before
 
 
 @contextmanager

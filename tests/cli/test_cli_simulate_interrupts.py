@@ -37,7 +37,7 @@ MOMENTS = int(os.environ.get("HYBRID_INTERRUPT_MOMENTS", "6"))
 # each command's stderr is captured and reported with its exit code.
 CHILD = """
 import contextlib, io, json, sys
-import hybrid.cli.simulate, hybrid.simulation.engine, hybrid.export.trajectory
+import hybrid.cli.simulate, hybrid.simulation.engine, hybrid.export.trajectory, hybrid.reader.loader
 from hybrid.cli.main import main
 for line in sys.stdin:
     args = json.loads(line)

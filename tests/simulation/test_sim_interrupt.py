@@ -23,7 +23,7 @@ locations:
 # Imports first, then "ready", then the command line exactly as the console script runs it.
 LAUNCHER = """
 import sys
-import hybrid.cli.main, hybrid.cli.simulate, hybrid.simulation.engine, hybrid.export.trajectory
+import hybrid.cli.main, hybrid.cli.simulate, hybrid.simulation.engine, hybrid.export.trajectory, hybrid.reader.loader
 print("ready", flush=True)
 sys.exit(hybrid.cli.main(sys.argv[1:]))
 """

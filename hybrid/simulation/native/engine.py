@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from hybrid.compose import System
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
+from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import run_from
 from hybrid.simulation.native.cache import load_generated, require_numba
@@ -286,7 +287,8 @@ def simulate_compiled(
     if last is not None and last[0] is model and not initial and _same_config(last[1], settings):
         compiled, p, x0, m0, cfg = last[2:]
     else:
-        compiled = compiled_native(model)
+        with immediate("compiling the model (nothing was run)"):
+            compiled = compiled_native(model)
         native = compiled.native
         p = np.array(native.parameter_vector(model), dtype=float)
         x0 = np.array(initial_vector(model, native.state_names, initial), dtype=float)

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
+from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import run_from
 from hybrid.simulation.native.engine import (
@@ -242,7 +243,8 @@ def simulate_many(
         raise UsageError(f"parameters and initial have different numbers of rows {sorted(sizes)}")
     n = sizes.pop() if sizes else 1
     refuse_requirements(as_system(model))
-    compiled = compiled_native(model)
+    with immediate("compiling the model (nothing was run)"):
+        compiled = compiled_native(model)
     native = compiled.native
     params = np.tile(np.array(native.parameter_vector(model), dtype=float), (n, 1))
     for key, column in params_table.items():

@@ -236,6 +236,15 @@ def _wait(worker: subprocess.Popen[bytes] | None) -> None:
         worker.wait()
 
 
+def _stop(workers: list[subprocess.Popen[bytes] | None]) -> None:
+    """Kill the workers (Ctrl-C): numba writes each cache file whole (a temporary file
+    renamed), so a worker killed mid-compile leaves no entry a later process would load."""
+    for worker in workers:
+        if worker is not None and worker.poll() is None:
+            worker.kill()
+            worker.wait()
+
+
 def compile_kernel(namespace: dict[str, Any], jit: Callable[[str], Any], names: Sequence[str],
                    costs: Mapping[str, float], needs: Mapping[str, Iterable[str]], path: str,
                    module: str) -> Callable[[], None]:  # fmt: skip
@@ -258,6 +267,9 @@ def compile_kernel(namespace: dict[str, Any], jit: Callable[[str], Any], names: 
     workers = [_spawn(path, module, s) for s in plan[1:]]
     try:
         _compile(namespace, jit, names, needs, plan[0], done)
+    except KeyboardInterrupt:
+        _stop(workers)
+        raise
     except BaseException:
         for worker in workers:
             _wait(worker)
@@ -265,8 +277,13 @@ def compile_kernel(namespace: dict[str, Any], jit: Callable[[str], Any], names: 
 
     def finish() -> None:
         """Wait for the workers, then load their pieces (or compile those they did not)."""
-        while workers:
-            _wait(workers.pop())
+        try:
+            while workers:
+                _wait(workers[-1])
+                workers.pop()
+        except KeyboardInterrupt:
+            _stop(workers)
+            raise
         for piece in (p for s in plan[1:] for p in s):
             if piece in done:
                 continue
