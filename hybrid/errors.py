@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 __all__ = [
     "HybridError",
+    "Note",
     "Position",
     "SimulationError",
     "SpecError",
@@ -161,3 +162,11 @@ def did_you_mean(name: str, candidates: Iterable[str], cutoff: float = 0.6) -> s
     """
     match = difflib.get_close_matches(name, list(candidates), n=1, cutoff=cutoff)
     return f"; did you mean '{match[0]}'?" if match else ""
+
+
+class Note(UserWarning):
+    """Something ``hybrid`` did that the user should know, though nothing failed.
+
+    Raised as a warning (``warnings.warn``), so a program decides what to do with
+    it; the command line prints each as one line, ``hybrid: note: message``.
+    """

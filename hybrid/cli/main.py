@@ -11,10 +11,12 @@ import argparse
 import contextlib
 import math
 import sys
+import warnings
 from collections.abc import Iterator, Sequence
+from typing import Any
 
 from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_INVALID, EXIT_OK
-from hybrid.errors import SimulationError, SpecError, UsageError
+from hybrid.errors import Note, SimulationError, SpecError, UsageError
 from hybrid.version import __version__
 
 __all__ = ["EXIT_FINDINGS", "EXIT_INVALID", "EXIT_OK", "build_parser", "main"]
@@ -225,8 +227,25 @@ def _no_further_interrupts() -> Iterator[None]:
         signal.signal(signal.SIGINT, previous)
 
 
+def _show_note(message: Warning | str, category: type[Warning], *rest: Any, **kw: Any) -> None:
+    """hybrid's notes as one line each; any other warning as Python shows it."""
+    if issubclass(category, Note):
+        print(f"hybrid: note: {message}", file=sys.stderr)
+    else:
+        _SHOW_WARNING(message, category, *rest, **kw)
+
+
+_SHOW_WARNING = warnings.showwarning
+
+
 def _main(argv: Sequence[str] | None) -> int:
     args = build_parser().parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_note
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
         if args.command == "validate":
             return _validate(args.files)

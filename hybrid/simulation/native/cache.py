@@ -17,6 +17,17 @@ cannot be written, a directory under the system's temporary directory. Delete
 it to reclaim the space; nothing else refers to it. Like numba's own cache,
 it is trusted: keep it private to the user (it is created ``0o700``).
 
+**A damaged cache is rebuilt, not blamed on the model.** Once a model or the
+kernel has compiled and loaded, :func:`seal` writes ``manifest.json`` beside
+its module: the SHA-256 of every file of that key. Before the next load, a file
+listed there that is missing or no longer matches (a truncated copy, a disk
+error, a hand edit) makes the whole key's files be discarded and compiled again,
+with a :class:`CompiledCacheNote` saying so (the command line prints it as one
+``hybrid: note:`` line). Files no manifest covers yet (a compile that was
+interrupted, another process's) are guarded the other way: a load from the cache
+that fails (numba's pickles truncated, machine code LLVM cannot read) discards
+them and compiles once more, with the same note.
+
 Examples
 --------
 >>> cache_root().name
@@ -25,23 +36,42 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib.util
+import json
 import os
 import platform
+import shutil
 import sys
 import tempfile
 import threading
+import warnings
 from pathlib import Path
 from types import ModuleType
 
-from hybrid.errors import UsageError
+from hybrid.errors import Note, UsageError
 from hybrid.simulation.native.kernel_text import Generated
 from hybrid.version import install_hint
 
-__all__ = ["CACHE_ENV", "cache_key", "cache_root", "load_generated", "require_numba"]
+__all__ = [
+    "CACHE_ENV",
+    "MANIFEST",
+    "CompiledCacheNote",
+    "cache_key",
+    "cache_root",
+    "load_generated",
+    "require_numba",
+    "seal",
+]
 
 CACHE_ENV = "HYBRID_NATIVE_CACHE"
+MANIFEST = "manifest.json"
+"""The file beside a compiled module that lists the SHA-256 of each of its cache files."""
+
+
+class CompiledCacheNote(Note):
+    """A damaged compiled-model cache was discarded and is being rebuilt."""
 
 _LOADED: dict[str, ModuleType] = {}
 _LOCK = threading.Lock()
@@ -119,6 +149,79 @@ def _write_once(path: Path, text: str) -> None:
     os.replace(temporary, path)
 
 
+def _digests(directory: Path) -> dict[str, str]:
+    """SHA-256 of the module and of numba's files of one key (temporary files left out)."""
+    found: dict[str, str] = {}
+    for path in sorted([*directory.glob("*.py"), *directory.glob("__pycache__/*")]):
+        if path.is_file() and ".tmp" not in path.name:
+            found[str(path.relative_to(directory))] = hashlib.sha256(path.read_bytes()).hexdigest()
+    return found
+
+
+def _damage(directory: Path) -> str | None:
+    """The first file the manifest lists that is missing or changed, or None."""
+    try:
+        listed = json.loads((directory / MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None  # no manifest (or one being replaced): nothing to hold the files to
+    if not isinstance(listed, dict):
+        return MANIFEST
+    for name, digest in listed.items():
+        path = directory / str(name)
+        try:
+            if hashlib.sha256(path.read_bytes()).hexdigest() != digest:
+                return f"{name} has changed"
+        except OSError:
+            return f"{name} is missing"
+    return None
+
+
+def _discard(directory: Path, why: str) -> None:
+    """Remove a key's compiled files (the module is written again) and say so."""
+    warnings.warn(
+        f"the compiled-model cache in {directory} was damaged ({why}); discarded, compiling again",
+        CompiledCacheNote,
+        stacklevel=3,
+    )
+    shutil.rmtree(directory / "__pycache__", ignore_errors=True)
+    for name in (MANIFEST, *(p.name for p in directory.glob("*.py"))):
+        with contextlib.suppress(OSError):
+            os.unlink(directory / name)
+
+
+def seal(module: ModuleType) -> None:
+    """Record the SHA-256 of the compiled ``module``'s cache files (see the module docstring).
+
+    Called once a module has compiled and loaded whole; a manifest that already
+    lists the same files is left as it is.
+    """
+    origin = getattr(module, "__file__", None)
+    if not origin:
+        return
+    directory = Path(origin).parent
+    digests = _digests(directory)
+    try:
+        if json.loads((directory / MANIFEST).read_text(encoding="utf-8")) == digests:
+            return
+    except (OSError, ValueError):
+        pass
+    with contextlib.suppress(OSError):  # a cache that cannot be written is only not guarded
+        _write_once(directory / MANIFEST, json.dumps(digests, indent=1, sort_keys=True))
+
+
+def _import(name: str, path: Path) -> ModuleType:
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # numba's cache re-imports the module by name
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        sys.modules.pop(name, None)
+        raise
+    return module
+
+
 def load_generated(generated: Generated) -> ModuleType:
     """The imported module of ``generated`` (numba compiles or loads it on first call)."""
     numba = require_numba()
@@ -128,12 +231,21 @@ def load_generated(generated: Generated) -> ModuleType:
         if module is not None:
             return module
         name = f"hybrid_native_{key}"
-        path = _writable_directory(key) / f"{name}.py"
+        directory = _writable_directory(key)
+        damage = _damage(directory)
+        if damage is not None:
+            _discard(directory, damage)
+        path = directory / f"{name}.py"
         _write_once(path, generated.source)
-        spec = importlib.util.spec_from_file_location(name, path)
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module  # numba's cache re-imports the module by name
-        spec.loader.exec_module(module)
+        cached = any((directory / "__pycache__").glob("*.nb*"))
+        try:
+            module = _import(name, path)
+        except Exception as exc:
+            if not cached:
+                raise  # compiled from nothing: the model's own failure
+            lines = [line for line in str(exc).splitlines() if line.strip()]
+            _discard(directory, f"{type(exc).__name__}: {lines[0] if lines else 'no message'}")
+            _write_once(path, generated.source)
+            module = _import(name, path)
         _LOADED[key] = module
         return module

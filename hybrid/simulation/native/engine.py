@@ -31,7 +31,7 @@ from hybrid.model import Automaton
 from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import run_from
-from hybrid.simulation.native.cache import load_generated, require_numba
+from hybrid.simulation.native.cache import load_generated, require_numba, seal
 from hybrid.simulation.native.kernel_text import kernel_module
 from hybrid.simulation.native.kernel_types import PIECES
 from hybrid.simulation.native.layout import Layout
@@ -112,6 +112,8 @@ class CompiledNative:
                 f"(library functions: {what}): {lines[0] if lines else type(exc).__name__}"
             ) from exc
         self.kernel = kernel()
+        seal(self.kernel)  # both compiled whole now: their cache files are held to a manifest
+        seal(self.module)
         self.functions: Any = self.module.model
         self.fp = np.array([self.functions.address, 0, *_PIECES["one"]], dtype=np.int64)
         """The addresses the compiled loop calls: the model (a ``cfunc``), then the pieces."""
