@@ -14,6 +14,8 @@ Examples
 
 from __future__ import annotations
 
+import sys as _sys
+import types as _types
 from typing import TYPE_CHECKING
 
 from hybrid.errors import HybridError, Position, SimulationError, SpecError, UsageError
@@ -65,7 +67,6 @@ __all__ = [
 # and the command line is inside its Ctrl-C handling before anything heavy runs.
 _LAZY = {
     "System": "hybrid.compose",
-    "compose": "hybrid.compose",
     "Automaton": "hybrid.model",
     "Range": "hybrid.model",
     "load": "hybrid.reader.loader",
@@ -90,6 +91,28 @@ def __getattr__(name: str) -> object:
     value = _lazy_getattr(name)
     globals()[name] = value
     return value
+
+
+class _Package(_types.ModuleType):
+    """``hybrid.compose`` is the function, though ``hybrid/compose.py`` is a module too.
+
+    Importing a submodule sets the package's attribute of that name to the module,
+    which would hide the lazily loaded function of the same name; this property
+    keeps the function (and ignores the import system's assignment).
+    """
+
+    @property
+    def compose(self) -> object:
+        from hybrid.compose import compose
+
+        return compose
+
+    @compose.setter
+    def compose(self, value: object) -> None:
+        pass
+
+
+_sys.modules[__name__].__class__ = _Package
 
 
 def __dir__() -> list[str]:

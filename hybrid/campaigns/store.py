@@ -12,6 +12,11 @@ settings or points) is refused, and so is a folder found without ``resume``
 (nothing is overwritten by accident). When the campaign is complete, the
 results file is written and the folder removed.
 
+A row the executor made for a run it lost (a worker process that died, a Dask
+task that failed: :data:`LOST` is set in it) is kept in the chunks, so the
+campaign's record is whole, but it is not *done*: a resumed campaign runs that
+point again.
+
 Examples
 --------
 >>> import tempfile, pathlib
@@ -36,7 +41,10 @@ from typing import Any
 
 from hybrid.errors import UsageError
 
-__all__ = ["CHUNK_ROWS", "CHUNK_SECONDS", "ChunkStore", "parts_dir", "write_whole"]
+__all__ = ["CHUNK_ROWS", "CHUNK_SECONDS", "LOST", "ChunkStore", "parts_dir", "write_whole"]
+
+LOST = "lost"
+"""Key set (to True) in a row the executor made for a run lost to it, not run to an end."""
 
 CHUNK_ROWS = 64
 """A chunk is written when this many rows are waiting..."""
@@ -109,7 +117,10 @@ class ChunkStore:
         for chunk in sorted(self.folder.glob("chunk-*.jsonl")):
             for line in chunk.read_text().splitlines():
                 row = json.loads(line)
-                self.done[int(row["run"])] = row
+                if row.get(LOST):
+                    self.done.pop(int(row["run"]), None)  # run again (a later chunk may hold it)
+                else:
+                    self.done[int(row["run"])] = row
             self.next_chunk = max(self.next_chunk, int(chunk.stem.split("-")[1]) + 1)
 
     def add(self, row: dict[str, Any]) -> None:

@@ -36,7 +36,7 @@ from hybrid.campaigns.space import (
     ranges_axes,
     sample_points,
 )
-from hybrid.campaigns.store import ChunkStore
+from hybrid.campaigns.store import LOST, ChunkStore
 from hybrid.campaigns.table import FAILED, SweepTable
 from hybrid.campaigns.targets import INPUT, check_names, free_inputs
 from hybrid.compose import System, as_system
@@ -273,16 +273,23 @@ def run_campaign(
         tracker.update(len(rows), **counts)
 
     def failed(job: tuple[int, str, Any], cause: str, message: str) -> dict[str, Any]:
-        return {"run": job[0], **job[2], **failed_row(model, plan, cause, message)}
+        row = {"run": job[0], **job[2], **failed_row(model, plan, cause, message)}
+        if cause == "error":  # the executor lost the run (a worker died): not the run's end
+            row[LOST] = True
+        return row
 
     with sigint_watch(handle_sigint) as interrupts, executor:
         if jobs:
             executor.start(payload, plan)
-            complete = executor.run(
-                jobs, on_result, failed, lambda: interrupts.requested, hard_limit(plan.timeout)
-            )
+            stop = lambda: interrupts.requested  # noqa: E731
+            limit = hard_limit(plan.timeout)
+            complete = executor.run(jobs, on_result, failed, stop, limit)
+            lost = [job for job in jobs if rows.get(job[0], {}).get(LOST)] if complete else []
+            if lost:  # once more, on the workers that are left (or new ones)
+                complete = executor.run(lost, on_result, failed, stop, limit)
         else:
             complete = True
+    lost_rows = sum(1 for row in rows.values() if row.get(LOST))
     if store is not None:
         store.flush()
     tracker.finish(len(rows), **counts)
@@ -291,11 +298,12 @@ def run_campaign(
         list(rows.values()),
         names,
         requirements,
-        complete=complete,
+        complete=complete and not lost_rows,
         total=len(points),
         resumed=resumed,
+        lost=lost_rows,
     )
-    if complete and out is not None and store is not None:
+    if table.complete and out is not None and store is not None:
         table.write(out)
         store.remove()
     return table

@@ -60,9 +60,10 @@ def _text(value: Any) -> str:
 class SweepTable:
     """Rows of a campaign (``rows``: one dict per run, by run number).
 
-    ``complete`` is False when the campaign stopped early (Ctrl-C); the rows
-    are then those finished, and a resumed campaign adds the rest. ``resumed``
-    counts the rows a resumed campaign found done.
+    ``complete`` is False when the campaign stopped early (Ctrl-C) or lost runs
+    to its executor (``lost``: a worker died twice under them); the rows are then
+    those finished, and a resumed campaign adds the rest. ``resumed`` counts the
+    rows a resumed campaign found done.
     """
 
     def __init__(
@@ -75,6 +76,7 @@ class SweepTable:
         complete: bool = True,
         total: int | None = None,
         resumed: int = 0,
+        lost: int = 0,
     ) -> None:
         self.columns = list(columns)
         self.rows = sorted((dict(r) for r in rows), key=lambda r: int(r["run"]))
@@ -84,6 +86,8 @@ class SweepTable:
         self.total = len(self.rows) if total is None else total
         self.resumed = resumed
         """Rows read back from an earlier, interrupted run of the campaign (not run again)."""
+        self.lost = lost
+        """Rows of runs the executor lost (a worker died) even when tried twice: not done."""
 
     def __len__(self) -> int:
         return len(self.rows)

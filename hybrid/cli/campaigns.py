@@ -177,8 +177,14 @@ def run_sweep(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     if not table.complete:
+        done = len(table) - table.lost
+        why = (
+            f"{table.lost} runs were lost to the executor (a worker died under them, twice)"
+            if table.lost
+            else "interrupted"
+        )
         print(
-            f"{args.file}: interrupted: {len(table)} of {table.total} runs done, kept in "
+            f"{args.file}: {why}: {done} of {table.total} runs done, kept in "
             f"{parts_dir(Path(args.out))}/; the same command with --resume runs only the rest",
             file=sys.stderr,
         )
