@@ -9,7 +9,9 @@ expansion and with ``file:line:column``:
   defence: expat calls these handlers only inside a DTD, which is refused first);
 - files over :data:`MAX_XML_BYTES` (refused from their size, unread), elements
   nested deeper than :data:`MAX_XML_DEPTH`, more than :data:`MAX_XML_ELEMENTS`
-  elements;
+  elements (refused by a pass of expat that only counts them, before any node is
+  built, when the file has more ``<`` than that: in about the time and memory of
+  a bare expat parse);
 - malformed XML (expat's own message, at expat's position).
 
 Nothing is fetched and nothing is executed: processing instructions and
@@ -209,9 +211,12 @@ def parse_xml_bytes(raw: bytes, file: str, *, max_bytes: int = MAX_XML_BYTES) ->
             f"file is {len(raw)} bytes, over the limit of {max_bytes} bytes: refused unread",
             Position(file),
         )
-    parser = expat.ParserCreate(namespace_separator=" ")
     utf8 = _declared_encoding(raw) in ("utf-8", "utf8", "")
-    builder = _Builder(parser, file, raw.split(b"\n") if utf8 else [], raw)
+    lines = raw.split(b"\n") if utf8 else []
+    if raw.count(b"<") > MAX_XML_ELEMENTS:  # every element starts with '<': else within the cap
+        _refuse_too_many_elements(raw, file, lines)
+    parser = expat.ParserCreate(namespace_separator=" ")
+    builder = _Builder(parser, file, lines, raw)
     parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
     parser.StartDoctypeDeclHandler = builder.doctype
     parser.EntityDeclHandler = builder.entity
@@ -235,6 +240,40 @@ def parse_xml_bytes(raw: bytes, file: str, *, max_bytes: int = MAX_XML_BYTES) ->
     if builder.root is None:
         raise SpecError("malformed XML: no element", Position(file))
     return builder.root
+
+
+class _Counter(_Builder):
+    """The builder's refusals, counting elements instead of building them."""
+
+    def start(self, tag: str, attrs: dict[str, str]) -> None:
+        self.count += 1
+        if self.count > MAX_XML_ELEMENTS:
+            self.refuse(f"more than {MAX_XML_ELEMENTS} elements: refused")
+
+    def end(self, tag: str) -> None:
+        pass
+
+
+def _refuse_too_many_elements(raw: bytes, file: str, lines: list[bytes]) -> None:
+    """A first pass of expat that refuses a document over the element cap, building nothing.
+
+    Malformed XML and a document type declaration are left to the building pass
+    (which refuses them with its own words) unless the cap is passed first.
+    """
+    parser = expat.ParserCreate(namespace_separator=" ")
+    counter = _Counter(parser, file, lines, raw)
+    parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
+    parser.StartDoctypeDeclHandler = counter.doctype
+    parser.EntityDeclHandler = counter.entity
+    parser.UnparsedEntityDeclHandler = counter.entity
+    parser.ExternalEntityRefHandler = counter.external
+    parser.StartElementHandler = counter.start
+    try:
+        parser.Parse(raw, True)
+    except _Refused as exc:
+        raise SpecError(exc.message, Position(file, exc.line, exc.column)) from None
+    except (expat.ExpatError, ValueError, LookupError):
+        return
 
 
 def _declared_encoding(raw: bytes) -> str:

@@ -17,8 +17,13 @@ import pytest
 from support import run_cli
 
 import hybrid
-from hybrid.interchange import import_spaceex
-from hybrid.interchange.safexml import MAX_XML_BYTES, MAX_XML_DEPTH, parse_xml_bytes
+from hybrid.interchange import import_spaceex, safexml
+from hybrid.interchange.safexml import (
+    MAX_XML_BYTES,
+    MAX_XML_DEPTH,
+    MAX_XML_ELEMENTS,
+    parse_xml_bytes,
+)
 
 BILLION_LAUGHS = """<?xml version="1.0"?>
 <!DOCTYPE lolz [
@@ -116,6 +121,43 @@ def test_deep_nesting_is_refused_at_the_element(tmp_path: Path) -> None:
     err = _refused(raw, tmp_path)
     assert (err.line, err.column) == (1, 3 * MAX_XML_DEPTH + 1)  # the 65th '<a>'
     assert "nested more than" in err.message
+
+
+def test_too_many_elements_are_refused_before_any_node_is_built(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """1.2 million empty elements (4.8 MB, under the size cap): refused at the one past the cap.
+
+    The bound is on work, not time: no node is built, and the memory traced is
+    about the file's bytes (building the nodes up to the cap took 495 MB).
+    """
+    import tracemalloc
+
+    built: list[int] = []
+    start = safexml._Builder.start
+    monkeypatch.setattr(safexml._Builder, "start",
+                        lambda self, tag, attrs: (built.append(1), start(self, tag, attrs)))  # fmt: skip
+    raw = b"<sspaceex>" + b"<p/>" * (MAX_XML_ELEMENTS + 200_000) + b"</sspaceex>"
+    tracemalloc.start()
+    try:
+        err = _refused(raw, tmp_path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert "more than 1000000 elements" in err.message
+    # the root is element 1: element 1,000,001 is the 1,000,000th '<p/>', at 10 + 4 * 999,999 + 1
+    assert (err.line, err.column) == (1, 10 + 4 * (MAX_XML_ELEMENTS - 1) + 1)
+    assert built == []
+    assert peak < 4 * len(raw), f"{peak / 1e6:.1f} MB traced for a {len(raw) / 1e6:.1f} MB file"
+
+
+def test_a_file_under_the_element_cap_is_parsed_once(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    counted: list[int] = []
+    monkeypatch.setattr(safexml, "_refuse_too_many_elements", lambda *a: counted.append(1))
+    root = parse_xml_bytes(b"<sspaceex>" + b"<p/>" * 1000 + b"</sspaceex>", "m.xml")
+    assert len(root.children) == 1000 and counted == []
 
 
 @pytest.mark.parametrize(
