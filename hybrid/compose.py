@@ -152,6 +152,13 @@ class System:
                     found.setdefault(name, r)
         return MappingProxyType(found)
 
+    def input_position(self, name: str) -> Position | None:
+        """Where the free input ``name`` is declared (its first declaring component), if known."""
+        for c in self.components:
+            if name in c.automaton.inputs:
+                return c.automaton.input_positions.get(name)
+        return None
+
     def input_ranges(self) -> dict[str, Range]:
         """The declared range of every bounded free input (see :meth:`Automaton.input_ranges`)."""
         return dict(self._input_ranges)

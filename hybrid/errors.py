@@ -143,13 +143,25 @@ class SimulationError(HybridError):
 
 
 class UsageError(SimulationError):
-    """An invalid argument or setting of a call or command (no place in a file or in time).
+    """An invalid argument or setting of a call or command (no place in time).
+
+    ``at`` is the place in the user's spec the mistake concerns, when there is one
+    (the declaration of an input given no value); ``str()`` then starts with it.
 
     Examples
     --------
     >>> str(UsageError("rtol must be > 0, got -1"))
     'rtol must be > 0, got -1'
+    >>> str(UsageError("input 'u' needs a value", at=Position("tank.yaml", 3, 10)))
+    "tank.yaml:3:10: input 'u' needs a value"
     """
+
+    def __init__(self, message: str, *, at: Position | None = None) -> None:
+        self.at = at
+        super().__init__(message)
+
+    def __str__(self) -> str:
+        return f"{self.at}: {self.message}" if self.at is not None else self.message
 
 
 def did_you_mean(name: str, candidates: Iterable[str], cutoff: float = 0.6) -> str:

@@ -205,7 +205,10 @@ def falsify(
         if n not in (inputs or {}) and f"input.{n}" not in names and n not in ranged
     ]
     if missing:
-        raise UsageError(f"input '{missing[0]}' needs a value: vary it or give it")
+        raise UsageError(
+            f"input '{missing[0]}' needs a value: vary it or give it",
+            at=as_system(model).input_position(missing[0]),
+        )
     plan = RunPlan(
         t_end=float(t_end),
         solver={k: v for k, v in solver.items() if v is not None},

@@ -366,7 +366,8 @@ def _check_inputs(
     if missing:
         raise UsageError(
             f"input '{missing[0]}' needs a value in every run: vary it (input.{missing[0]}) "
-            f"or give it (--input {missing[0]}=EXPR)"
+            f"or give it (--input {missing[0]}=EXPR)",
+            at=as_system(model).input_position(missing[0]),
         )
     from hybrid.simulation.inputs import ExpressionInput
 

@@ -283,7 +283,8 @@ def _run(args: argparse.Namespace) -> int:
         print(str(exc), file=sys.stderr)
         return EXIT_INVALID
     except (UsageError, SimulationError) as exc:
-        print(f"{getattr(args, 'file', 'hybrid')}: {exc}", file=sys.stderr)
+        placed = isinstance(exc, UsageError) and exc.at is not None  # file:line:column first
+        print(str(exc) if placed else f"{getattr(args, 'file', 'hybrid')}: {exc}", file=sys.stderr)
         return EXIT_INVALID
     except KeyboardInterrupt as exc:
         print(f"hybrid: {str(exc) or 'interrupted'}", file=sys.stderr)

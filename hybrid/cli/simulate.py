@@ -157,7 +157,8 @@ def _inputs(
     if missing:
         raise UsageError(
             f"input '{missing[0]}' needs a value: give --input {missing[0]}=EXPR (an expression "
-            f"of t) or --input-csv FILE (columns t,{missing[0]})"
+            f"of t) or --input-csv FILE (columns t,{missing[0]})",
+            at=system.input_position(missing[0]),
         )
     return given
 

@@ -169,7 +169,8 @@ class CompiledModel:
         if missing:
             raise UsageError(
                 f"input '{missing[0]}' needs a value: pass inputs={{'{missing[0]}': f}} "
-                "with f a function of t"
+                "with f a function of t",
+                at=self.system.input_position(missing[0]),
             )
         unknown = [n for n in self.inputs if n not in external]
         if unknown:

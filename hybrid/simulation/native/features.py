@@ -43,7 +43,8 @@ def refuse_unsupported(system: System) -> None:
         raise UsageError(
             f"input '{unheld[0]}' of {name} needs a value, and the compiled backend cannot take "
             f"inputs given as Python functions: use backend='scipy' with inputs={{'{unheld[0]}': f}}, "
-            f"or compose {name} with an automaton that defines '{unheld[0]}'"
+            f"or compose {name} with an automaton that defines '{unheld[0]}'",
+            at=system.input_position(unheld[0]),
         )
 
 
