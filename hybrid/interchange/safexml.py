@@ -215,14 +215,7 @@ def parse_xml_bytes(raw: bytes, file: str, *, max_bytes: int = MAX_XML_BYTES) ->
     lines = raw.split(b"\n") if utf8 else []
     if raw.count(b"<") > MAX_XML_ELEMENTS:  # every element starts with '<': else within the cap
         _refuse_too_many_elements(raw, file, lines)
-    parser = expat.ParserCreate(namespace_separator=" ")
-    builder = _Builder(parser, file, lines, raw)
-    parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
-    parser.StartDoctypeDeclHandler = builder.doctype
-    parser.EntityDeclHandler = builder.entity
-    parser.UnparsedEntityDeclHandler = builder.entity
-    parser.ExternalEntityRefHandler = builder.external
-    parser.StartElementHandler = builder.start
+    parser, builder = _hardened(_Builder, raw, file, lines)
     parser.EndElementHandler = builder.end
     parser.CharacterDataHandler = builder.data
     parser.buffer_text = False
@@ -254,20 +247,28 @@ class _Counter(_Builder):
         pass
 
 
+def _hardened(
+    kind: type[_Builder], raw: bytes, file: str, lines: list[bytes]
+) -> tuple[expat.XMLParserType, _Builder]:
+    """An expat parser whose DTD, entity and element callbacks are ``kind``'s refusals."""
+    parser = expat.ParserCreate(namespace_separator=" ")
+    handler = kind(parser, file, lines, raw)
+    parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
+    parser.StartDoctypeDeclHandler = handler.doctype
+    parser.EntityDeclHandler = handler.entity
+    parser.UnparsedEntityDeclHandler = handler.entity
+    parser.ExternalEntityRefHandler = handler.external
+    parser.StartElementHandler = handler.start
+    return parser, handler
+
+
 def _refuse_too_many_elements(raw: bytes, file: str, lines: list[bytes]) -> None:
     """A first pass of expat that refuses a document over the element cap, building nothing.
 
     Malformed XML and a document type declaration are left to the building pass
     (which refuses them with its own words) unless the cap is passed first.
     """
-    parser = expat.ParserCreate(namespace_separator=" ")
-    counter = _Counter(parser, file, lines, raw)
-    parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
-    parser.StartDoctypeDeclHandler = counter.doctype
-    parser.EntityDeclHandler = counter.entity
-    parser.UnparsedEntityDeclHandler = counter.entity
-    parser.ExternalEntityRefHandler = counter.external
-    parser.StartElementHandler = counter.start
+    parser, _ = _hardened(_Counter, raw, file, lines)
     try:
         parser.Parse(raw, True)
     except _Refused as exc:
