@@ -19,7 +19,7 @@ from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_INVALID, EXIT_O
 from hybrid.errors import Note, SimulationError, SpecError, UsageError
 from hybrid.version import __version__
 
-__all__ = ["EXIT_FINDINGS", "EXIT_INVALID", "EXIT_OK", "build_parser", "main"]
+__all__ = ["EXIT_FINDINGS", "EXIT_INVALID", "EXIT_OK", "build_parser", "entry", "main"]
 
 
 class _Parser(argparse.ArgumentParser):
@@ -196,6 +196,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     with _no_further_interrupts():
         print(f"hybrid: {said}", file=sys.stderr)
     return EXIT_ABANDONED
+
+
+def entry() -> int:
+    """The ``hybrid`` command (console script and ``python -m hybrid``): :func:`main`, then exit.
+
+    Once :func:`main` has returned, the command's work is done and said: a Ctrl-C
+    while the interpreter shuts down would only turn its exit code into death by
+    SIGINT, so it is ignored from then on.
+    """
+    code = main()
+    import signal
+    import threading
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    return code
 
 
 def _caused_by_interrupt(exc: BaseException) -> bool:
