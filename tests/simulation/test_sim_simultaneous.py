@@ -274,3 +274,57 @@ def test_a_stuck_component_beside_a_zero_time_loop_ends_as_the_loop_does(
     if cause == "zeno":
         assert run.termination.zeno_time == 0.0
         assert "1000 jumps at the same instant" in run.termination.message
+
+
+ONE_LEVEL = """
+automaton: one_level
+description: Two edges and a self-loop on one level x == 1 of one component; x never returns.
+state: {x: {initial: 0.0}, y: {initial: 0.0}}
+locations:
+  p: {flow: {x: 1, y: 0}}
+  n: {flow: {x: 1, y: 0}}
+edges:
+  - {name: count, from: p, to: p, guard: x == 1, reset: {y: y + 1}, priority: 1}
+  - {name: over, from: p, to: n, guard: x == 1}
+  - {name: back, from: n, to: p, guard: x == 1}
+"""
+
+WATCHER = """
+automaton: watcher
+description: It reads the other component's x and leaves when x reaches 1.
+inputs: [x]
+locations:
+  before: {}
+  after: {}
+edges:
+  - {name: seen, from: before, to: after, guard: x == 1}
+"""
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_level_is_used_by_the_jump_that_reads_it_in_its_component_only(
+    tmp_path: Path, backend: str
+) -> None:
+    # by hand: at t = 1 the level x == 1 is reached; `count` (priority 1) fires and uses it
+    # for its component, so neither `over` nor (later) `back` fires there, and x never
+    # comes back to 1; the watcher's guard reads the same x but is another component's
+    # level: it fires at the same instant, after `count`
+    (tmp_path / "one_level.yaml").write_text(ONE_LEVEL)
+    (tmp_path / "watcher.yaml").write_text(WATCHER)
+    alone = hybrid.load(tmp_path / "one_level.yaml")
+    run = hybrid.simulate(alone, t_end=3.0, backend=backend)
+    assert [(j.edge, j.enabled) for j in run.jumps] == [("count", ("count", "over"))]
+    assert abs(run.jumps[0].t - 1.0) <= 1e-9 and run["y"][-1] == 1.0
+    assert run.termination.cause == "t_end" and run.termination.location == "p"
+    (tmp_path / "both.yaml").write_text(
+        "system: both\ncomponents:\n  - {spec: one_level.yaml, as: a}\n"
+        "  - {spec: watcher.yaml, as: w}\n"
+    )
+    both = hybrid.load(tmp_path / "both.yaml")
+    run = hybrid.simulate(both, t_end=3.0, backend=backend)
+    assert [(j.edge, j.enabled) for j in run.jumps] == [
+        ("a.count", ("a.count", "a.over", "w.seen")),
+        ("w.seen", ("w.seen",)),
+    ]
+    assert all(abs(j.t - 1.0) <= 1e-9 for j in run.jumps)
+    assert run.termination.location == "a.p|w.after"
