@@ -143,9 +143,20 @@ def nearest_rows(
     of a jump the group took a rounding error later): ``own`` is set to that point. True
     if one was."""
     found = False
+    todo = np.flatnonzero(own < 0)
+    if todo.size == 0 or run.t.size == 0:
+        return False
+    # first the rows near any own point at all (few: those at the instants of jumps)
+    ordered = np.sort(run.t)
+    at = np.searchsorted(ordered, times[todo])
+    gap = np.minimum(
+        np.abs(ordered[np.clip(at, 0, ordered.size - 1)] - times[todo]),
+        np.abs(ordered[np.clip(at - 1, 0, ordered.size - 1)] - times[todo]),
+    )
+    todo = todo[gap <= 1e-10 * (1.0 + np.abs(times[todo]))]
     order = np.lexsort((run.t, run.j))  # own points by (j, t)
     keys_j, keys_t = run.j[order], run.t[order]
-    for r in np.flatnonzero(own < 0).tolist():
+    for r in todo.tolist():
         t, j = float(times[r]), int(lj[r])
         lo, hi = np.searchsorted(keys_j, j, "left"), np.searchsorted(keys_j, j, "right")
         if lo == hi:
