@@ -42,7 +42,15 @@ from collections.abc import Callable, Sequence
 
 from hybrid.expr import ir
 
-__all__ = ["guard_to_rho", "is_strict", "levels", "oriented_rho", "snapped", "structural_key"]
+__all__ = [
+    "guard_to_rho",
+    "is_strict",
+    "level_key",
+    "levels",
+    "oriented_rho",
+    "snapped",
+    "structural_key",
+]
 
 
 def guard_to_rho(node: ir.Expr) -> ir.Expr:
@@ -141,6 +149,24 @@ def structural_key(node: ir.Expr) -> tuple[object, ...]:
 
 Replacement = Callable[[int, ir.Expr, int], ir.Expr]
 """``(index, difference, column) -> boolean node`` that stands for level atom ``index``."""
+
+
+def level_key(difference: ir.Expr, owners: Sequence[int]) -> str:
+    """Which level the atom ``difference`` (of :func:`levels`) of a transition of ``owners``
+    (component numbers) is: the owners and the variables it reads, parameters aside.
+
+    Atoms of one component over the same variables at their levels at one point
+    are one level reached (``x == b`` and ``x == c`` at ``x = 0.5`` with ``b = c``);
+    the simulator's rule "a level reached at an instant is used by the jump whose
+    guard reads it" (docs/semantics.md) needs that identity, the same whether the
+    parameters are bound to numbers or are slots.
+
+    >>> level_key(ir.Bin("-", ir.Var("x", ir.STATE), ir.Var("b", ir.PARAM)), (1,))
+    '1:x'
+    """
+    skip = ir.names_in(difference, ir.PARAM) | ir.names_in(difference, ir.CONST)
+    names = sorted(ir.names_in(difference) - skip)
+    return ",".join(map(str, owners)) + ":" + ",".join(names)
 
 
 def levels(node: ir.Expr) -> tuple[ir.Expr, ...]:

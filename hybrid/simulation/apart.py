@@ -8,18 +8,24 @@ one component is a new product mode, and every solver step carries every
 component), so :func:`simulate_apart` runs each group on its own (with its
 interpolants kept) and :func:`merge` interleaves the runs in hybrid time:
 
-- the jumps of all groups, by time (at one instant: group order, then each
-  group's own order), numbered ``j = 0, 1, ...`` for the whole system;
+- the jumps of all groups, by time, numbered ``j = 0, 1, ...`` for the whole
+  system; at one instant in the order the product takes them (priority, then
+  the order of the components and of the edges: :mod:`~hybrid.simulation.instants`),
+  each listing every group's transitions enabled there;
 - the points of every group at its own times, the other groups' states there
   from their interpolants (the solver's dense output, not a straight line),
   their signals computed from those states; two points per jump;
 - the run ends where the first group ends other than at ``t_end`` (the others
-  are cut there), or with cause ``max_jumps`` at the jump after the
-  ``max_jumps``-th of the system.
+  are cut there; of groups ending at one instant, one whose jump was due,
+  ``zeno`` or ``max_jumps``, before one with nothing enabled, as the product
+  jumps while it can), or with cause ``max_jumps`` at the jump after the
+  ``max_jumps``-th of the system, or ``zeno`` at the jump that exceeds the cap
+  on jumps at one instant, counted over all groups.
 
 What a run of the product would give differs only in numbers below the
-solver's tolerance (each group's own steps instead of steps shared by all)
-and in ``Jump.enabled``, which lists the transitions of the jumping group.
+solver's tolerance (each group's own steps instead of steps shared by all;
+jumps of groups a rounding error apart are one instant, at the first one's
+time, as the product decides them).
 
 Examples
 --------
@@ -44,6 +50,15 @@ import numpy as np
 
 from hybrid.compose import System
 from hybrid.simulation.compiled import CompiledMode, CompiledModel
+from hybrid.simulation.instants import (
+    Key,
+    first_over_cap,
+    inside,
+    interleave,
+    nearest_rows,
+    tolerance,
+    transition_key,
+)
 from hybrid.simulation.result import Jump, Run, Termination
 from hybrid.simulation.settings import Settings
 
@@ -120,6 +135,17 @@ class _Part:
         self.location_at = {
             int(j): str(loc) for j, loc in zip(self.run.j, self.run.location, strict=True)
         }
+        self._keys: dict[tuple[str, str], Key] = {}
+
+    def key(self, jump: Jump, name: str) -> Key:
+        """The rank in the system of transition ``name``, enabled where ``jump`` leaves."""
+        found = self._keys.get((jump.source, name))
+        if found is None:
+            view = next(
+                tr.view for tr in self.modes[jump.source].transitions if tr.name == name
+            )
+            found = self._keys[(jump.source, name)] = transition_key(view, self.members)
+        return found
 
     def fill(
         self,
@@ -139,6 +165,7 @@ class _Part:
         own = np.array(
             [self.rows.get((t, j), -1) for t, j in zip(times.tolist(), lj.tolist(), strict=True)]
         )
+        nearest_rows(self.run, self.segments, times, lj, own)  # a rounding error before one
         exact = own >= 0
         if exact.any():
             states[np.ix_(exact, xs)] = self.run.states[own[exact]]
@@ -177,23 +204,34 @@ class _Part:
 def merge(system: System, parts: Sequence[_Part], settings: Settings) -> Run:
     """The system's run from the runs of its groups (see the module's docstring)."""
     ends = [p.run.termination for p in parts]
-    stopper = min(
-        (k for k, e in enumerate(ends) if e.cause != "t_end"),
-        key=lambda k: ends[k].t,
+    early = [k for k, e in enumerate(ends) if e.cause != "t_end"]
+    first = min((ends[k].t for k in early), default=settings.t_end)
+    stopper = min(  # of ends at one instant, one where a jump was due (the product jumps on)
+        (k for k in early if ends[k].t - first <= tolerance(first)),
+        key=lambda k: (ends[k].cause not in ("zeno", "max_jumps"), ends[k].t, k),
         default=None,
     )
     t_stop = settings.t_end if stopper is None else ends[stopper].t
-    events = sorted(
-        (jump.t, g, jump.j, jump)
-        for g, p in enumerate(parts)
-        for jump in p.run.jumps
-        if jump.t <= t_stop
+    merged = interleave(
+        [[jump for jump in p.run.jumps if jump.t <= t_stop + tolerance(t_stop)] for p in parts],
+        lambda g, jump, name: parts[g].key(jump, name),
     )
+    events = [(jump.t, g, jump.j, jump) for g, jump, _ in merged]
+    # a group's own points between an instant and its own time of a jump there are left out
+    skipped: list[list[tuple[float, float]]] = [[] for _ in parts]
+    for g, jump, own in merged:
+        if own > jump.t:
+            skipped[g].append((jump.t, own))
     termination_cause = None
-    if len(events) > settings.max_jumps:
+    over = first_over_cap([e[0] for e in events], settings.max_jumps_per_instant)
+    if len(events) > settings.max_jumps and (over is None or settings.max_jumps <= over):
         t_stop = events[settings.max_jumps][0]
         events = events[: settings.max_jumps]
         termination_cause = "max_jumps"
+    elif over is not None:
+        t_stop, last = events[over][0], events[over][3].edge
+        events = events[:over]
+        termination_cause = "zeno"
     # the hybrid time of each group after k jumps of the system
     local = np.zeros((len(events) + 1, len(parts)), dtype=np.int64)
     for k, (_, g, _, _) in enumerate(events):
@@ -206,7 +244,7 @@ def merge(system: System, parts: Sequence[_Part], settings: Settings) -> Run:
         rows += [(t, k), (t, k + 1)]
     for g, p in enumerate(parts):
         for t, j in zip(p.run.t.tolist(), p.run.j.tolist(), strict=True):
-            if t > t_stop:
+            if t > t_stop or inside(skipped[g], t):
                 continue
             big_j = _global_j(local, g, j, t, jump_times)
             if big_j is not None:
@@ -250,6 +288,14 @@ def merge(system: System, parts: Sequence[_Part], settings: Settings) -> Run:
     if termination_cause == "max_jumps":
         message = f"reached max_jumps={settings.max_jumps}"
         termination = Termination("max_jumps", t_stop, len(events), message, location=where)
+    elif termination_cause == "zeno":
+        message = (
+            f"{settings.max_jumps_per_instant} jumps at the same instant: a cycle of "
+            f"transitions takes no time (last: {last})"
+        )
+        termination = Termination(
+            "zeno", t_stop, len(events), message, zeno_time=t_stop, location=where
+        )
     elif stopper is None:
         termination = Termination("t_end", t_stop, len(events), "reached t_end", location=where)
     else:

@@ -32,7 +32,7 @@ True
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from typing import Any
 
 import numpy as np
@@ -105,14 +105,39 @@ def holds_now(
 
 
 def enabled_at_entry(
-    mode: CompiledMode, t: float, x: np.ndarray
+    mode: CompiledMode,
+    t: float,
+    x: np.ndarray,
+    reached: np.ndarray | None = None,
+    used: Collection[str] = (),
 ) -> tuple[CompiledTransition | None, list[CompiledTransition], list[bool]]:
-    """At a point where a stay starts: the transition that fires, all enabled, and arming."""
+    """At a point where a stay starts: the transition that fires, all enabled, and arming.
+
+    ``reached``: the state where the last stay stopped, when that was at this
+    instant (the jumps since were taken at ``t``). A level the flow reached
+    there is still reached after jumps that left it where it is, until a jump
+    whose guard reads it is taken: so a guard that does not hold here is
+    decided again with its equality atoms snapped, each true where its two
+    sides are within the band both here and at ``reached`` and its level (by
+    ``level_keys``) is not in ``used`` (read by a guard taken at this instant,
+    or by one disarmed in the stay: a state that starts on a level and leaves
+    it has not reached it).
+    """
     enabled: list[CompiledTransition] = []
     armed: list[bool] = []
     width = band(x)
+    width_then = 0.0 if reached is None else band(reached)
     for tr in mode.transitions:
         now, is_armed = holds_now(tr.rho, tr.holds, mode, t, x, True, width)
+        if not now and tr.levels and reached is not None:
+            then = [abs(d(t, reached)) <= width_then for d in tr.levels]
+            at_level = tuple(
+                abs(d(t, x)) <= width and was and key not in used
+                for d, was, key in zip(tr.levels, then, tr.level_keys, strict=True)
+            )
+            if any(at_level):
+                rho, holds = tr.snapped(at_level)
+                now = holds_now(rho, holds, mode, t, x, True, width)[0]
         armed.append(is_armed)
         if now:
             enabled.append(tr)

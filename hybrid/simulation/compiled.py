@@ -47,7 +47,7 @@ from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
-from hybrid.expr.rho import guard_to_rho, levels, oriented_rho, snapped
+from hybrid.expr.rho import guard_to_rho, level_key, levels, oriented_rho, snapped
 from hybrid.model import Automaton
 from hybrid.modes import Binder, Mode, ModeView, TransitionView, mode_of
 
@@ -79,6 +79,8 @@ class CompiledTransition(CompiledCondition):
     view: TransitionView
     reset: Fn
     levels: tuple[Fn, ...] = ()
+    level_keys: tuple[str, ...] = ()
+    """Each level's :func:`~hybrid.expr.rho.level_key`: one level read by several guards."""
     variant: Callable[[str, ir.Expr, str], Fn] | None = None
     _oriented: dict[tuple[int, ...], Fn] = field(default_factory=dict)
     _snapped: dict[tuple[bool, ...], tuple[Fn, Fn]] = field(default_factory=dict)
@@ -355,6 +357,7 @@ class CompiledModel:
             what = f"the guard of {tr.name}{within}"
             role = f"guard {tr.name}"
             differences = levels(tr.guard)
+            owners = [i for i, _ in tr.edges]
 
             def variant(
                 suffix: str, expr: ir.Expr, kind: str, i: int = i, what: str = what, role: str = role
@@ -383,6 +386,7 @@ class CompiledModel:
                         )
                         for k, d in enumerate(differences)
                     ),
+                    level_keys=tuple(level_key(d, owners) for d in differences),
                     variant=variant if differences else None,
                 )
             )

@@ -40,7 +40,9 @@ from hybrid.simulation.zeno import ZenoDetector
 
 __all__ = ["EventLoop"]
 
-Flowed = tuple[float, np.ndarray, CompiledTransition | None, list[CompiledTransition]]
+Flowed = tuple[
+    float, np.ndarray, CompiledTransition | None, list[CompiledTransition], set[str]
+]
 Progress = Callable[[float, int, int], None]
 
 
@@ -83,6 +85,10 @@ class EventLoop:
         self.recorder.start(mode, t, x)
         zeno = ZenoDetector()
         same_instant, last_jump_t, stalls = 0, math.nan, 0
+        # where the last stay stopped (levels reached at that instant), and the levels used
+        # there: read by a guard disarmed in that stay or taken at that instant
+        reached: np.ndarray | None = None
+        t_reached, used = math.nan, set[str]()
         max_per_instant = settings.max_jumps_per_instant
 
         while True:
@@ -92,7 +98,9 @@ class EventLoop:
                 return Termination(
                     "interrupted", t, j, "interrupted by the user", location=mode.name
                 )
-            chosen, enabled, armed = boundary.enabled_at_entry(mode, t, x)
+            chosen, enabled, armed = boundary.enabled_at_entry(
+                mode, t, x, reached if t == t_reached else None, used
+            )
             if self._failed() is not None:
                 return self._eval_failure(t, j, mode)
             if chosen is None and mode.urgent:
@@ -114,7 +122,8 @@ class EventLoop:
                 if isinstance(outcome, Termination):
                     return outcome
                 t_before = t
-                t, x, chosen, enabled = outcome
+                t, x, chosen, enabled, used = outcome
+                reached, t_reached = x, t
                 if chosen is None:
                     stalls = stalls + 1 if t == t_before else 0
                     if stalls > max_per_instant:
@@ -145,6 +154,7 @@ class EventLoop:
                 )
             source = mode
             mode, x = self._jump(mode, chosen, enabled, t, x, j)
+            used.update(chosen.level_keys)
             j += 1
             if self._failed() is not None:  # the reset, evaluated in the source mode
                 return self._eval_failure(t, j, mode, source)
@@ -225,7 +235,11 @@ class EventLoop:
             blocked = self._blocked(mode, t, x, j, "is about to be left")
             if blocked is not None:
                 return blocked
-        return t, x, chosen, enabled
+        disarmed = {
+            key for i, tr in enumerate(mode.transitions) if not watch.armed(i)
+            for key in tr.level_keys
+        }
+        return t, x, chosen, enabled, disarmed
 
     # --- jumping ------------------------------------------------------------------------
 

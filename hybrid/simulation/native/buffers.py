@@ -127,11 +127,13 @@ __all__ = [
     "S_FLOW_T",
     "S_GEN",
     "S_LAST_STEP",
+    "S_REACHED_T",
     "S_SIG_T",
     "TABLES",
     "TAB_HEADER",
     "T_INV_BOOL",
     "T_INV_RHO",
+    "T_LV_KEY",
     "T_MAX_INV",
     "T_MAX_LV",
     "T_MAX_TR",
@@ -164,11 +166,13 @@ __all__ = [
     "W_PE",
     "W_Q",
     "W_RATE",
+    "W_REACHED",
     "W_SCAL",
     "W_SIGFAIL",
     "W_SIGX",
     "W_TERMS",
     "W_TRARMED",
+    "W_USED",
     "W_X",
     "W_XNEW",
     "W_XS",
@@ -223,12 +227,14 @@ ASK_ENTRY, ASK_EVENT, ASK_LEFT, ASK_WATCH = 0, 1, 2, 3
 T_N_STATES, T_N_SIGNALS, T_MAX_TR, T_MAX_LV, T_MAX_INV, T_N_PARAMS = 0, 1, 2, 3, 4, 5
 T_MODE_TR, T_MODE_INV, T_TR_TARGET, T_TR_PRIORITY, T_TR_RHO, T_TR_BOOL = 6, 7, 8, 9, 10, 11
 T_TR_SRHO, T_TR_SBOOL, T_TR_LV, T_INV_RHO, T_INV_BOOL, T_MODE_URGENT = 12, 13, 14, 15, 16, 17
-TAB_HEADER = 18
+T_LV_KEY = 18  # a level's key (hybrid.expr.rho.level_key) as a number
+TAB_HEADER = 19
 TABLES = (
     "MODE_TR", "MODE_INV", "TR_TARGET", "TR_PRIORITY", "TR_RHO", "TR_BOOL",
-    "TR_SRHO", "TR_SBOOL", "TR_LV", "INV_RHO", "INV_BOOL", "MODE_URGENT",
+    "TR_SRHO", "TR_SBOOL", "TR_LV", "INV_RHO", "INV_BOOL", "MODE_URGENT", "LV_KEY",
 )  # fmt: skip
-"""The tables in ``tab`` order (from ``T_MODE_TR`` on)."""
+"""The tables in ``tab`` order (from ``T_MODE_TR`` on; ``LV_KEY`` last, its length the
+number of levels of all modes)."""
 
 # the scratch space of a run: ``wf`` (floats) and ``wi`` (integers); wi's header says
 # where each piece starts (float pieces in wf, integer pieces in wi)
@@ -237,11 +243,14 @@ W_K, W_Y, W_F, W_YNEW, W_YTMP, W_XS, W_Q, W_RATE, W_AHEAD, W_XNEW = 2, 3, 4, 5, 
 W_PE, W_TERMS, W_ARMV, W_ZENO, W_FAILX, W_FLOWX, W_SIGX, W_SCAL = 12, 13, 14, 15, 16, 17, 18, 19
 W_TRARMED, W_ENABLED, W_INVARMED, W_FAILI, W_SIGFAIL = 20, 21, 22, 23, 24
 W_NPE, W_X = 25, 26  # W_X: the run's state (a float piece)
-WI_HEADER = 27
+W_USED = 27  # keys of the levels used at this instant: count, then keys
+W_REACHED = 28  # the state where the last stay stopped (a float piece)
+WI_HEADER = 29
 # scalars in wf from wi[W_SCAL]
-# (S_B0: the band at the start of the stay, the shift of the watch's disarmed terms)
-S_FAIL_T, S_FLOW_FAIL, S_FLOW_T, S_LAST_STEP, S_SIG_T, S_GEN, S_B0 = range(7)
-N_SCALARS = 7
+# (S_B0: the band at the start of the stay, the shift of the watch's disarmed terms;
+# S_REACHED_T: when the last stay stopped, where W_REACHED holds the state)
+S_FAIL_T, S_FLOW_FAIL, S_FLOW_T, S_LAST_STEP, S_SIG_T, S_GEN, S_B0, S_REACHED_T = range(8)
+N_SCALARS = 8
 ZENO_SIZE = 17  # last t, start gap, counts (2), 7 gaps, 6 ratios
 
 # columns of the recorded arrays

@@ -7,7 +7,10 @@ Function by function (docs/semantics.md, "Deciding a guard at a point"):
 - :func:`holds_now` is ``boundary.holds_now`` (band, slope test, boolean form;
   a rho that is not 0 but is exactly 0 at the point ahead, a flat zero, is
   decided by the boolean form there);
-- :func:`enabled_at_entry` is ``boundary.enabled_at_entry``;
+- :func:`enabled_at_entry` is ``boundary.enabled_at_entry``: at the instant the
+  last stay stopped (its state kept in ``W_REACHED``), a guard that does not
+  hold is decided again with its equality atoms snapped (at their level both
+  here and there, and the level not used: :func:`is_used`);
 - :func:`enabled_at_event` is ``boundary.enabled_at_event``: an armed guard is
   decided *snapped* (each equality atom true where its two sides differ by at
   most the band: the snap slots of the model's parameter vector are set, then
@@ -43,8 +46,10 @@ from hybrid.simulation.native.buffers import (
     OP_TRUTH,
     OP_VALUE,
     S_FAIL_T,
+    S_REACHED_T,
     T_INV_BOOL,
     T_INV_RHO,
+    T_LV_KEY,
     T_MAX_LV,
     T_MODE_INV,
     T_MODE_TR,
@@ -63,8 +68,10 @@ from hybrid.simulation.native.buffers import (
     W_FAILX,
     W_PE,
     W_RATE,
+    W_REACHED,
     W_SCAL,
     W_TRARMED,
+    W_USED,
 )
 from hybrid.simulation.native.kernel_types import Array, Fns, Ints, at
 
@@ -75,6 +82,7 @@ __all__ = [
     "enabled_at_event",
     "holds_now",
     "invariant_left_at",
+    "is_used",
     "note_failure",
     "slope",
     "step_ahead",
@@ -188,15 +196,60 @@ def choose(tab: Ints, m: int, wi: Ints) -> int:
     return best
 
 
+def is_used(tab: Ints, lv: int, wi: Ints) -> bool:
+    """Whether level ``lv`` (global) is used at this instant (its key is among ``W_USED``)."""
+    used = wi[W_USED]
+    key = tab[tab[T_LV_KEY] + lv]
+    for i in range(wi[used]):  # noqa: SIM110 (compiled: a plain loop)
+        if wi[used + 1 + i] == key:
+            return True
+    return False
+
+
 def enabled_at_entry(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
                      wi: Ints) -> int:  # fmt: skip
-    """At a point where a stay starts: the transition that fires (-1: none); flags in ``wi``."""
+    """At a point where a stay starts: the transition that fires (-1: none); flags in ``wi``.
+
+    At the instant the last stay stopped (``S_REACHED_T``), a guard that does
+    not hold here is decided again with its equality atoms snapped: each true
+    where its two sides are within the band both here and where the stay
+    stopped (``W_REACHED``), and its level not used (:func:`is_used`).
+    """
     width = band(x)
     first = tab[tab[T_MODE_TR] + m]
-    for k in range(tab[tab[T_MODE_TR] + m + 1] - first):
+    n_tr = tab[tab[T_MODE_TR] + m + 1] - first
+    lv0 = tab[tab[T_TR_LV] + first]
+    snaps = wi[W_PE] + tab[T_N_PARAMS] + tab[T_MAX_LV]
+    armv = wf[wi[W_ARMV] :]
+    reached = wf[wi[W_REACHED] : wi[W_REACHED] + x.shape[0]]
+    same_instant = wf[wi[W_SCAL] + S_REACHED_T] == t
+    width_then = band(reached)
+    for k in range(n_tr):
         tr = first + k
         rho_f, bool_f = tab[tab[T_TR_RHO] + tr], tab[tab[T_TR_BOOL] + tr]
         now, armed = holds_now(fns, rho_f, bool_f, F_GUARD, tr, m, t, x, True, width, wf, wi)
+        lv_from, lv_to = tab[tab[T_TR_LV] + tr] - lv0, tab[tab[T_TR_LV] + tr + 1] - lv0
+        if not now and same_instant and lv_to > lv_from:
+            # the levels of the mode's guards where the stay stopped, then here
+            fns(OP_ARM, m, t, at(reached, 0), at(wf, wi[W_PE]), at(wf, wi[W_ARMV]))
+            for a in range(lv_from, lv_to):
+                level = armv[n_tr + a]
+                if level != level:
+                    note_failure(F_GUARD, tr, m, t, reached, wf, wi)
+                wf[snaps + a] = -1.0 if abs(level) <= width_then else 1.0
+            fns(OP_ARM, m, t, at(x, 0), at(wf, wi[W_PE]), at(wf, wi[W_ARMV]))
+            any_level = False
+            for a in range(lv_from, lv_to):
+                level = armv[n_tr + a]
+                if level != level:
+                    note_failure(F_GUARD, tr, m, t, x, wf, wi)
+                if wf[snaps + a] < 0.0 and abs(level) <= width and not is_used(tab, lv0 + a, wi):
+                    any_level = True
+                else:
+                    wf[snaps + a] = 1.0
+            if any_level:
+                rho_f, bool_f = tab[tab[T_TR_SRHO] + tr], tab[tab[T_TR_SBOOL] + tr]
+                now = holds_now(fns, rho_f, bool_f, F_GUARD, tr, m, t, x, True, width, wf, wi)[0]
         wi[wi[W_TRARMED] + k] = 1 if armed else 0
         wi[wi[W_ENABLED] + k] = 1 if now else 0
     return choose(tab, m, wi)

@@ -10,6 +10,10 @@ Function by function:
   invariant that does not hold), non-finite resets, Zeno by geometric accumulation;
 - :func:`jump` is ``EventLoop._jump`` (reset on pre-jump values, record the
   jump and the post-jump point);
+- :func:`note_reached` and :func:`note_used` keep ``EventLoop.run``'s
+  ``reached`` (the state where the last stay stopped, and when) and ``used``
+  (the keys of the levels read by a guard disarmed in that stay or taken at
+  that instant);
 - :func:`zeno_update` is :meth:`hybrid.simulation.zeno.ZenoDetector.update`
   (window 6, spread 2 %, shrink 1e-3), its state in ``wf``;
 - :func:`lay_out_work` sizes the scratch space (``wf``, ``wi``) of a run (Python
@@ -53,12 +57,16 @@ from hybrid.simulation.native.buffers import (
     OP_RESET,
     S_FLOW_FAIL,
     S_GEN,
+    S_REACHED_T,
+    T_LV_KEY,
     T_MAX_INV,
     T_MAX_LV,
     T_MAX_TR,
+    T_MODE_TR,
     T_MODE_URGENT,
     T_N_PARAMS,
     T_N_STATES,
+    T_TR_LV,
     T_TR_TARGET,
     W_AHEAD,
     W_ARMV,
@@ -75,11 +83,13 @@ from hybrid.simulation.native.buffers import (
     W_PE,
     W_Q,
     W_RATE,
+    W_REACHED,
     W_SCAL,
     W_SIGFAIL,
     W_SIGX,
     W_TERMS,
     W_TRARMED,
+    W_USED,
     W_X,
     W_XNEW,
     W_XS,
@@ -108,7 +118,15 @@ from hybrid.simulation.native.search import HORIZON_SAMPLES
 from hybrid.simulation.native.stay import STAY_EVENT, end_run, failed
 from hybrid.simulation.native.store import finish, record_jump, record_point
 
-__all__ = ["jump", "lay_out_work", "run_one", "start_work", "zeno_update"]
+__all__ = [
+    "jump",
+    "lay_out_work",
+    "note_reached",
+    "note_used",
+    "run_one",
+    "start_work",
+    "zeno_update",
+]
 
 # --- kernel ---
 
@@ -137,7 +155,7 @@ def lay_out_work(tab: Ints, wi: Ints) -> tuple[int, int]:
         (W_K, 7 * d), (W_Y, d), (W_F, d), (W_YNEW, d), (W_YTMP, d), (W_XS, d), (W_Q, 4 * d),
         (W_RATE, d), (W_AHEAD, d), (W_XNEW, d), (W_TERMS, max_tr + max_inv),
         (W_ARMV, max_tr + max_lv), (W_ZENO, ZENO_SIZE), (W_FAILX, d), (W_FLOWX, d),
-        (W_SIGX, d), (W_SCAL, N_SCALARS), (W_PE, n_pe), (W_X, d),
+        (W_SIGX, d), (W_SCAL, N_SCALARS), (W_PE, n_pe), (W_X, d), (W_REACHED, d),
     )  # fmt: skip
     at = 0
     for slot, size in sizes:
@@ -146,7 +164,8 @@ def lay_out_work(tab: Ints, wi: Ints) -> tuple[int, int]:
     floats = at
     at = WI_HEADER
     for slot, size in ((W_TRARMED, max_tr), (W_ENABLED, max_tr), (W_INVARMED, max_inv),
-                       (W_FAILI, 3), (W_SIGFAIL, 3)):  # fmt: skip
+                       (W_FAILI, 3), (W_SIGFAIL, 3),
+                       (W_USED, 1 + max_lv + tab.shape[0] - tab[T_LV_KEY])):  # fmt: skip
         wi[slot] = at
         at += size
     wi[W_D] = d
@@ -223,6 +242,35 @@ def zeno_update(z: Array, t: float) -> float:
         return math.nan
     estimate: float = t + gap * latest / (1.0 - latest)
     return estimate
+
+
+def note_used(tab: Ints, tr: int, wi: Ints) -> None:
+    """The levels the guard of transition ``tr`` reads are used at this instant."""
+    used = wi[W_USED]
+    for lv in range(tab[tab[T_TR_LV] + tr], tab[tab[T_TR_LV] + tr + 1]):
+        key = tab[tab[T_LV_KEY] + lv]
+        n = wi[used]
+        seen = False
+        for i in range(n):
+            if wi[used + 1 + i] == key:
+                seen = True
+        if not seen:
+            wi[used + 1 + n] = key
+            wi[used] = n + 1
+
+
+def note_reached(tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints) -> None:
+    """A stay in mode ``m`` stopped at ``(t, x)``: the levels reached there; the levels
+    of the guards disarmed in it (``wi``'s armed flags) are used."""
+    reached = wi[W_REACHED]
+    for i in range(x.shape[0]):
+        wf[reached + i] = x[i]
+    wf[wi[W_SCAL] + S_REACHED_T] = t
+    wi[wi[W_USED]] = 0
+    first = tab[tab[T_MODE_TR] + m]
+    for k in range(tab[tab[T_MODE_TR] + m + 1] - first):
+        if wi[wi[W_TRARMED] + k] == 0:
+            note_used(tab, first + k, wi)
 
 
 def jump(fns: Fns, tab: Ints, pts: Array2, jps: Array2, oi: Ints, m: int, tr: int, t: float,
@@ -310,6 +358,7 @@ def run_one(fp: Ints, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f:
             if outcome != STAY_EVENT:
                 return
             t_before, t = t, t_after
+            note_reached(tab, m, t, x, wf, wi)
             if chosen < 0:
                 stalls = stalls + 1 if t == t_before else 0
                 if stalls > per_instant:
@@ -326,6 +375,7 @@ def run_one(fp: Ints, tab: Ints, p: Array, x0: Array, t0: float, m0: int, cfg_f:
             return
         if not jump(fns, tab, pts, jps, oi, m, chosen, t, j, x, wf, wi):
             return
+        note_used(tab, chosen, wi)
         m = tab[tab[T_TR_TARGET] + chosen]
         j += 1
         if failed(wi):

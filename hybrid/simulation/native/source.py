@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hybrid.expr import ir
-from hybrid.expr.rho import guard_to_rho
+from hybrid.expr.rho import guard_to_rho, level_key
 from hybrid.simulation.native.buffers import T_MODE_TR, TAB_HEADER, TABLES
 from hybrid.simulation.native.kernel_text import JIT, Generated, kernel_source
 from hybrid.simulation.native.library import importable
@@ -119,6 +119,7 @@ def generate(model: NativeModel) -> Generated:
     rhs_cases, out_cases, reset_cases, watch_cases, arm_cases = [], [], [], [], []
     outputs_ir = _output_exprs(model)
     levels = 0
+    keys: dict[str, int] = {}  # a level's key (hybrid.expr.rho.level_key) -> its number
     for mode in modes:
         flows = [mode.flow.get(s, ir.Num(0.0)) for s in states]
         pre, items = body_lines(flows, mode.signals, names)
@@ -149,6 +150,8 @@ def generate(model: NativeModel) -> Generated:
             oriented.append(tr.oriented_rho(first))
             raw.append(rho)
             differences.extend(tr.levels)
+            owners = [i for i, _ in tr.view.edges]
+            tables["LV_KEY"] += [keys.setdefault(level_key(d, owners), len(keys)) for d in tr.levels]
             resets = [tr.reset.get(s) for s in states]
             pre, items = body_lines([e for e in resets if e is not None], mode.signals, names)
             it = iter(items)

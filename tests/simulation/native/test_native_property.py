@@ -140,3 +140,103 @@ def test_models_starting_on_their_boundaries_agree(
     compiled, _ = both_backends(model, common)
     if which < 3:  # never through the floor by more than its band (1e-10 (1 + |state|))
         assert float(np.min(compiled["x"] - c)) >= -1e-9 * (1.0 + abs(c))
+
+
+# Systems whose components jump at one instant (docs/semantics.md, "Several components at
+# one instant"): three clocks with equality guards at levels that are exact in binary, so
+# that their events fall on the very same instants; a component that gets stuck (its
+# invariant ends at `T`) and one that loops without time passing from `T2` (either left out
+# by putting its time beyond the run). Three structures: the clocks independent (the scipy
+# backend simulates them apart and merges the runs), joined by a label none of their edges
+# carries (one group), or with two of them synchronised on their `back` edges.
+CLOCK = """
+automaton: clock_K_
+parameters: {a: 1.0, b: 1.0, c: 2.0}
+state: {x_K_: {initial: 0.0}, n_K_: {initial: 0.0}}
+_LABELS_
+locations:
+  u: {flow: {x_K_: 1, n_K_: 0}}
+  v: {flow: {x_K_: 1, n_K_: 0}}
+edges:
+  - {name: go, from: u, to: v, guard: x_K_ == a, reset: {x_K_: 0}}
+  - {name: tick, from: v, to: v, guard: x_K_ == b, reset: {n_K_: n_K_ + 1}, priority: _PRIORITY_}
+  - {name: back, from: v, to: u, guard: x_K_ == c, reset: {x_K_: 0}_BACK_}
+"""
+STUCK = """
+automaton: stuck
+parameters: {T: 100.0}
+state: {s: {initial: 0.0}}
+locations:
+  wait: {flow: {s: 1}, invariant: s <= T}
+"""
+LOOPER = """
+automaton: looper
+parameters: {T2: 100.0}
+state: {w: {initial: 0.0}}
+locations:
+  p: {flow: {w: 1}}
+  q: {flow: {w: 0}}
+edges:
+  - {name: there, from: p, to: q, guard: w >= T2}
+  - {name: back, from: q, to: p}
+"""
+COUPLINGS = ("apart", "declared", "synchronised")
+LEVELS = st.sampled_from([0.5, 1.0, 1.5, 2.0, 3.0])
+
+
+def _clock(k: int, coupling: str) -> hybrid.Automaton:
+    labels = {"apart": "", "declared": "labels: [s]", "synchronised": "labels: [s]"}[coupling]
+    synchronised = coupling == "synchronised" and k < 3
+    text = (
+        CLOCK.replace("_K_", str(k))
+        .replace("_LABELS_", labels)
+        .replace("_PRIORITY_", "1" if k == 1 else "0")
+        .replace("_BACK_", ", label: s" if synchronised else "")
+    )
+    return hybrid.load_text(text)
+
+
+SYSTEMS = {
+    coupling: hybrid.compose(
+        *(_clock(k, coupling) for k in (1, 2, 3)),
+        hybrid.load_text(STUCK),
+        hybrid.load_text(LOOPER),
+        names=["c1", "c2", "c3", "stuck", "looper"],
+    )
+    for coupling in COUPLINGS
+}
+SYSTEM_EXAMPLES = 500 if os.environ.get("HYBRID_FUZZ") else 12
+
+
+@pytest.mark.fuzz
+@settings(max_examples=SYSTEM_EXAMPLES, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(coupling=st.sampled_from(COUPLINGS),
+       levels=st.lists(st.tuples(LEVELS, LEVELS, LEVELS), min_size=3, max_size=3),
+       starts=st.lists(st.sampled_from([0.0, 0.5, 1.0]), min_size=3, max_size=3),
+       stuck_at=st.sampled_from([0.0, 2.0, 3.0, 100.0]),
+       loop_at=st.sampled_from([1.0, 3.0, 100.0]),
+       max_jumps=st.sampled_from([30, 1500]))  # fmt: skip
+def test_systems_jumping_at_one_instant_agree(
+    coupling: str,
+    levels: list[tuple[float, float, float]],
+    starts: list[float],
+    stuck_at: float,
+    loop_at: float,
+    max_jumps: int,
+) -> None:
+    values = {"stuck.T": stuck_at, "looper.T2": loop_at}
+    for k, (a, b, c) in enumerate(levels, start=1):
+        values.update({f"c{k}.a": a, f"c{k}.b": b, f"c{k}.c": c})
+    model = SYSTEMS[coupling].with_parameters(values)
+    initial = {f"x{k}": x for k, x in enumerate(starts, start=1)}
+    # t_end off the grid of event times (multiples of 0.5): no jump falls on it
+    common = {"t_end": 6.75, "max_jumps": max_jumps, "initial": initial,
+              "handle_sigint": False}  # fmt: skip
+    compiled, reference = both_backends(model, common)  # type: ignore[arg-type]
+    # the same choices at every instant, listed alike, and the same end
+    assert [(j.enabled, j.chosen_by) for j in compiled.jumps] == [
+        (j.enabled, j.chosen_by) for j in reference.jumps
+    ]
+    assert compiled.termination.j == reference.termination.j
+    assert abs(compiled.termination.t - reference.termination.t) <= 1e-9
