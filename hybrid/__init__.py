@@ -29,12 +29,14 @@ if TYPE_CHECKING:
     from hybrid.campaigns.falsify import Falsification, falsify
     from hybrid.campaigns.sweep import sweep
     from hybrid.campaigns.table import SweepTable
+    from hybrid.simulation.bounds import BoundsWarning
     from hybrid.simulation.engine import simulate
     from hybrid.simulation.native.many import Ensemble, simulate_many
     from hybrid.simulation.result import Jump, Run, Termination
 
 __all__ = [
     "Automaton",
+    "BoundsWarning",
     "Ensemble",
     "Falsification",
     "HybridError",
@@ -63,6 +65,7 @@ __all__ = [
 # The simulator (scipy) and the analysis (networkx) load on first use, so that
 # `hybrid validate` and `import hybrid` stay quick.
 _LAZY = {
+    "BoundsWarning": "hybrid.simulation.bounds",
     "Jump": "hybrid.simulation.result",
     "Run": "hybrid.simulation.result",
     "Termination": "hybrid.simulation.result",

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -20,6 +21,7 @@ from hybrid.compose import System, as_system
 from hybrid.errors import UsageError, did_you_mean
 from hybrid.model import Automaton
 from hybrid.progress import TerminalLine, terminal_reporter
+from hybrid.simulation.bounds import BoundsWarning
 from hybrid.simulation.engine import simulate
 from hybrid.simulation.interrupts import ABANDON_HINT, Interrupts
 from hybrid.simulation.result import RequirementResult, Run
@@ -39,6 +41,7 @@ def run_simulate(args: argparse.Namespace) -> int:
             raise UsageError(f"--{flag}: directory of '{path}' does not exist")
     if args.out is not None and Path(args.out).suffix.lower() not in (".csv", ".npz"):
         raise UsageError(f"--out: use a .csv or .npz file name, got '{args.out}'")
+    warnings.simplefilter("ignore", BoundsWarning)  # the command says them, below
     line = terminal_reporter(args.quiet)
     interrupts = Interrupts(notify=_notifier(line))
     with interrupts.installed():
@@ -63,6 +66,8 @@ def run_simulate(args: argparse.Namespace) -> int:
         )
         for note in run.settings.get("start", {}).get("notes", ()):
             print(f"{args.file}: note: {note}", file=sys.stderr)
+        for excursion in run.out_of_bounds:
+            print(f"{args.file}: warning: {excursion.message}", file=sys.stderr)
         term = run.termination
         pending = [path for _, path in outputs if path is not None]
         if term.cause == "interrupted" and pending:

@@ -78,12 +78,14 @@ def write_npz(run: Run, path: str | Path, progress: Reporter | None = None) -> N
 
 
 def events_document(run: Run) -> dict[str, Any]:
-    """The events JSON document: termination, every jump, and each requirement's result."""
+    """The events JSON document: termination, every jump, each requirement's result, and
+    where the run left the declared bounds of a state variable."""
     return {
         "model": run.model,
         "termination": run.termination.as_dict(),
         "jumps": [jump.as_dict() for jump in run.jumps],
         "requirements": {name: r.as_dict() for name, r in run.requirements.items()},
+        "out_of_bounds": [excursion.as_dict() for excursion in run.out_of_bounds],
         "settings": run.settings,
     }
 

@@ -149,6 +149,9 @@ class Run:
     """In a system: each component's name and its columns; empty for an automaton."""
     requirements: Mapping[str, RequirementResult] = field(default_factory=dict)
     """Each requirement of the model, by name, as monitored on this run."""
+    out_of_bounds: tuple[Any, ...] = ()
+    """Per state variable, where the run first left its declared ``bounds:``
+    (:class:`hybrid.simulation.bounds.BoundExcursion`); empty when it stayed within."""
 
     def __getitem__(self, name: str) -> NDArray[np.float64]:
         if name in self.state_names:
