@@ -1,4 +1,4 @@
-"""The ``hybrid`` command line: validate, check, simulate, graph, schema, sweep, falsify.
+"""The ``hybrid`` command line: one subcommand per task (``hybrid --help`` lists them all).
 
 Exit codes: 0 success; 1 findings (check) or a run that ended before t-end
 (simulate); 2 an invalid spec or invalid usage. Errors go to stderr as
@@ -80,9 +80,16 @@ def build_parser() -> argparse.ArgumentParser:
     from hybrid.export.pictures import RENDERED_FORMATS
     from hybrid.simulation.settings import BACKENDS, METHODS
 
-    parser = _Parser(prog="hybrid", description="Hybrid automata: validate, check, simulate.")
+    parser = _Parser(
+        prog="hybrid",
+        description="Hybrid automata in YAML: validate, check and simulate specs, sweep "
+        "and falsify them, draw their graphs, exchange them with other tools.",
+        epilog="Every command is listed above; 'hybrid COMMAND --help' gives its options.",
+    )
     parser.add_argument("--version", action="version", version=f"hybrid {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    sub = parser.add_subparsers(
+        dest="command", required=True, parser_class=_Parser, title="commands", metavar="COMMAND"
+    )
 
     p = sub.add_parser("validate", help="parse and check the spec language only")
     p.add_argument("files", nargs="+", metavar="FILE", help="spec or system files")
