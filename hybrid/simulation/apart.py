@@ -44,6 +44,7 @@ import numpy as np
 
 from hybrid.compose import System
 from hybrid.simulation.compiled import CompiledMode, CompiledModel
+from hybrid.simulation.layout import run_layout
 from hybrid.simulation.result import Jump, Run, Termination
 from hybrid.simulation.settings import Settings
 
@@ -267,6 +268,7 @@ def merge(system: System, parts: Sequence[_Part], settings: Settings) -> Run:
         termination=termination,
         settings=settings.as_dict(),
         segments=_segments(parts, local, jump_times, settings, t_stop) if settings.dense else [],
+        units=run_layout(system)["units"],
     )
 
 

@@ -144,7 +144,7 @@ class Run:
     segments: list[tuple[int, float, float, Any]] = field(default_factory=list, repr=False)
     """With ``dense=True``: ``(j, t0, t1, interpolant)`` per stay in a mode."""
     units: Mapping[str, str] = field(default_factory=dict)
-    """The ``unit:`` of each state variable that declares one (axis labels of plots)."""
+    """The ``unit:`` of each state variable or signal that declares one (labels of plots)."""
     components: tuple[tuple[str, tuple[str, ...]], ...] = ()
     """In a system: each component's name and its columns; empty for an automaton."""
     requirements: Mapping[str, RequirementResult] = field(default_factory=dict)
