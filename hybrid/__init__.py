@@ -20,7 +20,6 @@ from hybrid.compose import System, compose
 from hybrid.errors import HybridError, Position, SimulationError, SpecError, UsageError
 from hybrid.lazy import lazy_attributes
 from hybrid.model import Automaton, Range
-from hybrid.reader.loader import load, load_text
 from hybrid.version import __version__
 
 if TYPE_CHECKING:
@@ -29,6 +28,7 @@ if TYPE_CHECKING:
     from hybrid.campaigns.falsify import Falsification, falsify
     from hybrid.campaigns.sweep import sweep
     from hybrid.campaigns.table import SweepTable
+    from hybrid.reader.loader import load, load_text
     from hybrid.simulation.bounds import BoundsWarning
     from hybrid.simulation.engine import simulate
     from hybrid.simulation.native.many import Ensemble, simulate_many
@@ -62,10 +62,17 @@ __all__ = [
     "sweep",
 ]
 
-# The simulator (scipy) and the analysis (networkx) load on first use, so that
-# `hybrid validate` and `import hybrid` stay quick.
+# The model types load with the package: `hybrid.compose` must be bound to the
+# function before anything imports the submodule of that name (which would bind the
+# module there, and __getattr__ is never asked for a name that is bound); they cost
+# no pydantic, scipy or networkx. Everything else loads on first use: the reader
+# (pydantic, whose models take a tenth of a second to build), the simulator (scipy)
+# and the analysis (networkx), so that `import hybrid` is quick and the command line
+# is inside its Ctrl-C handling before anything heavy runs.
 _LAZY = {
     "BoundsWarning": "hybrid.simulation.bounds",
+    "load": "hybrid.reader.loader",
+    "load_text": "hybrid.reader.loader",
     "Jump": "hybrid.simulation.result",
     "Run": "hybrid.simulation.result",
     "Termination": "hybrid.simulation.result",
