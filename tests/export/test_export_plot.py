@@ -262,7 +262,9 @@ def test_without_matplotlib_the_error_says_what_to_install(
 
     run = hybrid.simulate(hybrid.load(ROOT / "specs/thermostat.yaml"), t_end=5.0)
     monkeypatch.setattr(builtins, "__import__", no_matplotlib)
-    with pytest.raises(hybrid.UsageError, match=r"pip install 'hybrid-automata\[plot\]'"):
+    with pytest.raises(
+        hybrid.UsageError, match=r"pip install 'matplotlib>=3.7' \(the 'plot' extra\)"
+    ):
         run.plot()
 
 
