@@ -152,7 +152,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="drive free inputs with time series: a CSV with columns t,NAME,...",
     )
     p.add_argument("--dt", type=_positive, default=None, help="write points on a uniform grid")
-    p.add_argument("--out", help="trajectory file (.csv or .npz)")
+    p.add_argument("--out", help="trajectory file (.csv, .npz or .mat)")
     p.add_argument("--events", help="events JSON file")
     p.add_argument("--plot", help="figure file (needs the 'plot' extra)")
     p.add_argument(

@@ -39,8 +39,10 @@ def run_simulate(args: argparse.Namespace) -> int:
     for flag, path in outputs:
         if path is not None and not Path(path).resolve().parent.is_dir():
             raise UsageError(f"--{flag}: directory of '{path}' does not exist")
-    if args.out is not None and Path(args.out).suffix.lower() not in (".csv", ".npz"):
-        raise UsageError(f"--out: use a .csv or .npz file name, got '{args.out}'")
+    from hybrid.export.trajectory import TRAJECTORY_SUFFIXES
+
+    if args.out is not None and Path(args.out).suffix.lower() not in TRAJECTORY_SUFFIXES:
+        raise UsageError(f"--out: use a .csv, .npz or .mat file name, got '{args.out}'")
     warnings.simplefilter("ignore", BoundsWarning)  # the command says them, below
     line = terminal_reporter(args.quiet)
     interrupts = Interrupts(notify=_notifier(line))
@@ -169,13 +171,10 @@ def _inputs(
 def _write_outputs(
     run: Run, args: argparse.Namespace, written: list[str], line: TerminalLine | None
 ) -> None:
-    from hybrid.export.trajectory import write_csv, write_events, write_npz
+    from hybrid.export.trajectory import write_events, write_trajectory
 
     if args.out is not None:
-        if Path(args.out).suffix.lower() == ".npz":
-            write_npz(run, args.out, progress=line)
-        else:
-            write_csv(run, args.out, progress=line)
+        write_trajectory(run, args.out, progress=line)
         written.append(args.out)
     if args.events is not None:
         write_events(run, args.events, progress=line)
