@@ -1,4 +1,6 @@
 # Entry points: `make demo`, `make test` and `make docs`; each bootstraps .venv on a fresh machine.
+# `demo`, `test` and `docs` install hybrid and, beside it, the UVMS case study (uvms_model/, its own
+# distribution `hybrid-uvms`, which registers the function library its specs use).
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
@@ -12,16 +14,16 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
-$(STAMP_DEMO): pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[plot]'
+$(STAMP_DEMO): pyproject.toml uvms_model/pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[plot]' -e ./uvms_model
 	touch $@
 
-$(STAMP_TEST): pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[test,plot]'
+$(STAMP_TEST): pyproject.toml uvms_model/pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[test,plot]' -e ./uvms_model
 	touch $@
 
-$(STAMP_DOCS): pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[docs]'
+$(STAMP_DOCS): pyproject.toml uvms_model/pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[docs]' -e ./uvms_model
 	touch $@
 
 demo: $(STAMP_DEMO)

@@ -13,6 +13,7 @@ from typing import Any
 
 from bench import (
     engine_overhead,
+    import_time,
     native_backend,
     peers,
     rhs_call,
@@ -32,6 +33,7 @@ def main(argv: list[str] | None = None) -> int:
     started = time.perf_counter()
     report: dict[str, Any] = {"machine": machine(), "comparisons": []}
     for module, kwargs in (
+        (import_time, {"repeats": repeats}),
         (engine_overhead, {"repeats": repeats}),
         (step_search, {"repeats": repeats}),
         (rhs_call, {"repeats": repeats}),

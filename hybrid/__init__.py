@@ -31,12 +31,14 @@ if TYPE_CHECKING:
     from hybrid.compose import System, compose
     from hybrid.model import Automaton, Range
     from hybrid.reader.loader import load, load_text
+    from hybrid.simulation.bounds import BoundsWarning
     from hybrid.simulation.engine import simulate
     from hybrid.simulation.native.many import Ensemble, simulate_many
     from hybrid.simulation.result import Jump, Run, Termination
 
 __all__ = [
     "Automaton",
+    "BoundsWarning",
     "Ensemble",
     "Falsification",
     "HybridError",
@@ -69,6 +71,7 @@ _LAZY = {
     "System": "hybrid.compose",
     "Automaton": "hybrid.model",
     "Range": "hybrid.model",
+    "BoundsWarning": "hybrid.simulation.bounds",
     "load": "hybrid.reader.loader",
     "load_text": "hybrid.reader.loader",
     "Jump": "hybrid.simulation.result",

@@ -192,6 +192,7 @@ def rename(automaton: Automaton, mapping: Mapping[str, str]) -> Automaton:
         ranges=MappingProxyType(keys(automaton.ranges)),
         properties=replace(automaton.properties, forbidden=forbidden),
         signal_positions=keys(automaton.signal_positions),
+        signal_units=keys(automaton.signal_units),
         input_positions=keys(automaton.input_positions),
         label_positions={labels.get(k, k): v for k, v in automaton.label_positions.items()},
     )

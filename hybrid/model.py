@@ -238,6 +238,8 @@ class Automaton:
     """The declared range of each bounded input (``inputs: {u: {range: [lo, hi]}}``)."""
     requirements: tuple[Requirement, ...] = ()
     """Requirements on its trajectories (``requirements:``), in file order."""
+    signal_units: Mapping[str, str] = field(default_factory=dict)
+    """The ``unit:`` of each signal that declares one (``{expr: ..., unit: ...}``)."""
 
     def __post_init__(self) -> None:
         if not self.initial_locations or self.initial_locations[0] != self.initial_location:

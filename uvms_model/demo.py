@@ -65,6 +65,16 @@ def effort_table(results: dict[str, MissionResult]) -> str:
 def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else argv
     out = Path(args[0] if args else "out")
+    missing = [name for name in MISSIONS if not (specs_dir() / f"{name}.yaml").is_file()]
+    if missing:
+        print(
+            f"uvms_model.demo: the missions' specs are not in {specs_dir()} "
+            f"(missing: {', '.join(f'{m}.yaml' for m in missing)}); run the demo from a "
+            "checkout of the repository (`make demo`, or `python -m uvms_model.demo OUT` "
+            "from its root)",
+            file=sys.stderr,
+        )
+        return 2
     out.mkdir(parents=True, exist_ok=True)
     status = 0
     print("== specs ==")

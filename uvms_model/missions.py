@@ -95,8 +95,16 @@ INITIAL_POSTURE: tuple[str, ...] = ("q1", "q2", "q3")
 
 
 def specs_dir() -> Path:
-    """The repository's ``specs/`` folder."""
-    return Path(__file__).resolve().parent.parent / "specs"
+    """The repository's ``specs/`` folder, where the missions' specs are.
+
+    The case study is run from a checkout: this is ``specs/`` beside the package's
+    folder, or, when the package is installed elsewhere (``pip install ./uvms_model``),
+    ``specs/`` of the current directory. The specs are not shipped in the package.
+    """
+    beside = Path(__file__).resolve().parent.parent / "specs"
+    if (beside / "uvms_singularity.yaml").is_file():
+        return beside
+    return Path.cwd() / "specs"
 
 
 def _uvms_parameters(model: hybrid.Automaton | hybrid.System) -> dict[str, float]:

@@ -14,6 +14,11 @@ at build time, the JSON Schema at a stable path.
   a name. The blocks of a page share one namespace (not with its ``python`` blocks,
   which the build does not run). An exception fails the build (a warning, and
   warnings are errors).
+- ``<!-- hybrid-docs:notebook NAME.ipynb -->`` is replaced, when the page is read, by
+  the notebook beside the page as it was executed and stored: its Markdown cells,
+  its code, and its stored outputs (text as text, figures as images). The build
+  does not run it; tests/docs/test_docs_notebooks.py does, and holds the stored
+  outputs to what it prints.
 - ``schema/automaton.schema.json`` is copied to ``<site>/schema/``.
 - Mermaid fences are shown as text (the diagram renders on GitHub).
 """
@@ -21,8 +26,11 @@ at build time, the JSON Schema at a stable path.
 from __future__ import annotations
 
 import argparse
+import base64
 import importlib
+import json
 import os
+import re
 import shutil
 import traceback
 from collections.abc import Iterator
@@ -41,6 +49,8 @@ CLI_MARKER = "<!-- hybrid-docs:cli-reference -->"
 API_MARKER = "<!-- hybrid-docs:api-index -->"
 API_DIR = "api"
 FIGURE_DIR = "_generated/figures"
+NOTEBOOK_MARKER = re.compile(r"<!-- hybrid-docs:notebook (?P<name>[\w.-]+\.ipynb) -->")
+NOTEBOOK_DIR = "_generated/notebooks"
 
 
 # --- the command-line reference ----------------------------------------------------------
@@ -224,6 +234,48 @@ class HybridPlot(SphinxDirective):
         return result
 
 
+# --- notebooks ---------------------------------------------------------------------------
+
+
+def _text(value: object) -> str:
+    return "".join(value) if isinstance(value, list) else str(value)
+
+
+def _fence(language: str, text: str) -> str:
+    ticks = "`" * max([3, *(len(run) + 1 for run in re.findall(r"`{3,}", text))])
+    return f"{ticks}{language}\n{text.rstrip()}\n{ticks}"
+
+
+def notebook_markdown(srcdir: Path, docname: str, name: str) -> str:
+    """The stored notebook ``name`` beside page ``docname``, as MyST Markdown."""
+    path = (srcdir / docname).parent / name
+    notebook = json.loads(path.read_text(encoding="utf-8"))
+    out_dir = srcdir / NOTEBOOK_DIR
+    out_dir.mkdir(parents=True, exist_ok=True)
+    parts: list[str] = []
+    for i, cell in enumerate(notebook["cells"]):
+        source = _text(cell["source"])
+        if cell["cell_type"] == "markdown":
+            parts.append(source)
+            continue
+        if cell["cell_type"] != "code":
+            continue
+        parts.append(_fence("python", source))
+        for k, output in enumerate(cell.get("outputs", [])):
+            data = output.get("data", {})
+            if output["output_type"] == "stream":
+                parts.append(_fence("text", _text(output["text"])))
+            elif "image/png" in data:
+                stem = f"{path.stem}-{i}-{k}.png"
+                (out_dir / stem).write_bytes(base64.b64decode(_text(data["image/png"])))
+                parts.append(f"![output of the cell above](/{NOTEBOOK_DIR}/{stem})")
+            elif "text/plain" in data:
+                parts.append(_fence("text", _text(data["text/plain"])))
+            elif output["output_type"] == "error":
+                LOG.warning("notebook %s stores an error", path.name)
+    return "\n\n".join(parts)
+
+
 # --- wiring ------------------------------------------------------------------------------
 
 
@@ -232,6 +284,10 @@ def _source_read(app: Sphinx, docname: str, source: list[str]) -> None:
         source[0] = source[0].replace(CLI_MARKER, cli_reference())
     if API_MARKER in source[0]:
         source[0] = source[0].replace(API_MARKER, api_index(app.config.API_MODULES))
+    srcdir = Path(app.srcdir)
+    source[0] = NOTEBOOK_MARKER.sub(
+        lambda found: notebook_markdown(srcdir, docname, found["name"]), source[0]
+    )
 
 
 def _copy_schema(app: Sphinx, exception: BaseException | None) -> None:

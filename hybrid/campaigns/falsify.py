@@ -29,7 +29,13 @@ from typing import Any
 
 from hybrid.campaigns.executors import Executor
 from hybrid.campaigns.payload import pack
-from hybrid.campaigns.runs import RunPlan, failed_row, model_variant, requirement_columns
+from hybrid.campaigns.runs import (
+    RunPlan,
+    failed_row,
+    model_variant,
+    requirement_columns,
+    simulate_quietly,
+)
 from hybrid.campaigns.search import objective
 from hybrid.campaigns.space import SAMPLERS, Axis, ranges_axes, unit_samples
 from hybrid.campaigns.sweep import SOLVER_OPTIONS, executor_for, hard_limit
@@ -38,7 +44,6 @@ from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.progress import Reporter, Tracker
-from hybrid.simulation.engine import simulate
 from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
@@ -356,7 +361,7 @@ class _Search:
             inputs: dict[str, Any] = {n: ExpressionInput(n, s) for n, s in self.plan.inputs}
             inputs.update({n: Constant(v) for n, v in over.inputs.items()})
             try:
-                run = simulate(
+                run = simulate_quietly(
                     model_variant(self.model, over.parameters),
                     t_end=self.plan.t_end,
                     initial=over.initial or None,

@@ -41,6 +41,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+import warnings
 from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -52,6 +53,7 @@ from hybrid.campaigns.targets import Constant, split
 from hybrid.compose import System, as_system
 from hybrid.errors import HybridError, UsageError
 from hybrid.model import Automaton
+from hybrid.simulation.bounds import BoundsWarning
 from hybrid.simulation.engine import simulate
 from hybrid.simulation.margins import watched_requirements
 from hybrid.simulation.result import Run
@@ -67,6 +69,7 @@ __all__ = [
     "requirement_columns",
     "run_point",
     "run_points",
+    "simulate_quietly",
 ]
 
 OUTCOME_COLUMNS = ("cause", "t", "j", "jumps", "zeno_time", "message")
@@ -193,6 +196,17 @@ def model_variant(model: Automaton | System, parameters: Mapping[str, float]) ->
     return system
 
 
+def simulate_quietly(*args: Any, **kwargs: Any) -> Run:
+    """:func:`~hybrid.simulation.engine.simulate` without a :class:`BoundsWarning` per run.
+
+    A campaign's runs are rows of a table, not lines of a log: thousands of
+    runs would repeat the same warning.
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", BoundsWarning)
+        return simulate(*args, **kwargs)
+
+
 def run_point(
     model: Automaton | System, index: int, point: Mapping[str, float], plan: RunPlan
 ) -> dict[str, Any]:
@@ -209,7 +223,7 @@ def run_point(
             inputs.update({n: ExpressionInput(n, s) for n, s in plan.inputs})
         inputs.update({n: Constant(v) for n, v in over.inputs.items()})
         extra: dict[str, Any] = {} if plan.backend == "scipy" else {"backend": plan.backend}
-        run = simulate(
+        run = simulate_quietly(
             target,
             t_end=plan.t_end,
             initial=over.initial or None,

@@ -43,6 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hybrid.campaigns.samplers import SAMPLERS
 from hybrid.campaigns.targets import INITIAL, INPUT, check_names
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
@@ -65,9 +66,6 @@ __all__ = [
 
 Point = dict[str, float]
 """Values of the varied names for one run, in the order of the axes."""
-
-SAMPLERS = ("lhs", "sobol", "random")
-"""How samples are drawn: Latin hypercube, scrambled Sobol, uniform."""
 
 MAX_POINTS = 10_000_000
 """A campaign larger than this is refused before anything runs."""

@@ -39,7 +39,7 @@ def add_campaign_commands(
     types: Mapping[str, Callable[[str], Any]],
 ) -> None:
     """Add ``sweep`` and ``falsify``; ``types`` are the parser's argument types by name."""
-    from hybrid.campaigns.space import SAMPLERS
+    from hybrid.campaigns.samplers import SAMPLERS
 
     p = sub.add_parser("sweep", help="run a spec over a grid or samples of parameters")
     p.add_argument("file", metavar="FILE", help="spec or system file")

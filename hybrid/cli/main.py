@@ -1,4 +1,4 @@
-"""The ``hybrid`` command line: validate, check, simulate, graph, schema, sweep, falsify.
+"""The ``hybrid`` command line: one subcommand per task (``hybrid --help`` lists them all).
 
 Exit codes: 0 success; 1 findings (check) or a run that ended before t-end
 (simulate); 2 an invalid spec or invalid usage. Errors go to stderr as
@@ -83,9 +83,16 @@ def build_parser() -> argparse.ArgumentParser:
     from hybrid.export.pictures import RENDERED_FORMATS
     from hybrid.simulation.settings import BACKENDS, METHODS
 
-    parser = _Parser(prog="hybrid", description="Hybrid automata: validate, check, simulate.")
+    parser = _Parser(
+        prog="hybrid",
+        description="Hybrid automata in YAML: validate, check and simulate specs, sweep "
+        "and falsify them, draw their graphs, exchange them with other tools.",
+        epilog="Every command is listed above; 'hybrid COMMAND --help' gives its options.",
+    )
     parser.add_argument("--version", action="version", version=f"hybrid {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    sub = parser.add_subparsers(
+        dest="command", required=True, parser_class=_Parser, title="commands", metavar="COMMAND"
+    )
 
     p = sub.add_parser("validate", help="parse and check the spec language only")
     p.add_argument("files", nargs="+", metavar="FILE", help="spec or system files")
@@ -148,7 +155,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="drive free inputs with time series: a CSV with columns t,NAME,...",
     )
     p.add_argument("--dt", type=_positive, default=None, help="write points on a uniform grid")
-    p.add_argument("--out", help="trajectory file (.csv or .npz)")
+    p.add_argument("--out", help="trajectory file (.csv, .npz or .mat)")
     p.add_argument("--events", help="events JSON file")
     p.add_argument("--plot", help="figure file (needs the 'plot' extra)")
     p.add_argument(

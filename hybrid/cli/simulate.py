@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -20,6 +21,7 @@ from hybrid.compose import System, as_system
 from hybrid.errors import UsageError, did_you_mean
 from hybrid.model import Automaton
 from hybrid.progress import TerminalLine, terminal_reporter
+from hybrid.simulation.bounds import BoundsWarning
 from hybrid.simulation.engine import simulate
 from hybrid.simulation.interrupts import ABANDON_HINT, Interrupts
 from hybrid.simulation.result import RequirementResult, Run
@@ -38,8 +40,11 @@ def run_simulate(args: argparse.Namespace) -> int:
     for flag, path in outputs:
         if path is not None:
             writable_file(path, f"--{flag}")
-    if args.out is not None and Path(args.out).suffix.lower() not in (".csv", ".npz"):
-        raise UsageError(f"--out: use a .csv or .npz file name, got '{args.out}'")
+    from hybrid.export.trajectory import TRAJECTORY_SUFFIXES
+
+    if args.out is not None and Path(args.out).suffix.lower() not in TRAJECTORY_SUFFIXES:
+        raise UsageError(f"--out: use a .csv, .npz or .mat file name, got '{args.out}'")
+    warnings.simplefilter("ignore", BoundsWarning)  # the command says them, below
     line = terminal_reporter(args.quiet)
     interrupts = Interrupts(notify=_notifier(line))
     with interrupts.installed():
@@ -64,6 +69,8 @@ def run_simulate(args: argparse.Namespace) -> int:
         )
         for note in run.settings.get("start", {}).get("notes", ()):
             print(f"{args.file}: note: {note}", file=sys.stderr)
+        for excursion in run.out_of_bounds:
+            print(f"{args.file}: warning: {excursion.message}", file=sys.stderr)
         term = run.termination
         pending = [path for _, path in outputs if path is not None]
         if term.cause == "interrupted" and pending:
@@ -173,12 +180,10 @@ def _write_outputs(
     one is written into a fresh temporary folder, and the error names it.
     """
     from hybrid.export.outputs import keep_elsewhere
-    from hybrid.export.trajectory import write_csv, write_events, write_npz
+    from hybrid.export.trajectory import write_events, write_trajectory
 
     writers: list[tuple[str, str, Callable[[Path], object]]] = []
     if args.out is not None:
-        npz = Path(args.out).suffix.lower() == ".npz"
-        write_trajectory = write_npz if npz else write_csv
         writers.append(("out", args.out, lambda p: write_trajectory(run, p, progress=line)))
     if args.events is not None:
         writers.append(("events", args.events, lambda p: write_events(run, p, progress=line)))

@@ -15,7 +15,13 @@ if TYPE_CHECKING:
     from hybrid.export.diagrams import to_dot, to_mermaid
     from hybrid.export.pictures import render
     from hybrid.export.plot import figure_of, figures_of, plot_run, save_figure
-    from hybrid.export.trajectory import events_document, write_csv, write_events, write_npz
+    from hybrid.export.trajectory import (
+        events_document,
+        write_csv,
+        write_events,
+        write_mat,
+        write_npz,
+    )
 
 __all__ = [
     "atomic_write",
@@ -29,6 +35,7 @@ __all__ = [
     "to_mermaid",
     "write_csv",
     "write_events",
+    "write_mat",
     "write_npz",
 ]
 
@@ -46,6 +53,7 @@ __getattr__, __dir__ = lazy_attributes(
         "to_mermaid": "hybrid.export.diagrams",
         "write_csv": "hybrid.export.trajectory",
         "write_events": "hybrid.export.trajectory",
+        "write_mat": "hybrid.export.trajectory",
         "write_npz": "hybrid.export.trajectory",
     },
 )

@@ -223,7 +223,7 @@ def _draw(container: Any, run: Run, view: View, against: str, signals: bool) -> 
             for k, name in enumerate(view.signals):
                 colour = f"C{k % 10}"
                 values = run[name]
-                _flow(ax, run, the_stays, axis, values, name, colour, dense=False)
+                _flow(ax, run, the_stays, axis, values, _label(run, name), colour, dense=False)
                 _jumps(ax, run, jumps, axis, values, colour)
             if c == 0:
                 ax.set_ylabel("signals")
@@ -236,7 +236,7 @@ def _draw(container: Any, run: Run, view: View, against: str, signals: bool) -> 
                 )
         for ax in axes[1:, c]:
             ax.grid(True, alpha=0.3)
-        axes[-1, c].set_xlabel("t" if axis == "t" else "j (jumps)")
+        axes[-1, c].set_xlabel("t [s]" if axis == "t" else "j (jumps)")
 
 
 def _x(run: Run, axis: str) -> NDArray[np.float64]:

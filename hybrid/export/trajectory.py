@@ -1,4 +1,4 @@
-"""Trajectory files (CSV, NPZ) and the events JSON of the contract.
+"""Trajectory files (CSV, NPZ, MATLAB's MAT) and the events JSON of the contract.
 
 CSV columns are ``t,j,location,<state...>,<signals...>``; a jump gives two
 rows with the same ``t`` (pre-jump with ``j``, post-jump with ``j + 1``).
@@ -22,7 +22,15 @@ from hybrid.export.atomic import atomic_write
 from hybrid.progress import Reporter, Tracker
 from hybrid.simulation.result import Run
 
-__all__ = ["events_document", "write_csv", "write_events", "write_npz"]
+__all__ = [
+    "TRAJECTORY_SUFFIXES",
+    "events_document",
+    "write_csv",
+    "write_events",
+    "write_mat",
+    "write_npz",
+    "write_trajectory",
+]
 
 
 CHUNK_ROWS = 20_000
@@ -77,13 +85,64 @@ def write_npz(run: Run, path: str | Path, progress: Reporter | None = None) -> N
     tracker.finish(len(run))
 
 
+def write_mat(run: Run, path: str | Path, progress: Reporter | None = None) -> None:
+    """Write the trajectory as a MATLAB ``.mat`` file (version 5, atomically).
+
+    The arrays of :func:`write_npz`, as MATLAB reads them: ``t`` and ``j`` are
+    columns (as ``ode45`` returns ``t``), ``states`` and ``signals`` one row per
+    point, ``location``, ``state_names`` and ``signal_names`` character matrices
+    (``cellstr(location)`` in MATLAB); and each state variable and signal under
+    its own name, a column, unless the name is one of those arrays'.
+
+    Examples
+    --------
+    >>> import hybrid, scipy.io, tempfile, pathlib
+    >>> run = hybrid.simulate(hybrid.load("specs/bouncing_ball.yaml"), t_end=2.0)
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "ball.mat"
+    >>> write_mat(run, path)
+    >>> back = scipy.io.loadmat(path)
+    >>> back["h"].shape == (len(run), 1), bool((back["h"][:, 0] == run["h"]).all())
+    (True, True)
+    """
+    from scipy.io import savemat
+
+    arrays: dict[str, Any] = {
+        "t": run.t,
+        "j": run.j.astype(np.float64),
+        "location": run.location.astype(str),
+        "state_names": np.array(run.state_names, dtype=str),
+        "signal_names": np.array(run.signal_names, dtype=str),
+        "states": run.states,
+        "signals": run.signals,
+    }
+    for name in (*run.state_names, *run.signal_names):
+        if name not in arrays and not name.startswith("_"):  # MATLAB names start with a letter
+            arrays[name] = run[name]
+    tracker = Tracker(f"writing {Path(path).name}", total=len(run), unit="rows", report=progress)
+    with atomic_write(path) as handle:
+        savemat(handle, arrays, oned_as="column", do_compression=True)
+    tracker.finish(len(run))
+
+
+TRAJECTORY_SUFFIXES = (".csv", ".npz", ".mat")
+"""The trajectory files ``hybrid simulate --out`` writes, by suffix."""
+
+
+def write_trajectory(run: Run, path: str | Path, progress: Reporter | None = None) -> None:
+    """Write the trajectory in the format its suffix names (:data:`TRAJECTORY_SUFFIXES`)."""
+    writer = {".npz": write_npz, ".mat": write_mat}.get(Path(path).suffix.lower(), write_csv)
+    writer(run, path, progress)
+
+
 def events_document(run: Run) -> dict[str, Any]:
-    """The events JSON document: termination, every jump, and each requirement's result."""
+    """The events JSON document: termination, every jump, each requirement's result, and
+    where the run left the declared bounds of a state variable."""
     return {
         "model": run.model,
         "termination": run.termination.as_dict(),
         "jumps": [jump.as_dict() for jump in run.jumps],
         "requirements": {name: r.as_dict() for name, r in run.requirements.items()},
+        "out_of_bounds": [excursion.as_dict() for excursion in run.out_of_bounds],
         "settings": run.settings,
     }
 

@@ -21,7 +21,6 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import cache
-from importlib.metadata import entry_points
 from typing import Any
 
 __all__ = ["BUILTINS", "ENTRY_POINT_GROUP", "Function", "available_libraries", "load_library"]
@@ -96,12 +95,16 @@ BUILTINS: Mapping[str, Function] = dict(
 
 def available_libraries() -> list[str]:
     """Names of the function libraries installed packages register."""
+    from importlib.metadata import entry_points  # tens of ms: only when a library is looked for
+
     return sorted(ep.name for ep in entry_points(group=ENTRY_POINT_GROUP))
 
 
 @cache
 def load_library(name: str) -> Mapping[str, Function]:
     """The functions of library ``name``; raises ``LookupError`` if none is installed."""
+    from importlib.metadata import entry_points
+
     matches = [ep for ep in entry_points(group=ENTRY_POINT_GROUP) if ep.name == name]
     if not matches:
         raise LookupError(name)

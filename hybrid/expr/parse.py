@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from hybrid.errors import did_you_mean
 from hybrid.expr import ir
 from hybrid.expr.functions import BUILTINS, Function
+from hybrid.expr.habits import habit
 
 __all__ = [
     "MAX_DEPTH",
@@ -123,6 +124,9 @@ def parse_expression(source: str, scope: Scope, *, want: str = "number") -> ir.E
     try:
         tree = _ast_parse(text)
     except SyntaxError as exc:
+        found = habit(text)
+        if found is not None:
+            raise ExprError(found[0], lead + found[1]) from None
         col = (exc.offset or 1) - 1 if (exc.lineno or 1) == 1 else 0
         raise ExprError(f"syntax error: {exc.msg}", lead + col) from None
     except (MemoryError, RecursionError):
@@ -201,7 +205,7 @@ class _Converter:
                 return _fold(ir.Unary("-", self.number(node.operand), col)), _NUM
             if isinstance(node.op, ast.UAdd):
                 return self.number(node.operand), _NUM
-            raise ExprError("'~' is not supported", col)
+            raise ExprError("'~' is not negation here: write 'not'", col)
         if isinstance(node, ast.BoolOp):
             op = "and" if isinstance(node.op, ast.And) else "or"
             return ir.BoolOp(op, tuple(self.boolean(v) for v in node.values), col), _BOOL

@@ -32,7 +32,7 @@ from hybrid.reader.characters import ascii_only
 from hybrid.reader.messages import closest
 from hybrid.reader.problems import Problems
 from hybrid.reader.requirements import build_requirements
-from hybrid.reader.schema import AutomatonSpec
+from hybrid.reader.schema import AutomatonSpec, SignalSpec
 from hybrid.reader.sets import (
     build_initial,
     build_properties,
@@ -56,7 +56,8 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
     sizes = _vector_sizes(spec, functions)
     scope = Scope(variables=kinds, functions=functions, vectors=sizes)
 
-    signals = _signals(spec.signals, ("signals",), scope, problems, sizes)
+    sources, paths, units = _signal_definitions(spec)
+    signals = _signals(sources, ("signals",), scope, problems, sizes, paths)
     states = build_states(spec, positions, problems)
     state_names = [s.name for s in states]
 
@@ -124,6 +125,7 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
         parameters=MappingProxyType(dict(spec.parameters)),
         states=tuple(states),
         signals=MappingProxyType(signals),
+        signal_units=MappingProxyType(units),
         vector_sizes=MappingProxyType(sizes),
         signal_names=tuple(spec.signals),
         inputs=tuple(name for name, _, _ in input_entries(spec)),
@@ -205,9 +207,29 @@ def _declare_names(
     return kinds
 
 
+def _signal_definitions(
+    spec: AutomatonSpec,
+) -> tuple[dict[str, str], dict[str, tuple[Any, ...]], dict[str, str]]:
+    """Each signal's expression source, the path of that source, and the declared units.
+
+    A signal is ``name: expression`` or ``name: {expr: expression, unit: unit}``.
+    """
+    sources: dict[str, str] = {}
+    paths: dict[str, tuple[Any, ...]] = {}
+    units: dict[str, str] = {}
+    for name, definition in spec.signals.items():
+        if isinstance(definition, SignalSpec):
+            sources[name], paths[name] = definition.expr, ("signals", name, "expr")
+            if definition.unit:
+                units[name] = definition.unit
+        else:
+            sources[name], paths[name] = definition, ("signals", name)
+    return sources, paths, units
+
+
 def _vector_sizes(spec: AutomatonSpec, functions: Mapping[str, Function]) -> dict[str, int]:
     sizes: dict[str, int] = {}
-    for name, source in spec.signals.items():
+    for name, source in _signal_definitions(spec)[0].items():
         if len(source) > MAX_SOURCE_CHARS:
             continue  # refused with a position when the signal is parsed
         try:
@@ -227,11 +249,12 @@ def _signals(
     scope: Scope,
     problems: Problems,
     sizes: Mapping[str, int],
+    paths: Mapping[str, tuple[Any, ...]] | None = None,
 ) -> dict[str, ir.Expr]:
     """Parsed signal definitions; a vector signal's keeps the shape of its declaration."""
     definitions: dict[str, ir.Expr] = {}
     for name, source in sources.items():
-        path = (*base, name)
+        path = (paths or {}).get(name, (*base, name))
         try:
             ascii_only(source)
             found = vector_call(source, scope)

@@ -34,6 +34,7 @@ __all__ = [
     "LocationSpec",
     "PropertiesSpec",
     "RequirementSpec",
+    "SignalSpec",
     "StateVarSpec",
     "SystemSpec",
 ]
@@ -115,6 +116,30 @@ else:
 
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", populate_by_name=True, frozen=True)
+
+
+class SignalSpec(_Strict):
+    """A signal written as a mapping, to give it a unit: ``{expr: 0.5*v**2, unit: J}``."""
+
+    expr: Expression = Field(description="The signal's definition (an expression).")
+    unit: str | None = Field(None, description="Unit, for documentation and plots.")
+    description: str = ""
+
+
+def _signal_shape(value: Any) -> str:
+    return "<mapping>" if isinstance(value, dict) else "<expression>"
+
+
+if TYPE_CHECKING:  # the members, for mypy
+    SignalDefinition = str | SignalSpec
+else:
+    SignalDefinition = Annotated[
+        Union[  # noqa: UP007 - tagged members need the subscript form
+            Annotated[Expression, Tag("<expression>")],
+            Annotated[SignalSpec, Tag("<mapping>")],
+        ],
+        Discriminator(_signal_shape),
+    ]
 
 
 class StateVarSpec(_Strict):
@@ -312,7 +337,10 @@ class AutomatonSpec(_Strict):
     description: str = ""
     parameters: dict[Name, Number] = Field(default_factory=dict)
     state: dict[Name, StateVarSpec] = Field(default_factory=dict)
-    signals: dict[Name, Expression] = Field(default_factory=dict)
+    signals: dict[Name, SignalDefinition] = Field(
+        default_factory=dict,
+        description="Signals: name: expression, or name: {expr: expression, unit: unit}.",
+    )
     inputs: Inputs = Field(default_factory=list)
     labels: list[Name] = Field(default_factory=list)
     locations: dict[Name, LocationSpec] = Field(min_length=1)

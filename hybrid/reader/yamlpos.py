@@ -29,6 +29,7 @@ import yaml
 
 from hybrid.errors import Position, SpecError
 from hybrid.reader.files import MAX_FILE_BYTES, read_bytes
+from hybrid.reader.yamlhints import bang_at, cut_expression, tab_at
 
 __all__ = [
     "MAX_FILE_BYTES",
@@ -108,7 +109,11 @@ class _Checks(yaml.composer.Composer):
             raise _Refused("YAML anchors (&name) are not allowed in specs", event.start_mark)
         tag = getattr(event, "tag", None)
         if tag is not None and tag != "!":
-            raise _Refused(f"YAML tags ({tag}) are not allowed in specs", event.start_mark)
+            raise _Refused(
+                f"YAML tags ({tag}) are not allowed in specs"
+                + ("; if '!' meant negation, write 'not'" if tag.startswith("!") else ""),
+                event.start_mark,
+            )
         if isinstance(event, yaml.CollectionStartEvent):
             if self._depth >= MAX_YAML_DEPTH:
                 raise _Refused(
@@ -271,6 +276,12 @@ def read_yaml_text(
         mark = exc.problem_mark or exc.context_mark
         problem = exc.problem or exc.context or "invalid YAML"
         pos = _position(file, mark) if mark is not None else Position(file)
+        if mark is not None and tab_at(text, mark):
+            problem = "a tab: YAML indents with spaces only (replace the tab with spaces)"
+        elif mark is not None and (bang := bang_at(text, mark)) is not None:
+            pos = Position(file, mark.line + 1, bang + 1)
+            message = "'!' is not negation here (YAML reads it as a tag): write 'not'"
+            raise SpecError(message, pos) from None
         raise SpecError(f"invalid YAML: {problem}", pos) from None
     except yaml.YAMLError as exc:
         raise SpecError(f"invalid YAML: {exc}", Position(file)) from None
@@ -283,6 +294,9 @@ def read_yaml_text(
             "file is empty: a spec is a mapping starting with 'automaton:' or 'system:'",
             Position(file),
         )
+    cut = cut_expression(node, text)
+    if cut is not None:
+        raise SpecError(cut[0], _position(file, cut[1]))
     positions = PositionMap(file)
     data = _convert(node, (), positions)
     return YamlDocument(data, positions)

@@ -59,6 +59,7 @@ from hybrid.simulation.instants import (
     tolerance,
     transition_key,
 )
+from hybrid.simulation.layout import run_layout
 from hybrid.simulation.result import Jump, Run, Termination
 from hybrid.simulation.settings import Settings
 
@@ -313,6 +314,7 @@ def merge(system: System, parts: Sequence[_Part], settings: Settings) -> Run:
         termination=termination,
         settings=settings.as_dict(),
         segments=_segments(parts, local, jump_times, settings, t_stop) if settings.dense else [],
+        units=run_layout(system)["units"],
     )
 
 

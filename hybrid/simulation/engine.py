@@ -23,6 +23,7 @@ from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.progress import Reporter, Tracker
 from hybrid.simulation.apart import independent_groups, simulate_apart
+from hybrid.simulation.bounds import bound_excursions, warn_excursions
 from hybrid.simulation.compiled import CompiledModel
 from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.loop import EventLoop
@@ -110,6 +111,9 @@ def simulate(
         initial location and state, the inputs held at their nominal values,
         and ``notes`` when a point of a set was chosen (a nominal value, a
         midpoint, the first of several initial locations).
+        ``run.out_of_bounds`` says where a state variable first left its declared
+        ``bounds:``; each such variable also gives one
+        :class:`~hybrid.simulation.bounds.BoundsWarning` (``hybrid.BoundsWarning``).
 
     Examples
     --------
@@ -151,6 +155,16 @@ def simulate(
     else:
         run = _simulate_scipy(model, settings, initial, inputs, handle_sigint, progressed)
     run.settings["start"] = start
+    run.out_of_bounds = bound_excursions(
+        model.states,
+        run.state_names,
+        run.t,
+        run.j,
+        run.states,
+        rtol=settings.rtol,
+        atol=settings.atol,
+    )
+    warn_excursions(run.out_of_bounds)
     termination = run.termination
     if tracker is not None:
         tracker.finish(termination.t, jumps=len(run.jumps), points=len(run))

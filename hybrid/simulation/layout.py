@@ -1,8 +1,8 @@
-"""Which trajectory columns belong to which component, and the units of the state.
+"""Which trajectory columns belong to which component, and the units of state and signals.
 
 A :class:`~hybrid.simulation.result.Run` keeps these facts of its model so that
 it can be drawn (one figure per component of a system, axis labels with the
-``unit:`` of each state variable) without the model at hand.
+``unit:`` of each state variable and signal) without the model at hand.
 
 Examples
 --------
@@ -28,11 +28,13 @@ __all__ = ["run_layout"]
 
 
 def run_layout(model: Automaton | System) -> dict[str, Any]:
-    """``units`` (state variable to its ``unit:``) and ``components`` (per component of a
+    """``units`` (state variable or signal to its ``unit:``) and ``components`` (per component of a
     system: its name and its columns, state variables first, then signal columns;
     empty for a plain automaton): the keyword arguments a :class:`Run` takes."""
     system = as_system(model)
     units = {s.name: s.unit for s in system.states if s.unit}
+    for component in system.components:
+        units.update(component.automaton.signal_units)
     if system.single:
         return {"units": units, "components": ()}
     components = []

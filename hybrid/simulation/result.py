@@ -144,11 +144,14 @@ class Run:
     segments: list[tuple[int, float, float, Any]] = field(default_factory=list, repr=False)
     """With ``dense=True``: ``(j, t0, t1, interpolant)`` per stay in a mode."""
     units: Mapping[str, str] = field(default_factory=dict)
-    """The ``unit:`` of each state variable that declares one (axis labels of plots)."""
+    """The ``unit:`` of each state variable or signal that declares one (labels of plots)."""
     components: tuple[tuple[str, tuple[str, ...]], ...] = ()
     """In a system: each component's name and its columns; empty for an automaton."""
     requirements: Mapping[str, RequirementResult] = field(default_factory=dict)
     """Each requirement of the model, by name, as monitored on this run."""
+    out_of_bounds: tuple[Any, ...] = ()
+    """Per state variable, where the run first left its declared ``bounds:``
+    (:class:`hybrid.simulation.bounds.BoundExcursion`); empty when it stayed within."""
 
     def __getitem__(self, name: str) -> NDArray[np.float64]:
         if name in self.state_names:

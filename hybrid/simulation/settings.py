@@ -72,11 +72,18 @@ def finite_number(name: str, value: Any) -> float:
     hybrid.errors.UsageError: g must be a finite number, got nan
     """
     if not _plain_number(value) and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
-        raise UsageError(f"{name} must be a number, got {value!r}")
+        raise UsageError(f"{name} must be a number, got {_shown(value)}")
     number = float(value)
     if not math.isfinite(number):
         raise UsageError(f"{name} must be a finite number, got {number}")
     return number
+
+
+def _shown(value: Any) -> str:
+    """``value`` as a message shows it; a string is named as one (``t_end="10"``)."""
+    if isinstance(value, str):
+        return f"the string {value!r}: pass a number, not text"
+    return str(value) if _plain_number(value) else repr(value)
 
 
 def _plain_number(value: Any) -> bool:
@@ -125,7 +132,9 @@ class Settings:
             or not math.isfinite(self.t_end)
             or self.t_end <= t0
         ):
-            raise UsageError(f"t_end must be a finite time after t_start={t0}, got {self.t_end}")
+            raise UsageError(
+                f"t_end must be a finite time after t_start={t0}, got {_shown(self.t_end)}"
+            )
         span = float(self.t_end) - t0
         _whole("max_jumps", self.max_jumps, 0)
         _whole("max_jumps_per_instant", self.max_jumps_per_instant, 1)

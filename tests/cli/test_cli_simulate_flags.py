@@ -56,7 +56,7 @@ def test_bad_flags_exit_2_with_one_line(
     ("args", "message"),
     [
         (["--t-end", "1", "--param", "gg=1"], "unknown parameter 'gg'"),
-        (["--t-end", "1", "--out", "traj.txt"], "--out: use a .csv or .npz file name"),
+        (["--t-end", "1", "--out", "traj.txt"], "--out: use a .csv, .npz or .mat file name"),
         (["--t-end", "10", "--max-step", "1e-300"], "max_step=1e-300 is below the resolution"),
         (["--t-end", "1e6", "--max-step", "1e-7"], "needs at least 1e+13 steps"),
         (["--t-end", "10", "--dt", "1e-12"], "dt=1e-12 gives 1e+13 points"),

@@ -63,7 +63,7 @@ def test_bad_flag_exits_2_without_traceback(
 @pytest.mark.parametrize(
     "argv, says",
     [
-        ([], "the following arguments are required: command"),
+        ([], "the following arguments are required: COMMAND"),
         (["validate"], "the following arguments are required: FILE"),
         (["no-such-command"], "invalid choice: 'no-such-command'"),
         (["simulate", "specs/bouncing_ball.yaml", "--t-end", "-1"], "must be > 0"),

@@ -80,7 +80,9 @@ def test_without_pandas_the_error_says_what_to_install(
         return real_import(name, *args, **kwargs)
 
     monkeypatch.setattr(builtins, "__import__", no_pandas)
-    with pytest.raises(hybrid.UsageError, match=r"pip install 'hybrid-automata\[pandas\]'"):
+    with pytest.raises(
+        hybrid.UsageError, match=r"pip install 'pandas>=2.0' \(the 'pandas' extra\)"
+    ):
         run.to_pandas()
 
 

@@ -194,7 +194,7 @@ def test_bad_output_name_is_a_usage_error(
         "simulate", SPECS / "bouncing_ball.yaml", "--t-end", "1", "--out", tmp_path / "x.txt"
     )
     assert code == 2
-    assert "--out: use a .csv or .npz" in capsys.readouterr().err
+    assert "--out: use a .csv, .npz or .mat" in capsys.readouterr().err
     missing = tmp_path / "no" / "such" / "dir" / "x.csv"
     assert (
         main_in_process("simulate", SPECS / "bouncing_ball.yaml", "--t-end", "1", "--out", missing)

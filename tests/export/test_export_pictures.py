@@ -92,7 +92,9 @@ def test_without_the_graphviz_package_the_message_names_the_extra(
 
     graph = location_graph(hybrid.load(REPO / "specs/thermostat.yaml"))
     monkeypatch.setattr(builtins, "__import__", no_graphviz)
-    with pytest.raises(hybrid.UsageError, match=r"pip install 'hybrid-automata\[graph\]'"):
+    with pytest.raises(
+        hybrid.UsageError, match=r"pip install 'graphviz>=0.20' \(the 'graph' extra\)"
+    ):
         render(graph, "png")
 
 

@@ -65,7 +65,7 @@ def test_axis_labels_carry_the_units_of_the_spec(ball_run: hybrid.Run) -> None:
         *(f"{name} [{var['unit']}]" for name, var in state.items()),
         "signals",
     ]
-    assert fig.axes[-1].get_xlabel() == "t"
+    assert fig.axes[-1].get_xlabel() == "t [s]"
 
 
 def test_signals_have_a_legend_entry_each(ball_run: hybrid.Run) -> None:
@@ -152,7 +152,7 @@ def test_against_j_and_both_are_the_hybrid_time_view(ball_run: hybrid.Run) -> No
     assert list(before.get_xdata()) == [0, 1, 2] and list(after.get_xdata()) == [1, 2, 3]
     assert fig.axes[-1].get_xlabel() == "j (jumps)"
     both = figure_of(ball_run, "v", against="both", signals=False)
-    assert [ax.get_xlabel() for ax in both.axes[-2:]] == ["t", "j (jumps)"]
+    assert [ax.get_xlabel() for ax in both.axes[-2:]] == ["t [s]", "j (jumps)"]
     assert len(both.axes) == 4  # lane and v, against t and against j
 
 
@@ -262,7 +262,9 @@ def test_without_matplotlib_the_error_says_what_to_install(
 
     run = hybrid.simulate(hybrid.load(ROOT / "specs/thermostat.yaml"), t_end=5.0)
     monkeypatch.setattr(builtins, "__import__", no_matplotlib)
-    with pytest.raises(hybrid.UsageError, match=r"pip install 'hybrid-automata\[plot\]'"):
+    with pytest.raises(
+        hybrid.UsageError, match=r"pip install 'matplotlib>=3.7' \(the 'plot' extra\)"
+    ):
         run.plot()
 
 

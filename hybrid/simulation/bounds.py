@@ -1,0 +1,108 @@
+"""Declared bounds, watched: where a run leaves the ``bounds:`` its spec declares.
+
+``hybrid check`` proves its findings over the declared bounds of the state
+(docs/check.md), so a run that leaves them is a run those proofs do not cover.
+After a run, :func:`bound_excursions` finds, for each state variable, the first
+stored point beyond its bounds by more than the solver's tolerance
+(``atol + rtol * |bound|``), and :func:`warn_excursions` warns once per variable
+with its time ``t`` and hybrid time ``j`` (:class:`BoundsWarning`). The run keeps
+them as ``run.out_of_bounds`` and the events JSON as ``"out_of_bounds"``.
+
+Examples
+--------
+>>> import numpy as np
+>>> from hybrid.model import StateVar
+>>> h = StateVar("h", 1.0, lower=0.0, upper=3.0)
+>>> t, j = np.array([0.0, 1.0, 2.0]), np.array([0, 0, 0])
+>>> states = np.array([[1.0], [3.5], [4.0]])
+>>> (found,) = bound_excursions((h,), ("h",), t, j, states, rtol=1e-6, atol=1e-9)
+>>> found.message
+'h left its declared bounds [0, 3] at t=1 j=0 (h = 3.5)'
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from hybrid.model import StateVar
+
+__all__ = ["BoundExcursion", "BoundsWarning", "bound_excursions", "warn_excursions"]
+
+
+class BoundsWarning(UserWarning):
+    """A simulated run left the declared ``bounds:`` of a state variable."""
+
+
+@dataclass(frozen=True)
+class BoundExcursion:
+    """The first stored point of a run where ``variable`` is beyond its declared bounds."""
+
+    variable: str
+    t: float
+    j: int
+    value: float
+    lower: float
+    upper: float
+
+    @property
+    def message(self) -> str:
+        bounds = f"[{self.lower:g}, {self.upper:g}]"
+        return (
+            f"{self.variable} left its declared bounds {bounds} at t={self.t:.9g} j={self.j} "
+            f"({self.variable} = {self.value:.9g})"
+        )
+
+    def as_dict(self) -> dict[str, Any]:
+        """``{"variable", "t", "j", "value", "bounds": [lower, upper]}`` (the events JSON)."""
+        return {
+            "variable": self.variable,
+            "t": self.t,
+            "j": self.j,
+            "value": self.value,
+            "bounds": [self.lower, self.upper],
+        }
+
+
+def bound_excursions(
+    declared: Sequence[StateVar],
+    names: Sequence[str],
+    t: NDArray[np.float64],
+    j: NDArray[np.int64],
+    states: NDArray[np.float64],
+    *,
+    rtol: float,
+    atol: float,
+) -> tuple[BoundExcursion, ...]:
+    """Per bounded state variable, the first stored point beyond its bounds (tolerance above).
+
+    A non-finite value is not an excursion: the run ends ``nonfinite`` and says so.
+    """
+    found: list[BoundExcursion] = []
+    for var in declared:
+        if (math.isinf(var.lower) and math.isinf(var.upper)) or var.name not in names:
+            continue
+        column = states[:, names.index(var.name)]
+        below = column < var.lower - (atol + rtol * abs(var.lower))
+        above = column > var.upper + (atol + rtol * abs(var.upper))
+        beyond = np.flatnonzero((below | above) & np.isfinite(column))
+        if beyond.size:
+            k = int(beyond[0])
+            found.append(
+                BoundExcursion(
+                    var.name, float(t[k]), int(j[k]), float(column[k]), var.lower, var.upper
+                )
+            )
+    return tuple(found)
+
+
+def warn_excursions(found: Sequence[BoundExcursion], stacklevel: int = 3) -> None:
+    """One :class:`BoundsWarning` per excursion (one per variable)."""
+    for excursion in found:
+        warnings.warn(excursion.message, BoundsWarning, stacklevel=stacklevel)

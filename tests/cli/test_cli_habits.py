@@ -1,0 +1,145 @@
+"""Messages for the habits people bring from C, MATLAB and YAML elsewhere, from the real command.
+
+Each row is a mistake an engineer makes on a first try, the place the message must
+point at (counted by hand in the spec below) and what it must say. The specs are
+checked by ``python -m hybrid validate`` in a fresh process; the Python API's
+mistakes by ``python -c`` (a user's script).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+from support import REPO, assert_no_traceback, run_cli
+
+# The guard's value starts at column 12 of line 12 ("    guard: " is 11 characters).
+SPEC = """\
+automaton: habits
+parameters: {k: 1.0}
+state:
+  h: {initial: 1.0}
+  v: {initial: 0.0}
+locations:
+  a:
+    flow: {h: v, v: -1}
+edges:
+  - from: a
+    to: a
+    guard: GUARD
+"""
+
+GUARDS = [
+    # (guard as typed, column of the culprit, what the message says)
+    ("h = 0", 14, "'=' assigns; to compare, use '=='"),
+    ("h => 0", 14, "'=>' is not a comparison: write '>='"),
+    ("h <= 0 && v < 0", 19, "'&&' is not an operator here: write 'and'"),
+    ("h <= 0 || v < 0", 19, "'||' is not an operator here: write 'or'"),
+    ("h ~= 0", 14, "'~=' is MATLAB's not-equal: write '!='"),
+    ("!(h > 0)", 12, "'!' is not negation here (YAML reads it as a tag): write 'not'"),
+    ("h <= 0 and !(v > 0)", 23, "'!' is not negation here: write 'not'"),
+    ("~(h > 0)", 12, "'~' is not negation here: write 'not'"),
+    ("!v", 12, "YAML tags (!v) are not allowed in specs; if '!' meant negation, write 'not'"),
+]
+
+
+@pytest.mark.parametrize(("guard", "column", "message"), GUARDS, ids=[g for g, _, _ in GUARDS])
+def test_an_operator_from_c_or_matlab_is_named(
+    guard: str, column: int, message: str, tmp_path: Path
+) -> None:
+    spec = tmp_path / "habits.yaml"
+    spec.write_text(SPEC.replace("GUARD", guard))
+    result = run_cli("validate", spec)
+    assert result.returncode == 2
+    assert_no_traceback(result.stderr)
+    assert result.stderr.strip() == f"{spec}:12:{column}: {message}"
+
+
+def test_the_operators_we_spell_that_way_still_parse(tmp_path: Path) -> None:
+    spec = tmp_path / "ours.yaml"
+    spec.write_text(SPEC.replace("GUARD", "h == 0 or (h != 1 and not v >= 0 and h <= k)"))
+    result = run_cli("validate", spec)
+    assert (result.returncode, result.stderr) == (0, "")
+
+
+YAML = [
+    # (spec text, line:column, message)
+    (
+        SPEC.replace("GUARD", "h <= 0").replace("  h: {initial", "\th: {initial"),
+        "4:1",
+        "invalid YAML: a tab: YAML indents with spaces only (replace the tab with spaces)",
+    ),
+    (
+        SPEC.replace("GUARD", "h <= 0").replace("    flow:", "\tflow:"),
+        "8:1",
+        "invalid YAML: a tab: YAML indents with spaces only (replace the tab with spaces)",
+    ),
+    (
+        SPEC.replace("GUARD", "h <= 0") + "    reset: {h: max(h, 0)}\n",
+        "13:16",
+        "a comma cut 'max(h, 0)' in two: inside {...} or [...] a comma ends the entry; "
+        "quote it: h: 'max(h, 0)'",
+    ),
+    (
+        SPEC.replace("    guard: GUARD\n", "  - {from: a, to: a, guard: min(h, v) <= 0}\n").replace(
+            "  - from: a\n    to: a\n", ""
+        ),
+        "10:29",
+        "a comma cut 'min(h, v) <= 0' in two: inside {...} or [...] a comma ends the entry; "
+        "quote it: guard: 'min(h, v) <= 0'",
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    ("text", "where", "message"), YAML, ids=["tab", "tab-deep", "reset", "guard"]
+)
+def test_a_yaml_pitfall_is_named(text: str, where: str, message: str, tmp_path: Path) -> None:
+    spec = tmp_path / "pitfall.yaml"
+    spec.write_text(text)
+    result = run_cli("validate", spec)
+    assert result.returncode == 2
+    assert_no_traceback(result.stderr)
+    assert result.stderr.strip() == f"{spec}:{where}: {message}"
+
+
+def test_the_quoted_form_the_message_offers_is_accepted(tmp_path: Path) -> None:
+    spec = tmp_path / "quoted.yaml"
+    spec.write_text(SPEC.replace("GUARD", "h <= 0") + "    reset: {h: 'max(h, 0)'}\n")
+    result = run_cli("validate", spec)
+    assert (result.returncode, result.stderr) == (0, "")
+
+
+PYTHON = [
+    (
+        'run = hybrid.simulate(model, t_end=1.0)\nrun["h3"]',
+        "KeyError: \"no state variable or signal 'h3'; did you mean 'h'?\"",
+    ),
+    (
+        'hybrid.simulate(model, t_end="10")',
+        "t_end must be a finite time after t_start=0.0, got the string '10': "
+        "pass a number, not text",
+    ),
+    (
+        'hybrid.simulate(model, t_end=10.0, rtol="1e-6")',
+        "rtol must be a number, got the string '1e-6': pass a number, not text",
+    ),
+]
+
+
+@pytest.mark.parametrize(("code", "said"), PYTHON, ids=["did-you-mean", "t_end", "rtol"])
+def test_a_python_mistake_is_named(code: str, said: str) -> None:
+    import subprocess
+
+    script = f"import hybrid\nmodel = hybrid.load('specs/bouncing_ball.yaml')\n{code}\n"
+    result = subprocess.run(
+        [sys.executable, "-c", script],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines()[-1].endswith(said), result.stderr
