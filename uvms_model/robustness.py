@@ -431,8 +431,8 @@ def write_map_figure(result: RobustnessMap, path: Path) -> Path:
     ax.set_xlabel(result.x_name)
     ax.set_ylabel(result.y_name)
     ax.set_title(
-        f"{result.mission}: switches per run (white: the paper's outcome, red: not; "
-        "x: run ended early)\nstar: our values; dashed box: +-10%",
+        f"{result.mission}: switches per run; white: the paper's outcome (strict),\n"
+        "red: not (1: epsilon without beta; x: ended early); star: ours; box: +-10%",
         fontsize=9,
     )
     with atomic_write(path) as handle:
@@ -458,7 +458,7 @@ def main(argv: list[str] | None = None) -> int:
             )
     grid = robustness_map(
         "uvms_mission_2",
-        "uvms.v_max", [round(0.21 + 0.01 * k, 2) for k in range(13)],
+        "uvms.v_max", [round(0.21 + 0.015 * k, 3) for k in range(13)],
         "polarization.theta_accel", [round(0.65 + 0.05 * k, 2) for k in range(13)],
         workers=2,
     )  # fmt: skip

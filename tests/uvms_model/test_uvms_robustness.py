@@ -32,15 +32,7 @@ from uvms_model.robustness import (
 
 RTOL, ATOL = 1e-6, 1e-9
 
-MISSION_2_LOST = {
-    "uvms.a1 x1.1": "no beta",
-    "uvms.a2 x1.1": "no beta",
-    "uvms.a3 x1.1": "no beta",
-    "uvms.v_max x1.1": "no beta",
-    **{f"{q} -0.1 rad": "no switch" for q in ("q1", "q2", "q3")},
-    **{f"{q} -0.05 rad": "no beta" for q in ("q1", "q2", "q3")},
-    **{f"{q} +0.1 rad": "no beta" for q in ("q1", "q2", "q3")},
-}
+MISSION_2_LOST: dict[str, str] = {}
 """Mission 2's variants that lose the paper's outcome, as measured (strict classifier)."""
 
 
@@ -105,6 +97,9 @@ def test_mission_2_window_as_measured(variants: dict[str, list[Variant]]) -> Non
     verdicts = {v.name: v.verdict for v in variants["uvms_mission_2"]}
     lost = {name: verdict for name, verdict in verdicts.items() if verdict != "paper"}
     assert lost == MISSION_2_LOST
+    # the margin that stays thin: min |gamma| against the requirement's 0.5 (measured
+    # 0.589-0.618 over the variants at rtol 1e-7)
+    assert min(v.outcome.min_abs_gamma for v in variants["uvms_mission_2"]) > 0.58
 
 
 def test_relaxed_tolerances_give_the_nominal_outcome() -> None:
@@ -122,10 +117,10 @@ def test_relaxed_tolerances_give_the_nominal_outcome() -> None:
 
 def test_map_grid_and_figure(tmp_path: Path) -> None:
     grid = robustness_map(
-        "uvms_mission_2", "uvms.v_max", [0.26, 0.28], "polarization.theta_accel", [0.95],
+        "uvms_mission_2", "uvms.v_max", [0.28, 0.32], "polarization.theta_accel", [0.95],
         rtol=RTOL, atol=ATOL,
     )  # fmt: skip
-    assert grid.nominal == (0.27, 0.95)
+    assert grid.nominal == (0.30, 0.95)
     assert len(grid.outcomes) == 1 and len(grid.outcomes[0]) == 2
     assert all(classify(o) == "paper" for o in grid.outcomes[0])
     for o in grid.outcomes[0]:
