@@ -463,6 +463,9 @@ def main(argv: list[str] | None = None) -> int:
         workers=2,
     )  # fmt: skip
     path = write_map_figure(grid, out / "uvms_robustness_map.png")
+    verdicts = [classify(o) for row in grid.outcomes for o in row]
+    counts = ", ".join(f"{v} {verdicts.count(v)}" for v in sorted(set(verdicts)))
+    print(f"map of {grid.mission}: {counts} (of {len(verdicts)})")
     print(f"figure: {path}")
     return 0
 
