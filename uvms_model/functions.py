@@ -32,6 +32,7 @@ from collections.abc import Callable
 from functools import lru_cache
 from typing import Any
 
+from uvms_model.baselines import uvms_resolve, uvms_sigma_min
 from uvms_model.chain import (
     joint_point_rates,
     joint_points,
@@ -443,4 +444,13 @@ def registry() -> dict[str, Callable[..., Any]]:
         "uvms_vehicle_rate": _mark(uvms_vehicle_rate, 5, 2),
         "uvms_target": _mark(uvms_target, 2),
         "quintic": _mark(quintic, 7, 3),
+        # the comparison's baselines (numpy, no compiled form: scipy backend only)
+        "uvms_resolve": _plain(uvms_resolve, 19, 5),
+        "uvms_sigma_min": _plain(uvms_sigma_min, 11),
     }
+
+
+def _plain(fn: Callable[..., Any], arity: int, outputs: int = 1) -> Callable[..., Any]:
+    fn.hybrid_arity = (arity, arity)  # type: ignore[attr-defined]
+    fn.hybrid_outputs = outputs  # type: ignore[attr-defined]
+    return fn
