@@ -15,7 +15,8 @@ Every run is recorded on a 10 ms grid and measured alike (:func:`measure`):
   end effector's largest tracking error and the joints' range (largest ``|q|``).
 
 Run ``python -m uvms_model.compare [OUT_DIR]``: prints the gain study and the table,
-and writes ``compare.md``.
+and writes ``compare.md`` and a figure per mission (``|gamma|`` and the vehicle's speed
+of every method); ``make demo`` prints :func:`headline`.
 """
 
 from __future__ import annotations
@@ -31,7 +32,17 @@ import hybrid
 from uvms_model.baselines import sigma_min
 from uvms_model.missions import MISSIONS, run_mission, specs_dir
 
-__all__ = ["BASELINES", "MISSION_PARAMETERS", "Metrics", "baseline_run", "main", "measure"]
+__all__ = [
+    "BASELINES",
+    "HEADLINE",
+    "MISSION_PARAMETERS",
+    "Metrics",
+    "baseline_run",
+    "headline",
+    "main",
+    "measure",
+    "write_figure",
+]
 
 MISSION_PARAMETERS: Mapping[str, Mapping[str, float]] = {
     "uvms_mission_1": {"turns": 1.0, "centre_dy": 0.5},
@@ -202,6 +213,54 @@ def comparison_table(mission: str) -> str:
     return "\n".join(lines)
 
 
+HEADLINE: Mapping[str, tuple[int, Mapping[str, float]]] = {
+    "pseudoinverse": (1, {}),
+    "task priority + manipulability (k_null 0.5)": (4, {"k_null": 0.5}),
+}
+"""The baselines of the demo's headline, beside the paper's strategy."""
+
+
+def headline(mission: str = "uvms_mission_2") -> str:
+    """The demo's headline: the strategy against two baselines on ``mission`` (a table)."""
+    geometry = _geometry(_baseline(mission, {}))
+    strategy = run_mission(mission, rtol=1e-8, atol=1e-10, dt=DT)
+    lines = [HEADER, measure(strategy.run, geometry).row("the paper's strategy")]
+    for label, (code, overrides) in HEADLINE.items():
+        lines.append(measure(baseline_run(mission, code, overrides), geometry).row(label))
+    return "\n".join(lines)
+
+
+def write_figure(mission: str, path: Path) -> Path:
+    """``|gamma|`` and the vehicle's speed over time: the strategy and every baseline (first gain)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from hybrid.export.atomic import atomic_write
+
+    runs = {"the paper's strategy": run_mission(mission, rtol=1e-8, atol=1e-10, dt=DT).run}
+    for label, (code, gain, values) in BASELINES.items():
+        overrides = {gain: values[0]} if values else {}
+        name = f"{label} ({gain} {values[0]:g})" if values else label
+        runs[name] = baseline_run(mission, code, overrides)
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
+    for name, run in runs.items():
+        style = {"color": "k", "lw": 2} if name.startswith("the paper") else {"lw": 1}
+        ax1.plot(run.t, run["gamma"], label=name, **style)
+        ax2.plot(run.t, np.hypot(run["x_rate"], run["y_rate"]), **style)
+    ax1.axhline(0.65, color="0.5", ls=":", lw=1)
+    ax1.set_ylabel("|gamma|")
+    ax1.legend(fontsize=7, ncol=2)
+    ax2.set_ylabel("vehicle speed [m/s]")
+    ax2.set_xlabel("t [s]")
+    ax1.set_title(f"{mission}: the paper's strategy against the classical resolutions", fontsize=9)
+    with atomic_write(path) as handle:
+        fig.savefig(handle, format="png", dpi=100)
+    plt.close(fig)
+    return path
+
+
 def main(argv: list[str] | None = None) -> int:
     """Print the gain study and the tables of both missions; write ``compare.md``."""
     args = sys.argv[1:] if argv is None else argv
@@ -214,6 +273,7 @@ def main(argv: list[str] | None = None) -> int:
         table = comparison_table(mission)
         print(f"== {mission} ==\n{table}\n")
         parts.append(f"### {mission}\n\n{table}\n")
+        print(f"figure: {write_figure(mission, out / f'{mission}_compare.png')}")
     (out / "compare.md").write_text("\n".join(parts))
     print(f"written: {out / 'compare.md'}")
     return 0

@@ -8,7 +8,8 @@ elsewhere in the package (forward kinematics and the columns of N in
 :mod:`uvms_model.chain`, the quintic law in :mod:`uvms_model.quintic`, the FM in
 :mod:`uvms_model.functional_machine`); only the 3 x 3 solve has a fast scalar form
 here (Cramer's rule) beside the numpy reference (:func:`uvms_model.chain.solve_partition`),
-and the tests compare the two.
+and the tests compare the two. ``uvms_resolve`` and ``uvms_sigma_min`` (the comparison's
+baselines, :mod:`uvms_model.baselines`) are numpy functions with no compiled form.
 
 The kinematic solves are Davies' method: the network matrix
 :math:`N = [\$_x\ \$_y\ \$_\phi\ \$_{q1}\ \$_{q2}\ \$_{q3}\ -\$_{xe}\ -\$_{ye}\ -\$_{\phi e}]`
@@ -22,8 +23,8 @@ Examples
 0.0
 >>> sorted(registry())  # doctest: +NORMALIZE_WHITESPACE
 ['quintic', 'uvms_ee', 'uvms_fm', 'uvms_fm_rate', 'uvms_fm_raw', 'uvms_path', 'uvms_q0',
- 'uvms_q0_acc', 'uvms_state3', 'uvms_state3_acc', 'uvms_target', 'uvms_vehicle',
- 'uvms_vehicle_rate']
+ 'uvms_q0_acc', 'uvms_resolve', 'uvms_sigma_min', 'uvms_state3', 'uvms_state3_acc',
+ 'uvms_target', 'uvms_vehicle', 'uvms_vehicle_rate']
 """
 
 from __future__ import annotations

@@ -10,6 +10,7 @@ differences of :func:`uvms_model.functions.uvms_ee`), numpy's least-squares solv
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +18,7 @@ import pytest
 
 import hybrid
 from uvms_model.baselines import METHODS, jacobian, resolve
-from uvms_model.compare import MISSION_PARAMETERS, baseline_run, main, measure
+from uvms_model.compare import MISSION_PARAMETERS, baseline_run, headline, main, measure
 from uvms_model.functions import uvms_ee
 from uvms_model.missions import ABLATIONS, run_mission, specs_dir
 
@@ -134,8 +135,25 @@ def test_measure_on_a_run_and_the_table(tmp_path: Path, pinv_run: hybrid.Run) ->
 
 
 @pytest.mark.fuzz
-def test_the_comparison_writes_its_table(tmp_path: Path) -> None:
+@pytest.mark.skipif(
+    os.environ.get("HYBRID_FUZZ", "0") in ("", "0"),
+    reason="the whole comparison (about a minute) runs under make fuzz (HYBRID_FUZZ=1)",
+)
+def test_the_comparison_writes_its_table_and_figures(tmp_path: Path) -> None:
     assert main([str(tmp_path)]) == 0
     text = (tmp_path / "compare.md").read_text()
     assert text.count("| the paper's strategy |") == 2
     assert text.count("| task priority + manipulability (k_null 1) |") == 2
+    for mission in ("uvms_mission_1", "uvms_mission_2"):
+        assert (tmp_path / f"{mission}_compare.png").stat().st_size > 10_000
+
+
+def test_the_demos_headline() -> None:
+    table = headline()
+    rows = [line for line in table.splitlines() if line.startswith("| ") and "---" not in line]
+    assert [row.split(" | ")[0] for row in rows[1:]] == [
+        "| the paper's strategy",
+        "| pseudoinverse",
+        "| task priority + manipulability (k_null 0.5)",
+    ]
+    assert all("t_end at 60.0 s" in row for row in rows[1:])
