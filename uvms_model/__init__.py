@@ -7,8 +7,8 @@ kinematics, network matrix, Davies' partition solve of rates and accelerations),
 (transition law, eq. 9), :mod:`~uvms_model.paths` (mission paths),
 :mod:`~uvms_model.metrics` (smoothness and effort measures); :mod:`~uvms_model.functions`
 registers what the specs call; :mod:`~uvms_model.missions`,
-:mod:`~uvms_model.robustness`, :mod:`~uvms_model.figures` and :mod:`~uvms_model.demo`
-run and show the case study.
+:mod:`~uvms_model.robustness`, :mod:`~uvms_model.mechanism`, :mod:`~uvms_model.figures`
+and :mod:`~uvms_model.demo` run and show the case study.
 """
 
 from uvms_model.chain import (

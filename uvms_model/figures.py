@@ -4,7 +4,8 @@ For each mission five figures: the XY plane with the end-effector path, the vehi
 path and snapshots of the arm (the left panels of Figs. 7 and 10); gamma and alpha with
 gamma_tol, gamma_accel and gamma_max and the active location of the automaton shaded
 (the right panels of Figs. 7 and 10); vehicle x, y, phi and their rates (Figs. 8 and
-11); joints q1..q3 (wrapped to (-pi, pi]) and their rates (Figs. 9 and 12); the
+11); joints q1..q3 (unwrapped, with the lines at -pi and pi that the tool-heading law
+keeps them within) and their rates (Figs. 9 and 12); the
 functional machine: its output s, the bias theta_p and the polarization state.
 """
 
@@ -61,11 +62,15 @@ def write_figures(result: MissionResult, out_dir: Path, prefix: str) -> list[Pat
     fig = _two_panels(
         plt,
         result,
-        [("q1_wrapped", "q1"), ("q2_wrapped", "q2"), ("q3_wrapped", "q3")],
+        [("q1", "q1"), ("q2", "q2"), ("q3", "q3")],
         [("q1_rate", "q1p"), ("q2_rate", "q2p"), ("q3_rate", "q3p")],
         ("[rad]", "[rad/s]"),
     )
-    fig.suptitle(f"{model}: joint positions (wrapped) and velocities (cf. Figs. 9/12)")
+    for bound in (-np.pi, np.pi):
+        fig.axes[0].axhline(bound, color="0.4", ls=":", lw=1)
+    fig.suptitle(
+        f"{model}: joint positions (unwrapped; dotted: +-pi) and velocities (cf. Figs. 9/12)"
+    )
     paths.append(_save(fig, out_dir / f"{prefix}_joints.png"))
 
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 5), sharex=True)

@@ -8,7 +8,8 @@ elsewhere in the package (forward kinematics and the columns of N in
 :mod:`uvms_model.chain`, the quintic law in :mod:`uvms_model.quintic`, the FM in
 :mod:`uvms_model.functional_machine`); only the 3 x 3 solve has a fast scalar form
 here (Cramer's rule) beside the numpy reference (:func:`uvms_model.chain.solve_partition`),
-and the tests compare the two.
+and the tests compare the two. ``uvms_resolve`` and ``uvms_sigma_min`` (the comparison's
+baselines, :mod:`uvms_model.baselines`) are numpy functions with no compiled form.
 
 The kinematic solves are Davies' method: the network matrix
 :math:`N = [\$_x\ \$_y\ \$_\phi\ \$_{q1}\ \$_{q2}\ \$_{q3}\ -\$_{xe}\ -\$_{ye}\ -\$_{\phi e}]`
@@ -22,8 +23,8 @@ Examples
 0.0
 >>> sorted(registry())  # doctest: +NORMALIZE_WHITESPACE
 ['quintic', 'uvms_ee', 'uvms_fm', 'uvms_fm_rate', 'uvms_fm_raw', 'uvms_path', 'uvms_q0',
- 'uvms_q0_acc', 'uvms_state3', 'uvms_state3_acc', 'uvms_target', 'uvms_vehicle',
- 'uvms_vehicle_rate']
+ 'uvms_q0_acc', 'uvms_resolve', 'uvms_sigma_min', 'uvms_state3', 'uvms_state3_acc',
+ 'uvms_target', 'uvms_vehicle', 'uvms_vehicle_rate']
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from collections.abc import Callable
 from functools import lru_cache
 from typing import Any
 
+from uvms_model.baselines import uvms_resolve, uvms_sigma_min
 from uvms_model.chain import (
     joint_point_rates,
     joint_points,
@@ -443,4 +445,13 @@ def registry() -> dict[str, Callable[..., Any]]:
         "uvms_vehicle_rate": _mark(uvms_vehicle_rate, 5, 2),
         "uvms_target": _mark(uvms_target, 2),
         "quintic": _mark(quintic, 7, 3),
+        # the comparison's baselines (numpy, no compiled form: scipy backend only)
+        "uvms_resolve": _plain(uvms_resolve, 19, 5),
+        "uvms_sigma_min": _plain(uvms_sigma_min, 11),
     }
+
+
+def _plain(fn: Callable[..., Any], arity: int, outputs: int = 1) -> Callable[..., Any]:
+    fn.hybrid_arity = (arity, arity)  # type: ignore[attr-defined]
+    fn.hybrid_outputs = outputs  # type: ignore[attr-defined]
+    return fn

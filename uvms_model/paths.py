@@ -38,8 +38,9 @@ so the commanded velocity and acceleration start and end at zero. Velocity
 :math:`\dot p = [\rho'(\theta)(\cos\theta, \sin\theta) + \rho(\theta)(-\sin\theta,
 \cos\theta)]\,\dot\theta`. Outside :math:`[t_0, t_0 + T]` the path holds its end point.
 
-Heading (our choice): the end-effector heading is held constant at ``heading``
-(rate 0); pass the initial :math:`\phi_e` of the chain.
+Heading (our choice): ``heading + follow (theta - theta_s)``, the start heading turned by
+the fraction ``follow`` of the path's polar progress (0: held, 1: a constant angle to the
+radius); the specs add to it the lean of a wrist regulator (docs/uvms.md).
 """
 
 from __future__ import annotations

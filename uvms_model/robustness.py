@@ -4,7 +4,7 @@ Two studies, both from the specs:
 
 * :func:`one_at_a_time`: every parameter docs/uvms.md marks as ours
   (:data:`~uvms_model.missions.OWN_PARAMETERS`) at 0.9 and 1.1 times its value, and each
-  initial joint angle moved by -0.1 and +0.1 rad, one at a time.
+  initial joint angle moved by -0.1, -0.05, +0.05 and +0.1 rad, one at a time.
 * :func:`robustness_map`: a grid over two parameters, the outcome of each point
   classified by :func:`classify`; :func:`write_map_figure` draws it.
 
@@ -19,9 +19,10 @@ Run ``python -m uvms_model.robustness [OUT_DIR]`` to write the map of mission 2
 
 Examples
 --------
->>> outcome = Outcome("uvms_mission_2", "t_end", 2, 0.6, 0.25)
->>> classify(outcome)
+>>> classify(Outcome("uvms_mission_2", "t_end", 0.6, 0.25, epsilon=1, beta=1))
 'paper'
+>>> classify(Outcome("uvms_mission_2", "t_end", 0.6, 0.25, epsilon=1))
+'no beta'
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ from uvms_model.missions import (
     INITIAL_POSTURE,
     OWN_PARAMETERS,
     UVMS_EDGES,
+    MissionResult,
     derived_start,
     run_mission,
     specs_dir,
@@ -45,7 +47,7 @@ from uvms_model.missions import (
 
 __all__ = [
     "OUTCOME_DT",
-    "POSTURE_STEP",
+    "POSTURE_STEPS",
     "Outcome",
     "RobustnessMap",
     "Variant",
@@ -54,39 +56,61 @@ __all__ = [
     "one_at_a_time",
     "outcome_of",
     "robustness_map",
+    "summarise",
     "write_map_figure",
 ]
 
-POSTURE_STEP = 0.1
-"""Perturbation of each initial joint angle, rad (10% of an angle depends on its zero)."""
+POSTURE_STEPS = (-0.1, -0.05, 0.05, 0.1)
+"""Perturbations of each initial joint angle, rad (10% of an angle depends on its zero)."""
 
 M1_MIN_GAMMA = 0.65
 """Mission 1 keeps the paper's outcome: no switch and min |gamma| above gamma_tol."""
 M2_MIN_GAMMA = 0.5
-"""Mission 2 keeps the paper's outcome: one to three switches, min |gamma| above this."""
+"""Mission 2 keeps the paper's outcome: epsilon then beta, and min |gamma| above this."""
 OUTCOME_DT = 0.1
 """Recording grid of :func:`outcome_of`, s."""
 
 
 @dataclass(frozen=True)
 class Outcome:
-    """What one run of a mission did."""
+    """What one run of a mission did.
+
+    The automaton's switches are counted per edge. Their order needs no record: beta
+    leaves q1 only, which epsilon (from q0) and epsilon_again (from q2) enter, so
+    ``epsilon == 1, beta == 1, epsilon_again == 0`` is the sequence epsilon, beta and
+    nothing else.
+    """
 
     mission: str
     cause: str
-    switches: int
     min_abs_gamma: float
     max_vehicle_speed: float
     dexterity: float = math.nan
     """Robustness of mission 2's requirement ``always: gamma >= 0.5`` (NaN without it)."""
+    epsilon: int = 0
+    """Jumps q0 -> q1 (into kinematic state 3)."""
+    beta: int = 0
+    """Jumps q1 -> q2 (gamma back above the unit value)."""
+    epsilon_again: int = 0
+    """Jumps q2 -> q1 (kinematic state 3 entered again)."""
+
+    @property
+    def switches(self) -> int:
+        """All changes of kinematic state."""
+        return self.epsilon + self.beta + self.epsilon_again
 
 
 def classify(outcome: Outcome) -> str:
-    """``"paper"`` if the run keeps the paper's outcome for its mission, else why not.
+    """``"paper"`` if the run has the paper's outcome for its mission, strictly, else why not.
 
-    Mission 1 (paper: the FM alone is enough): the run reaches 60 s without a switch
-    and ``min |gamma| > 0.65``. Mission 2 (paper: gamma falls below gamma_tol and the
-    automaton switches): 60 s, one to three switches, ``min |gamma| > 0.5``.
+    Mission 1 (paper: "gamma reaches values above gamma_tol, hence the functional
+    machine is enough"): the run reaches its end without a switch and
+    ``min |gamma| > gamma_tol = 0.65``. Mission 2 (paper: gamma falls below gamma_tol,
+    the switch to kinematic state 3, "where the vehicle is secondary until gamma takes
+    the unit value again"): the run reaches its end after exactly one epsilon and then
+    one beta (back at the unit value before the end), no re-entry into kinematic state
+    3, and ``min |gamma| > 0.5``. A run that ends still in kinematic state 3 (epsilon
+    without beta) is not the paper's outcome.
 
     Parameters
     ----------
@@ -96,8 +120,16 @@ def classify(outcome: Outcome) -> str:
     Returns
     -------
     str
-        ``"paper"``, ``"ended <cause>"``, ``"no switch"``, ``"switched"``,
-        ``"<n> switches"`` or ``"low gamma"``.
+        ``"paper"``, ``"ended <cause>"``, ``"switched"`` (mission 1), ``"no switch"``,
+        ``"no beta"``, ``"re-entered"`` (mission 2) or ``"low gamma"``.
+
+    Examples
+    --------
+    >>> classify(Outcome("uvms_mission_1", "t_end", 0.79, 0.2))
+    'paper'
+    >>> classify(Outcome("uvms_mission_2", "t_end", 0.57, 0.25, epsilon=1, beta=1,
+    ...                  epsilon_again=1))
+    're-entered'
     """
     if outcome.cause != "t_end":
         return f"ended {outcome.cause}"
@@ -107,8 +139,10 @@ def classify(outcome: Outcome) -> str:
         return "paper" if outcome.min_abs_gamma > M1_MIN_GAMMA else "low gamma"
     if outcome.switches == 0:
         return "no switch"
-    if outcome.switches > 3:
-        return f"{outcome.switches} switches"
+    if outcome.beta == 0:
+        return "no beta"
+    if (outcome.epsilon, outcome.beta, outcome.epsilon_again) != (1, 1, 0):
+        return "re-entered"
     return "paper" if outcome.min_abs_gamma > M2_MIN_GAMMA else "low gamma"
 
 
@@ -141,12 +175,32 @@ def outcome_of(
         The run's end, switches, smallest ``|gamma|`` and top vehicle speed.
     """
     result = run_mission(mission, parameters, initial=initial, rtol=rtol, atol=atol, dt=dt)
+    return summarise(result)
+
+
+def summarise(result: MissionResult) -> Outcome:
+    """The :class:`Outcome` of a simulated mission.
+
+    Parameters
+    ----------
+    result : MissionResult
+        A run of :func:`uvms_model.missions.run_mission`.
+
+    Returns
+    -------
+    Outcome
+        Its end, smallest ``|gamma|`` (on its recording grid), top vehicle speed and
+        switches per edge.
+    """
+    edges = [edge for _, edge in result.switches]
     return Outcome(
-        mission,
+        result.name,
         result.run.termination.cause,
-        len(result.switches),
         result.min_abs_gamma,
         result.max_vehicle_speed,
+        epsilon=edges.count("epsilon"),
+        beta=edges.count("beta"),
+        epsilon_again=edges.count("epsilon_again"),
     )
 
 
@@ -183,12 +237,13 @@ def one_at_a_time(
     posture: Sequence[str] = INITIAL_POSTURE,
     *,
     factor: float = 0.1,
+    steps: Sequence[float] = POSTURE_STEPS,
     base: Mapping[str, float] | None = None,
     rtol: float = 1e-7,
     atol: float = 1e-9,
     workers: int = 1,
 ) -> list[Variant]:
-    """Each own parameter at ``1 -/+ factor`` times its value, each joint at -/+0.1 rad.
+    """Each own parameter at ``1 -/+ factor`` times its value, each joint moved by each step.
 
     Parameters
     ----------
@@ -197,9 +252,11 @@ def one_at_a_time(
     parameters : sequence of str
         Qualified parameter names to perturb.
     posture : sequence of str
-        Initial joint angles to perturb by :data:`POSTURE_STEP`.
+        Initial joint angles to perturb by each of ``steps``.
     factor : float
         Relative perturbation of the parameters.
+    steps : sequence of float
+        Steps of each initial joint angle, rad.
     base : mapping, optional
         Parameter overrides every variant starts from (default: the specs' values).
     rtol, atol : float
@@ -210,7 +267,7 @@ def one_at_a_time(
     Returns
     -------
     list of Variant
-        Two per parameter and two per joint, in that order.
+        Two per parameter and one per step of each joint, in that order.
     """
     base = dict(base or {})
     model = hybrid.load(specs_dir() / f"{mission}.yaml", parameters=base)
@@ -223,7 +280,7 @@ def one_at_a_time(
             labels.append(f"{name} x{f:g}")
             points.append({**nominal, name: nominal[name] * f})
     for state in posture:
-        for step in (-POSTURE_STEP, POSTURE_STEP):
+        for step in steps:
             labels.append(f"{state} {step:+g} rad")
             points.append({**nominal, f"init.{state}": nominal[f"init.{state}"] + step})
     # the path starts at the end effector of the initial posture: its three parameters
@@ -316,13 +373,14 @@ def _outcome(mission: str, row: Mapping[str, Any], switching: Sequence[str]) -> 
     if row["cause"] in ("error", "timeout"):
         raise RuntimeError(f"{mission} at {row}: {row['message']}")
     robustness = row.get("dexterity.robustness")
+    counts = {e.rpartition(".")[2]: int(row[f"jumps:{e}"]) for e in switching}
     return Outcome(
         mission,
         str(row["cause"]),
-        int(sum(row[f"jumps:{e}"] for e in switching)),
         float(row["min:gamma"]),
         float(row["max:vehicle_speed"]),
         math.nan if robustness is None else float(robustness),
+        **counts,
     )
 
 
@@ -373,8 +431,8 @@ def write_map_figure(result: RobustnessMap, path: Path) -> Path:
     ax.set_xlabel(result.x_name)
     ax.set_ylabel(result.y_name)
     ax.set_title(
-        f"{result.mission}: switches per run (white: the paper's outcome, red: not; "
-        "x: run ended early)\nstar: our values; dashed box: +-10%",
+        f"{result.mission}: switches per run; white: the paper's outcome (strict),\n"
+        "red: not (1: epsilon without beta; x: ended early); star: ours; box: +-10%",
         fontsize=9,
     )
     with atomic_write(path) as handle:
@@ -400,11 +458,14 @@ def main(argv: list[str] | None = None) -> int:
             )
     grid = robustness_map(
         "uvms_mission_2",
-        "uvms.v_max", [round(0.21 + 0.01 * k, 2) for k in range(13)],
+        "uvms.v_max", [round(0.21 + 0.015 * k, 3) for k in range(13)],
         "polarization.theta_accel", [round(0.65 + 0.05 * k, 2) for k in range(13)],
         workers=2,
     )  # fmt: skip
     path = write_map_figure(grid, out / "uvms_robustness_map.png")
+    verdicts = [classify(o) for row in grid.outcomes for o in row]
+    counts = ", ".join(f"{v} {verdicts.count(v)}" for v in sorted(set(verdicts)))
+    print(f"map of {grid.mission}: {counts} (of {len(verdicts)})")
     print(f"figure: {path}")
     return 0
 

@@ -8,8 +8,9 @@ position, velocity and acceleration and ends at rest at alpha_j p_i), the
 definitions of gamma (eq. 4, an absolute rate) and of the polarization FSM (Fig. 4),
 and finite differences for the closed-form accelerations.
 
-The missions are recorded on a 2 ms grid (``DT``): the smoothness figure is the
-largest change of a rate within 20 ms, which a step or a corner cannot hide from.
+The missions are recorded on a 2 ms grid (``DT``). Continuity (every acceleration the
+same just before and after every jump, to 1e-9) and the actuator budget (peak joint
+and vehicle accelerations, ours) are separate checks.
 """
 
 from __future__ import annotations
@@ -26,18 +27,19 @@ from uvms_model.missions import (
     ABLATIONS,
     ACCELERATION_SIGNALS,
     ALWAYS_ON,
+    JOINT_ACCELERATION_BUDGET,
     RATE_SIGNALS,
+    VEHICLE_ACCELERATION_BUDGET,
     MissionResult,
     run_mission,
     specs_dir,
 )
+from uvms_model.robustness import classify, summarise
 
 DT = 0.002
 """Recording grid of the smoothness tests, s."""
-RATE_CHANGE_BOUND = 0.02
-"""The issue's bound on the change of any rate within 20 ms (rad/s, m/s)."""
-ACC_STEP_BOUND = 0.01
-"""The issue's bound on an acceleration step at epsilon, beta, epsilon_again (rad/s^2)."""
+ACC_STEP_BOUND = 1e-9
+"""Continuity: the largest step of any acceleration at a jump (rad/s^2, m/s^2)."""
 S_STEP_BOUND = 0.05
 """The issue's bound on the change of the FM output across a polarization switch."""
 
@@ -84,7 +86,7 @@ def test_mission_2_switches_at_gamma_tol_and_back_at_one(mission_2: MissionResul
     params = _uvms_params()
     assert run.termination.cause == "t_end"
     assert [loc for loc, _ in mission_2.visited][:3] == ["q0", "q1", "q2"]
-    assert 1 <= len(mission_2.switches) <= 3
+    assert [edge for _, edge in mission_2.switches] == ["epsilon", "beta"]
     epsilon = next(j for j in run.jumps if j.edge == "uvms.epsilon")
     beta = next(j for j in run.jumps if j.edge == "uvms.beta")
     # epsilon fires exactly when |gamma| falls to gamma_tol, beta when it is back at 1
@@ -93,6 +95,22 @@ def test_mission_2_switches_at_gamma_tol_and_back_at_one(mission_2: MissionResul
     assert epsilon.t < beta.t
     # the dip below gamma_tol (the joint laws must brake the elbow smoothly) stays bounded
     assert mission_2.min_abs_gamma > 0.5
+
+
+def test_both_missions_have_the_papers_outcome_strictly_at_the_nominal_point(
+    mission_1: MissionResult, mission_2: MissionResult
+) -> None:
+    """Mission 1: no switch, min |gamma| > gamma_tol. Mission 2: epsilon at gamma_tol, then
+    beta (gamma back at the unit value) before the end, no re-entry, min |gamma| > 0.5."""
+    one, two = summarise(mission_1), summarise(mission_2)
+    assert (one.cause, one.switches) == ("t_end", 0)
+    assert one.min_abs_gamma > _uvms_params()["gamma_tol"]
+    assert (two.cause, two.epsilon, two.beta, two.epsilon_again) == ("t_end", 1, 1, 0)
+    assert two.min_abs_gamma > 0.5
+    assert classify(one) == classify(two) == "paper"
+    # beta is not the last instant: the mission ends in q2 (or back in q0) after it
+    assert mission_2.switches[-1][0] < 60.0 - 1.0
+    assert mission_2.visited[-1][0] in ("q2", "q0")
 
 
 def test_gamma_is_the_absolute_rate_of_eq_4(mission_2: MissionResult) -> None:
@@ -105,41 +123,50 @@ def test_gamma_is_the_absolute_rate_of_eq_4(mission_2: MissionResult) -> None:
 
 
 @pytest.mark.parametrize("which", ["mission_1", "mission_2"])
-def test_no_rate_changes_by_more_than_the_bound_within_20_ms(
+def test_accelerations_are_continuous_at_every_jump(
     which: str, request: pytest.FixtureRequest
 ) -> None:
+    """Continuity: at every jump (the automaton's switches epsilon, beta, at_rest and the
+    polarization switches) every joint and vehicle acceleration, in closed form, is the
+    same just before and just after, to 1e-9. Eq. 9's laws start from the acceleration
+    at the switch, the bias's quintic from its own, and the Davies solve is unique, so
+    the same primary accelerations give the same secondary ones."""
     result: MissionResult = request.getfixturevalue(which)
-    # no vehicle lag in the model: the vehicle's velocity is the algebraic law of eq. 8
-    assert not {"u", "w"} & set(result.model.state_names)
-    worst, name = result.rate_change
-    assert worst <= RATE_CHANGE_BOUND, f"{name} changes by {worst:.4f} within 20 ms"
-    assert result.max_tracking_error < 1e-3
-
-
-def test_mission_2_rates_stay_within_the_bound_around_every_switch(
-    mission_2: MissionResult,
-) -> None:
-    run = mission_2.run
-    for t_switch, _ in mission_2.switches:
-        near = (run.t >= t_switch - 1.0) & (run.t <= t_switch + 2.0)
-        for c in RATE_SIGNALS:
-            change = windowed_change(run.t[near], run[c][near], 0.02)
-            assert change <= RATE_CHANGE_BOUND, (c, t_switch, change)
+    run = result.run
+    assert run.jumps
+    for c in ACCELERATION_SIGNALS:
+        for (t, step), jump in zip(jump_steps(run.t, run.j, run[c]), run.jumps, strict=True):
+            assert step <= ACC_STEP_BOUND, (c, jump.edge, t, step)
+    assert result.jump_acceleration_step <= ACC_STEP_BOUND
+    edges = {jump.edge.split(".")[-1] for jump in run.jumps}
+    assert {"need_motion", "recovered"} <= edges
+    if which == "mission_2":
+        assert {"epsilon", "beta"} <= edges
 
 
 @pytest.mark.parametrize("which", ["mission_1", "mission_2"])
-def test_accelerations_are_continuous_at_the_switches(
-    which: str, request: pytest.FixtureRequest
-) -> None:
+def test_peak_accelerations_within_our_budget(which: str, request: pytest.FixtureRequest) -> None:
+    """The actuator budget (ours, apart from continuity): peak |q''| of every joint within
+    1 rad/s^2, peak |v'| of the vehicle within 0.5 m/s^2. The peaks are read from the
+    closed-form accelerations and checked against differences of the rates (2 ms grid)."""
     result: MissionResult = request.getfixturevalue(which)
-    steps = result.acceleration_steps
-    for edge in ("epsilon", "beta", "epsilon_again", "at_rest"):
-        assert steps.get(edge, 0.0) <= ACC_STEP_BOUND
-    # and at the polarization switches: the bias moves along a quintic (C2)
-    for edge in ("need_motion", "recovered", "relapse"):
-        assert steps.get(edge, 0.0) <= ACC_STEP_BOUND
-    if which == "mission_2":
-        assert {"epsilon", "beta"} <= set(steps)
+    run = result.run
+    # no vehicle lag in the model: the vehicle's velocity is the algebraic law of eq. 8
+    assert not {"u", "w"} & set(result.model.state_names)
+    joint, name = result.peak_joint_acceleration
+    assert joint <= JOINT_ACCELERATION_BUDGET, (name, joint)
+    assert result.peak_vehicle_acceleration <= VEHICLE_ACCELERATION_BUDGET
+    assert result.within_budget
+    step = np.diff(run.t)
+    inside = (step > 0) & (run.j[1:] == run.j[:-1])
+    for q in ("q1", "q2", "q3"):
+        fd = np.abs(np.diff(run[f"{q}_rate"])[inside] / step[inside])
+        assert float(np.max(fd)) <= JOINT_ACCELERATION_BUDGET
+    ax = np.diff(run["x_rate"])[inside] / step[inside]
+    ay = np.diff(run["y_rate"])[inside] / step[inside]
+    peak_fd = float(np.max(np.hypot(ax, ay)))
+    assert peak_fd == pytest.approx(result.peak_vehicle_acceleration, rel=0.02)
+    assert max(joint, result.peak_vehicle_acceleration) > 0.05  # the budget is exercised
 
 
 def test_epsilon_again_is_smooth_too() -> None:
@@ -235,6 +262,40 @@ def test_wrapped_joint_angles_and_the_wrist_at_the_end(
             turns = (run[q] - wrapped) / (2 * math.pi)
             np.testing.assert_allclose(turns, np.round(turns), atol=1e-9)
         assert abs(run["q3_wrapped"][-1]) <= math.pi
+
+
+def test_every_joint_stays_within_pi_over_both_missions(
+    mission_1: MissionResult, mission_2: MissionResult
+) -> None:
+    """The tool-heading law (ours) keeps the arm from winding: every joint angle,
+    unwrapped, stays within (-pi, pi) over both missions, on the 2 ms grid."""
+    for result in (mission_1, mission_2):
+        run = result.run
+        assert run.termination.cause == "t_end"
+        for q in ("q1", "q2", "q3"):
+            assert float(np.max(np.abs(run[q]))) < math.pi, (result.name, q)
+            np.testing.assert_allclose(run[f"{q}_wrapped"], run[q], atol=1e-12)
+
+
+def test_the_tool_heading_is_the_documented_law(mission_2: MissionResult) -> None:
+    """phi + q1 + q2 + q3 (the chain's tool heading) is ee_heading + heading_follow times
+    the path's polar progress 2 pi turns sigma(t / T) (quintic smoothstep) plus the lean,
+    whose rate is wrist_gain (wrist_rest - q3)."""
+    run = mission_2.run
+    p = dict(mission_2.model.components[0].automaton.parameters)  # type: ignore[union-attr]
+    tau = run.t / p["duration"]
+    sigma = 10 * tau**3 - 15 * tau**4 + 6 * tau**5
+    expected = p["ee_heading"] + p["heading_follow"] * 2 * math.pi * p["turns"] * sigma
+    heading = run["phi"] + run["q1"] + run["q2"] + run["q3"]
+    np.testing.assert_allclose(heading, expected + run["lean"], atol=1e-6)
+    # the lean's rate (~0.1 rad/s), by central differences over 4 ms inside each stay
+    # (the recorded grid is the solver's dense output: differences to ~2e-5)
+    t, lean, q3 = run.t, run["lean"], run["q3"]
+    inside = (run.j[2:] == run.j[:-2]) & (t[2:] - t[:-2] > 0)
+    rate = (lean[2:] - lean[:-2])[inside] / (t[2:] - t[:-2])[inside]
+    law = p["wrist_gain"] * (p["wrist_rest"] - q3[1:-1][inside])
+    np.testing.assert_allclose(rate, law, atol=1e-4)
+    assert float(np.max(np.abs(law))) > 0.05  # the regulator acts
 
 
 def test_eq_9_the_vehicle_comes_to_rest_where_beta_found_it(mission_2: MissionResult) -> None:

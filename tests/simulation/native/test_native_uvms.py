@@ -32,7 +32,7 @@ def without_requirements(name: str) -> System:
     return replace(mission, requirements=(), components=parts)
 
 
-@pytest.mark.parametrize(("name", "t_end", "jumps"), [("uvms_mission_1", 40.0, 4), ("uvms_mission_2", 59.0, 7)])
+@pytest.mark.parametrize(("name", "t_end", "jumps"), [("uvms_mission_1", 40.0, 4), ("uvms_mission_2", 59.0, 10)])
 def test_mission_agrees_with_scipy(name: str, t_end: float, jumps: int) -> None:
     mission = without_requirements(name)
     compiled = hybrid.simulate(mission, t_end=t_end, backend="compiled", **TOL)  # type: ignore[arg-type]
