@@ -112,10 +112,10 @@ def test_a_write_that_fails_at_the_end_keeps_the_output_elsewhere(
     out, events = tmp_path / "ball.csv", tmp_path / "ball.json"
     real = trajectory.write_csv
 
-    def full_disk(run: object, path: str | Path, **kwargs: object) -> None:
+    def full_disk(run: object, path: str | Path, *args: object, **kwargs: object) -> None:
         if Path(path) == out:
             raise OSError(errno.ENOSPC, "No space left on device", str(path))
-        real(run, path, **kwargs)  # type: ignore[arg-type]
+        real(run, path, *args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(trajectory, "write_csv", full_disk)
     code = main_in_process("simulate", BALL, "--t-end", "3", "--out", out, "--events", events)

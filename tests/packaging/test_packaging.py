@@ -162,7 +162,7 @@ def test_the_wheel_holds_hybrid_only(artifacts: dict[str, Path]) -> None:
     tops = {n.split("/", 1)[0] for n in names if not n.split("/", 1)[0].endswith(".dist-info")}
     assert tops == {"hybrid"}
     assert "hybrid.functions" not in entry_points
-    assert "hybrid = hybrid.cli:main" in entry_points
+    assert "hybrid = hybrid.cli.main:entry" in entry_points
 
 
 @pytest.mark.parametrize("kind", ["wheel", "sdist"])

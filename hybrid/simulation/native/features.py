@@ -18,7 +18,7 @@ Examples
 >>> refuse_unsupported(as_system(tank))
 Traceback (most recent call last):
 ...
-hybrid.errors.UsageError: input 'u' of tank needs a value, and the compiled backend cannot take inputs given as Python functions: use backend='scipy' with inputs={'u': f}, or compose tank with an automaton that defines 'u'
+hybrid.errors.UsageError: <string>:3:10: input 'u' of tank needs a value, and the compiled backend cannot take inputs given as Python functions: use backend='scipy' with inputs={'u': f}, or compose tank with an automaton that defines 'u'
 
 A free input with a ``range`` is held at its nominal value, as the scipy
 backend holds it (a slot of the run's parameter vector,
