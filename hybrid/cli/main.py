@@ -200,9 +200,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:
         if not _caused_by_interrupt(exc):
             raise
+    _STOPPED[0] = True
     with _no_further_interrupts():
         print(f"hybrid: {said}", file=sys.stderr)
     return EXIT_ABANDONED
+
+
+_STOPPED = [False]
+"""Whether main stopped on a Ctrl-C (set without importing anything)."""
 
 
 def entry() -> int:
@@ -212,6 +217,7 @@ def entry() -> int:
     while the interpreter shuts down would only turn its exit code into death by
     SIGINT, so it is ignored from then on.
     """
+    sys.unraisablehook = _quiet_after_interrupt
     code = main()
     import signal
     import threading
@@ -219,6 +225,18 @@ def entry() -> int:
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     return code
+
+
+def _quiet_after_interrupt(unraisable: Any) -> None:
+    """Python's report of an error in a finalizer, unless a Ctrl-C stopped work half-way.
+
+    A compile stopped by Ctrl-C leaves LLVM handles half-made; their finalizers fail
+    as the process ends ("Exception ignored in ..."), which says nothing to the user.
+    """
+    interrupts = sys.modules.get("hybrid.simulation.interrupts")  # loaded if Ctrl-C was handled
+    seen = interrupts is not None and interrupts.interrupted()
+    if not (_STOPPED[0] or seen):
+        sys.__unraisablehook__(unraisable)
 
 
 def _caused_by_interrupt(exc: BaseException) -> bool:
@@ -310,6 +328,7 @@ def _run(args: argparse.Namespace) -> int:
         print(str(exc) if placed else f"{getattr(args, 'file', 'hybrid')}: {exc}", file=sys.stderr)
         return EXIT_INVALID
     except KeyboardInterrupt as exc:
+        _STOPPED[0] = True
         print(f"hybrid: {str(exc) or 'interrupted'}", file=sys.stderr)
         return EXIT_ABANDONED
     except BrokenPipeError:

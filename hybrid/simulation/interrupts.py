@@ -37,11 +37,24 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
-__all__ = ["ABANDON_HINT", "Interrupts", "immediate", "sigint_watch"]
+__all__ = ["ABANDON_HINT", "Interrupts", "immediate", "interrupted", "note_interrupt", "sigint_watch"]
 
 ABANDON_HINT = "press Ctrl-C again to abandon them"
 
 _ACTIVE: list[Interrupts] = []
+_SEEN: list[bool] = [False]
+
+
+def note_interrupt() -> None:
+    """Record that this process has seen a Ctrl-C (see :func:`interrupted`)."""
+    _SEEN[0] = True
+
+
+def interrupted() -> bool:
+    """Whether this process has seen a Ctrl-C: work it stopped may leave half-made objects
+    (a compile's LLVM handles) whose finalizers fail; the command line then keeps quiet
+    about them as the process ends."""
+    return _SEEN[0]
 
 
 class Interrupts:
@@ -62,6 +75,7 @@ class Interrupts:
     def press(self) -> None:
         """One Ctrl-C: request a stop, or (while writing) warn, then abandon."""
         self.presses += 1
+        note_interrupt()
         if self.in_immediate is not None:
             raise KeyboardInterrupt(f"interrupted while {self.in_immediate}")
         if not self.in_writing:

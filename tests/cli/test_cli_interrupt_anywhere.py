@@ -217,3 +217,21 @@ def test_a_sweep_stopped_at_random_moments_resumes_to_the_uninterrupted_table(
         assert again.returncode in (0, 1), again.stderr
         assert out.read_text() == reference
         assert not out.with_name("out.csv.parts").exists()
+
+
+def test_finalizer_errors_are_reported_until_a_ctrl_c_stopped_work(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A compile stopped half-way leaves LLVM handles whose finalizers fail as the process
+    ends (make fuzz saw 'Exception ignored in ... PassBuilder'): after a Ctrl-C the command
+    keeps quiet about them; before one, Python's report stands."""
+    import hybrid.cli.main as cli_main
+
+    reported: list[object] = []
+    monkeypatch.setattr(sys, "__unraisablehook__", reported.append)
+    monkeypatch.setattr(cli_main, "_STOPPED", [False])
+    cli_main._quiet_after_interrupt("finalizer failed")
+    assert reported == ["finalizer failed"]
+    monkeypatch.setattr(cli_main, "_STOPPED", [True])
+    cli_main._quiet_after_interrupt("finalizer failed again")
+    assert reported == ["finalizer failed"]
