@@ -225,7 +225,9 @@ def test_finalizer_errors_are_reported_until_a_ctrl_c_stopped_work(
     """A compile stopped half-way leaves LLVM handles whose finalizers fail as the process
     ends (make fuzz saw 'Exception ignored in ... PassBuilder'): after a Ctrl-C the command
     keeps quiet about them; before one, Python's report stands."""
-    import hybrid.cli.main as cli_main
+    import importlib
+
+    cli_main = importlib.import_module("hybrid.cli.main")  # hybrid.cli.main is also the function
 
     reported: list[object] = []
     monkeypatch.setattr(sys, "__unraisablehook__", reported.append)
