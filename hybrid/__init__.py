@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from hybrid.campaigns.falsify import Falsification, falsify
     from hybrid.campaigns.sweep import sweep
     from hybrid.campaigns.table import SweepTable
+    from hybrid.reach import ReachResult, reach
     from hybrid.simulation.engine import simulate
     from hybrid.simulation.native.many import Ensemble, simulate_many
     from hybrid.simulation.result import Jump, Run, Termination
@@ -41,6 +42,7 @@ __all__ = [
     "Jump",
     "Position",
     "Range",
+    "ReachResult",
     "Report",
     "Run",
     "SimulationError",
@@ -55,6 +57,7 @@ __all__ = [
     "falsify",
     "load",
     "load_text",
+    "reach",
     "simulate",
     "simulate_many",
     "sweep",
@@ -75,6 +78,8 @@ _LAZY = {
     "falsify": "hybrid.campaigns.falsify",
     "SweepTable": "hybrid.campaigns.table",
     "Falsification": "hybrid.campaigns.falsify",
+    "reach": "hybrid.reach.api",
+    "ReachResult": "hybrid.reach.result",
 }
 _lazy_getattr, _lazy_dir = lazy_attributes(__name__, _LAZY)
 

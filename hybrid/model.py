@@ -109,6 +109,8 @@ class Location:
     invariant_position: Position = field(default_factory=lambda: Position("<spec>"))
     urgent: bool = False
     """No time may pass here: an edge must fire at once on entry, else the run is blocked."""
+    flow_positions: Mapping[str, Position] = field(default_factory=dict)
+    """Where each flow expression starts in the spec (for messages about one flow)."""
 
 
 @dataclass(frozen=True)
@@ -126,6 +128,8 @@ class Edge:
     guard_source: str = "true"
     position: Position = field(default_factory=lambda: Position("<spec>"))
     guard_position: Position = field(default_factory=lambda: Position("<spec>"))
+    reset_positions: Mapping[str, Position] = field(default_factory=dict)
+    """Where each reset expression starts in the spec (for messages about one reset)."""
 
 
 @dataclass(frozen=True)

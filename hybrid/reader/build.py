@@ -91,6 +91,9 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
             position=positions.key(base),
             invariant_position=positions.value((*base, "invariant")),
             urgent=loc.urgent,
+            flow_positions=MappingProxyType(
+                {var: positions.value((*base, "flow", var)) for var in flow}
+            ),
         )
         cycle = find_cycle({**signals, **loc_signals})
         if cycle and not find_cycle(signals):
@@ -308,6 +311,9 @@ def _edges(
                 guard_source=edge.guard,
                 position=positions.value(base),
                 guard_position=positions.value((*base, "guard")),
+                reset_positions=MappingProxyType(
+                    {var: positions.value((*base, "reset", var)) for var in reset}
+                ),
             )
         )
     return edges
