@@ -265,13 +265,13 @@ def _directions(cond: Condition, forms: Forms) -> list[Array]:
 
 
 def _target_steps(direct: list[ReachSet], direction: Array, step: float, t_end: float) -> list[int]:
-    """Step counts to aim at: the first contact's ends, and where the contact goes furthest."""
+    """Step counts to aim at: the ends of the set where the contact goes furthest, then of the first."""
     d = direction[:-1]
     first = min(direct, key=lambda s: s.t[0])
     best = max(direct, key=lambda s: float(np.where(d > 0, s.hi, s.lo) @ d))
     targets = []
-    for s in (first, best):
-        for t in s.t:
+    for s in (best, first):
+        for t in reversed(s.t):
             k = round(min(t, t_end) / step)
             if k >= 1 and k not in targets:
                 targets.append(k)

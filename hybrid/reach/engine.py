@@ -44,7 +44,7 @@ from hybrid.errors import UsageError
 from hybrid.model import Automaton, Edge
 from hybrid.reach.affine import TIME, Condition, Forms, Rows
 from hybrid.reach.boxes import affine_image, meets, meets_many
-from hybrid.reach.flowpipe import flowpipe
+from hybrid.reach.flowpipe import Overflow, flowpipe
 
 __all__ = ["MAX_CLUSTERS", "MAX_FLOWPIPES", "Mode", "ReachSet", "Transition", "explore"]
 
@@ -249,7 +249,18 @@ def _segments(
         kept.extend(zip(c_lo[:count], c_hi[:count], strict=True))
         return count
 
-    flowpipe(mode.a, mode.b, mode.c, forms.u_lo, forms.u_hi, start[0], start[1], step, steps, keep)
+    if not (np.all(np.isfinite(start[0])) and np.all(np.isfinite(start[1]))):
+        raise UsageError(f"the sets entering location '{mode.name}' are not bounded")
+    try:
+        flowpipe(
+            mode.a, mode.b, mode.c, forms.u_lo, forms.u_hi, start[0], start[1], step, steps, keep
+        )
+    except Overflow:
+        norm = float(np.abs(mode.a).sum(axis=1).max()) * step
+        raise UsageError(
+            f"the bounds of location '{mode.name}' overflow at step {step:g} "
+            f"(|A| h = {norm:.3g} in the infinity norm): give a smaller step"
+        ) from None
     return kept
 
 

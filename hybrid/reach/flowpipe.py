@@ -59,12 +59,16 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import expm
 
-__all__ = ["FP_MARGIN", "Flowpipe", "exp_matrices", "flowpipe"]
+__all__ = ["FP_MARGIN", "Flowpipe", "Overflow", "exp_matrices", "flowpipe"]
 
 FP_MARGIN = 1e-10
 """Relative widening of every box and error bound for the rounding of ``expm`` and products."""
 
 Array = NDArray[np.float64]
+
+
+class Overflow(ArithmeticError):
+    """The bounds are not finite numbers (``|A| h`` too large for double precision)."""
 
 
 def exp_matrices(a: Array, h: float) -> tuple[Array, Array, Array]:
@@ -84,7 +88,8 @@ def exp_matrices(a: Array, h: float) -> tuple[Array, Array, Array]:
     big[:n, :n] = a * h
     big[:n, n : 2 * n] = np.eye(n) * h
     big[n : 2 * n, 2 * n :] = np.eye(n) * h
-    e = expm(big)
+    with np.errstate(over="ignore", invalid="ignore"):
+        e = expm(big)
     return e[:n, :n], e[:n, n : 2 * n], e[:n, 2 * n :]
 
 
@@ -161,8 +166,13 @@ def flowpipe(
     abs_a = np.abs(a)
     _, _, phi2_abs = exp_matrices(abs_a, h)
     grow = 1.0 + FP_MARGIN
-    e_in = (abs_a @ phi2_abs) * grow
-    e_omega = (phi2_abs @ np.abs(a @ a)) * grow
+    with np.errstate(over="ignore", invalid="ignore"):
+        e_in = (abs_a @ phi2_abs) * grow
+        e_omega = (phi2_abs @ np.abs(a @ a)) * grow
+    if not (
+        np.all(np.isfinite(e_in)) and np.all(np.isfinite(e_omega)) and np.all(np.isfinite(phi))
+    ):
+        raise Overflow("the error bounds of one step overflow")
     u_c = (u_lo + u_hi) / 2.0
     u_r = (u_hi - u_lo) / 2.0 * grow
     v_c = c + b @ u_c
@@ -204,6 +214,8 @@ def flowpipe(
         if k + 1 - first == chunk or k + 1 == steps:
             block = slice(first, k + 1)
             seg_lo[block], seg_hi[block] = _widen(seg_lo[block], seg_hi[block])
+            if not (np.all(np.isfinite(seg_lo[block])) and np.all(np.isfinite(seg_hi[block]))):
+                raise Overflow("the bounds overflow")
             if keep is not None:
                 kept = keep(first, seg_lo[block], seg_hi[block])
                 if kept < k + 1 - first:
