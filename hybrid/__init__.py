@@ -24,12 +24,12 @@ from hybrid.reader.loader import load, load_text
 from hybrid.version import __version__
 
 if TYPE_CHECKING:
-    from hybrid.analysis.api import check
     from hybrid.analysis.findings import Report
     from hybrid.campaigns.falsify import Falsification, falsify
     from hybrid.campaigns.sweep import sweep
     from hybrid.campaigns.table import SweepTable
     from hybrid.reach import ReachResult, reach
+    from hybrid.reach.check import check
     from hybrid.simulation.engine import simulate
     from hybrid.simulation.native.many import Ensemble, simulate_many
     from hybrid.simulation.result import Jump, Run, Termination
@@ -73,7 +73,7 @@ _LAZY = {
     "simulate_many": "hybrid.simulation.native.many",
     "Ensemble": "hybrid.simulation.native.many",
     "Report": "hybrid.analysis.findings",
-    "check": "hybrid.analysis.api",
+    "check": "hybrid.reach.check",
     "sweep": "hybrid.campaigns.sweep",
     "falsify": "hybrid.campaigns.falsify",
     "SweepTable": "hybrid.campaigns.table",

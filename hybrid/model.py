@@ -167,6 +167,12 @@ class Properties:
     """Rules `hybrid check` does not report for this file (its ``checks: {ignore: [...]}``)."""
     forbidden: tuple[Forbidden, ...] = ()
     """States no run may reach (`properties.forbidden`)."""
+    reach_t_end: float | None = None
+    """The horizon of `hybrid reach` for `hybrid check` (``checks: {reach: {t_end}}``)."""
+    reach_max_jumps: int | None = None
+    """Its jump bound (``checks: {reach: {max_jumps}}``)."""
+    reach_step: float | None = None
+    """Its step (``checks: {reach: {step}}``)."""
 
 
 @dataclass(frozen=True)

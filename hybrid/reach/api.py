@@ -124,6 +124,7 @@ def reach(
         complete=complete,
         seconds=time.process_time() - started,
         file=model.file,
+        source=model,
     )
 
 

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from hybrid.reach.result import ReachResult
     from hybrid.simulation.result import Run
 
-__all__ = ["clip_polygon", "draw"]
+__all__ = ["axis_index", "clip_polygon", "draw"]
 
 Point = tuple[float, float]
 HalfPlane = tuple[tuple[float, float], float]
@@ -45,15 +45,19 @@ def clip_polygon(polygon: list[Point], planes: Sequence[HalfPlane]) -> list[Poin
     return out
 
 
-def _column(result: ReachResult, name: str) -> int:
+def axis_index(variables: Sequence[str], name: str, model: str) -> int:
+    """The column of ``name`` among ``variables`` (``-1`` for the time ``t``), or a UsageError."""
     if name == TIME:
         return -1
-    if name not in result.variables:
+    if name not in variables:
         raise UsageError(
-            f"'{name}' is not a state variable of {result.model} "
-            f"(state: {', '.join(result.variables)}, or t)"
+            f"'{name}' is not a state variable of {model} (state: {', '.join(variables)}, or t)"
         )
-    return result.variables.index(name)
+    return list(variables).index(name)
+
+
+def _column(result: ReachResult, name: str) -> int:
+    return axis_index(result.variables, name, result.model)
 
 
 def draw(result: ReachResult, x: str, y: str, *, ax: Any = None, runs: Sequence[Run] = ()) -> Any:
@@ -78,12 +82,19 @@ def draw(result: ReachResult, x: str, y: str, *, ax: Any = None, runs: Sequence[
         PolyCollection(boxes, facecolors="#9ecae1", edgecolors="#3182bd", linewidths=0.3, alpha=0.6)
     )
     ax.autoscale_view()
+    if not runs and result.source is not None:
+        from hybrid.simulation.engine import simulate
+
+        nominal = simulate(
+            result.source, result.t_end, max_jumps=result.max_jumps, handle_sigint=False
+        )
+        runs = [nominal]
     for run in runs:
         xs = run.t if ix < 0 else run.states[:, ix]
         ys = run.t if iy < 0 else run.states[:, iy]
         ax.plot(xs, ys, color="black", linewidth=0.8)
     for p in result.properties:
-        if p.witness is not None and p.witness not in runs:
+        if p.witness is not None and all(p.witness is not r for r in runs):
             run = p.witness
             xs = run.t if ix < 0 else run.states[:, ix]
             ys = run.t if iy < 0 else run.states[:, iy]

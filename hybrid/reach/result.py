@@ -23,13 +23,14 @@ import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 from numpy.typing import NDArray
 
+from hybrid.compose import System
 from hybrid.errors import Position, UsageError
-from hybrid.model import Forbidden
+from hybrid.model import Automaton, Forbidden
 from hybrid.reach.affine import Condition
 from hybrid.reach.engine import ReachSet
 from hybrid.simulation.result import Run
@@ -94,6 +95,8 @@ class ReachResult:
     complete: bool = True
     seconds: float = 0.0
     file: str = "<spec>"
+    source: Automaton | System | None = field(default=None, repr=False, compare=False)
+    """The model reached (the picture simulates its nominal run)."""
 
     @property
     def verdict(self) -> str:
@@ -129,21 +132,32 @@ class ReachResult:
             "properties": [p.as_dict() for p in self.properties],
         }
 
-    def write_sets(self, path: str | Path) -> None:
-        """Write every set (location, time interval, box hull) as JSON or NPZ, by suffix."""
-        target = Path(path)
-        if target.suffix.lower() == ".npz":
+    def write_sets(self, target: str | Path | BinaryIO, fmt: str | None = None) -> None:
+        """Write every set (location, time interval, box hull) as ``json`` or ``npz``.
+
+        ``target`` is a path (the format from its suffix unless given) or a binary file.
+        """
+        if fmt is None:
+            fmt = (
+                Path(str(target)).suffix.lower().lstrip(".")
+                if isinstance(target, str | Path)
+                else "json"
+            )
+        if fmt not in ("json", "npz"):
+            raise UsageError(f"sets are written as .json or .npz, not '{fmt}'")
+        if isinstance(target, str | Path):
+            with open(target, "wb") as handle:
+                self.write_sets(handle, fmt)
+            return
+        n = len(self.variables)
+        if fmt == "npz":
             np.savez_compressed(
                 target,
                 variables=np.array(self.variables, dtype=str),
                 location=np.array([s.location for s in self.sets], dtype=str),
                 t=np.array([s.t for s in self.sets], dtype=float).reshape(-1, 2),
-                lo=np.array([s.lo for s in self.sets], dtype=float).reshape(
-                    -1, len(self.variables)
-                ),
-                hi=np.array([s.hi for s in self.sets], dtype=float).reshape(
-                    -1, len(self.variables)
-                ),
+                lo=np.array([s.lo for s in self.sets], dtype=float).reshape(-1, n),
+                hi=np.array([s.hi for s in self.sets], dtype=float).reshape(-1, n),
             )
             return
         document = {
@@ -154,11 +168,13 @@ class ReachResult:
                 for s in self.sets
             ],
         }
-        target.write_text(json.dumps(document) + "\n", encoding="utf-8")
+        target.write((json.dumps(document) + "\n").encode("utf-8"))
 
     def plot(self, x: str, y: str, *, ax: Any = None, runs: Sequence[Run] = ()) -> Any:
         """Draw the sets projected on ``(x, y)`` (``t`` allowed), runs over them, the forbidden sets.
 
+        ``runs`` (default: the model's nominal run) are drawn in black, witnesses
+        in red, forbidden cases that read only ``x`` and ``y`` shaded in red.
         Needs matplotlib (the ``plot`` extra). Returns the matplotlib Axes.
         """
         from hybrid.reach.picture import draw

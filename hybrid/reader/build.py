@@ -116,6 +116,13 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
     )
     if spec.checks is not None:
         properties = replace(properties, ignore=tuple(spec.checks.ignore))
+        if spec.checks.reach is not None:
+            properties = replace(
+                properties,
+                reach_t_end=spec.checks.reach.t_end,
+                reach_max_jumps=spec.checks.reach.max_jumps,
+                reach_step=spec.checks.reach.step,
+            )
     ranges = input_ranges(spec, problems)
     locs = list(spec.locations)
     requirements = build_requirements(spec.requirements, positions, scope, locs, problems.items)

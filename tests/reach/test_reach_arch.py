@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support import run_cli
 
 import hybrid
 from hybrid.compose import as_system
@@ -34,12 +35,17 @@ BUILDING = EXTERNAL / "arch" / "building"
 PLATOON = EXTERNAL / "arch" / "platoon"
 
 
+TOPS: dict[Path, Path] = {}
+"""The folder of each import -> its top-level spec file."""
+
+
 def _import(tmp: Path, xml: Path, cfg: Path) -> hybrid.Automaton | hybrid.System | SpecError:
     try:
         result = import_spaceex(xml, cfg)
         tmp.mkdir(parents=True, exist_ok=True)
         for name, text in result.files.items():
             (tmp / name).write_text(text)
+        TOPS[tmp] = tmp / result.top
         return hybrid.load(tmp / result.top)
     except SpecError as exc:  # the importer refuses it, or writes a spec that does not load
         return exc
@@ -134,6 +140,20 @@ def test_building_bdu02_is_refuted_at_the_end_of_the_horizon() -> None:
         handle_sigint=False,
     )
     assert replay.t[-1] == 20.0 and _x25(replay)[-1] < -0.00078
+
+
+@_skip("BDS01")
+@_skip("BDU01")
+def test_check_is_green_on_bds01_and_red_with_a_witness_on_bdu01() -> None:
+    safe = run_cli("check", TOPS[_TMP / "BDS01"], "--reach-t-end", "20", "--reach-max-jumps", "1")
+    assert safe.returncode == 0, safe.stdout + safe.stderr
+    assert "property-" not in safe.stdout
+    unsafe = run_cli("check", TOPS[_TMP / "BDU01"], "--reach-t-end", "20", "--reach-max-jumps", "1")
+    assert unsafe.returncode == 1, unsafe.stdout + unsafe.stderr
+    assert (
+        "error property-violated: forbidden state 'x25 >= 0.004' is reached at t = "
+        in unsafe.stdout
+    )
 
 
 @_skip("PLAD01")

@@ -151,6 +151,7 @@ def test_reach_accepts_the_affine_models() -> None:
     assert any(n.startswith("circle") for n in names)
 
 
+@pytest.mark.fuzz
 @pytest.mark.parametrize(("name", "model"), ACCEPTED, ids=[n for n, _ in ACCEPTED])
 def test_every_simulated_state_is_in_a_set(
     name: str, model: hybrid.Automaton | hybrid.System
