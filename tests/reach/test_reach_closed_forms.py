@@ -9,9 +9,9 @@
   hull at ``t`` is ``R(t) c +- |R(t)| r`` (the hull of a rotated box), sampled
   densely inside each segment.
 
-The stated factors: a set is at most 1.05 times as wide as the exact hull over
-its time interval (heater, step 0.01) and 1.10 (rotation, step 0.01, where the
-hull of a rotating box over a segment is itself wider than at its ends).
+The stated factor: a set is at most 1.01 times as wide as the exact hull over
+its time interval, at step 0.01 (measured: 1.0036 for the heater without
+inputs, 1.0070 with them, 1.0006 for the rotation over a full turn).
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ def test_heater_sets_hold_the_exact_hull_and_are_tight(ulo: float, uhi: float) -
         low = min(_heater_exact(10.0, ulo, t) for t in (t0, t1))
         high = max(_heater_exact(12.0, uhi, t) for t in (t0, t1))
         assert s.lo[0] <= low and s.hi[0] >= high, (s.t, s.lo, s.hi, ends)
-        assert s.hi[0] - s.lo[0] <= 1.05 * (high - low)
+        assert s.hi[0] - s.lo[0] <= 1.01 * (high - low)
 
 
 def test_heater_step_points_are_exact_without_inputs() -> None:
@@ -107,7 +107,7 @@ def test_rotation_sets_hold_the_rotating_box_and_are_tight() -> None:
         high = np.max([hi for _, hi in samples], axis=0)
         assert np.all(s.lo <= low) and np.all(s.hi >= high), (s.t, s.lo, low, s.hi, high)
         worst = max(worst, float(np.max((s.hi - s.lo) / (high - low))))
-    assert worst <= 1.10
+    assert worst <= 1.01
 
 
 def test_exp_matrices_match_their_series() -> None:
