@@ -107,7 +107,9 @@ def reach(
         raise UsageError(f"max_jumps must be an integer >= 0, got {max_jumps!r}")
     started = time.process_time()
     forms = Forms(model)
-    entries = [(e, _condition(forms, e)) for e in model.properties.forbidden]
+    entries = [
+        (e, _condition(forms, e, forms.system.initial_mode)) for e in model.properties.forbidden
+    ]
     sets, complete = explore(model, t_end=t_end, max_jumps=max_jumps, step=step, forms=forms)
     results = [
         _decide(model, forms, entry, cond, sets, complete, t_end, max_jumps, step, witness)
@@ -128,8 +130,11 @@ def reach(
     )
 
 
-def _condition(forms: Forms, entry: Forbidden) -> Condition:
-    """The entry's condition over the reach vector (``true`` without ``when``)."""
+def _condition(forms: Forms, entry: Forbidden, mode: tuple[str, ...]) -> Condition:
+    """The entry's condition in ``mode`` over the reach vector (``true`` without ``when``).
+
+    Signals are read as ``mode``'s locations define them (a location may override one).
+    """
     n = len(forms.variables)
     if entry.when is None:
         return (Rows(np.zeros((0, n)), np.zeros(0)),)
@@ -139,7 +144,6 @@ def _condition(forms: Forms, entry: Forbidden) -> Condition:
         if name in names:
             comp = names.index(name)
             break
-    mode = forms.system.initial_mode
     what = f"the forbidden set '{entry.text()}'"
     return forms.condition(entry.when, comp, mode, entry.position, what)
 
@@ -174,15 +178,19 @@ def _decide(
     step: float,
     witness: bool,
 ) -> PropertyResult:
-    cut = _within(cond, forms, t_end)
-    chosen = [s for s in sets if _matches(forms, entry, s.mode)]
-    contacts: list[ReachSet] = []
-    if chosen:
+    by_mode: dict[tuple[str, ...], list[ReachSet]] = {}
+    for s in sets:
+        if _matches(forms, entry, s.mode):
+            by_mode.setdefault(s.mode, []).append(s)
+    hits: set[int] = set()
+    for mode, chosen in by_mode.items():
+        cut = _within(_condition(forms, entry, mode), forms, t_end)
         times = np.array([s.t for s in chosen])
         lo = np.column_stack([np.array([s.lo for s in chosen]), times[:, 0]])
         hi = np.column_stack([np.array([s.hi for s in chosen]), times[:, 1]])
         ok = meets_many(lo, hi, cut)[2]
-        contacts = [s for s, hit in zip(chosen, ok.tolist(), strict=True) if hit]
+        hits.update(id(s) for s, hit in zip(chosen, ok.tolist(), strict=True) if hit)
+    contacts = [s for s in sets if id(s) in hits]
     name = entry.text()
     horizon = f"within t <= {t_end:g} and {max_jumps} jumps"
     if not contacts and complete:
@@ -191,7 +199,10 @@ def _decide(
     first = min(s.t[0] for s in contacts) if contacts else None
     reads_inputs = entry.when is not None and bool(ir.names_in(entry.when, ir.INPUT))
     if witness and contacts and not reads_inputs:
-        found = _witness(model, forms, entry, cond, contacts, t_end, max_jumps, step)
+        conditions = {
+            chosen[0].location: _condition(forms, entry, mode) for mode, chosen in by_mode.items()
+        }
+        found = _witness(model, forms, conditions, cond, contacts, t_end, max_jumps, step)
         if found is not None:
             run, at, candidate = found
             return PropertyResult(
@@ -219,7 +230,7 @@ def _decide(
 def _witness(
     model: Automaton | System,
     forms: Forms,
-    entry: Forbidden,
+    conditions: dict[str, Condition],
     cond: Condition,
     contacts: list[ReachSet],
     t_end: float,
@@ -242,7 +253,7 @@ def _witness(
         run = simulate_candidate(model, forms, candidate, max_jumps)
         if run is None:
             continue
-        at = reaches(run, forms, entry, cond)
+        at = reaches(run, forms, conditions)
         if at is not None:
             return run, at, candidate
     return None

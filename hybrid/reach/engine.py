@@ -1,7 +1,9 @@
 """The hybrid loop: flowpipes per mode, guards met, resets applied, up to a jump bound.
 
 A waiting list holds boxes to start from: ``(mode, lo, hi, jumps)``. Each is
-clipped to its mode's invariant, flowed with :func:`hybrid.reach.flowpipe.flowpipe`
+kept as a set of its own (a run may enter outside the invariant: the simulator
+then stops there, blocked, or jumps on at once), then clipped to its mode's
+invariant and flowed with :func:`hybrid.reach.flowpipe.flowpipe`
 until the horizon or until a segment's box leaves the invariant (a run that
 stays in a mode satisfies its invariant throughout, so once no state of a
 segment does, no run is still there later), and every segment is kept as a
@@ -26,7 +28,7 @@ Examples
 ... ''')
 >>> sets, complete = explore(m, t_end=1.0, max_jumps=0, step=0.01)
 >>> complete, len(sets), sets[-1].t[1] >= 1.0
-(True, 100, True)
+(True, 101, True)
 """
 
 from __future__ import annotations
@@ -210,10 +212,14 @@ def explore(
         pipes += 1
         if pipes > MAX_FLOWPIPES:
             return sets, False
-        start = meets(lo, hi, mode.invariant)
-        if start is None or start[0][t_index] > t_end:
+        if lo[t_index] > t_end:
             continue
-        segments = _segments(mode, forms, start, t_end, step, t_index)
+        # the entry box itself, unclipped: a run may enter outside the invariant (it
+        # then ends blocked there, or jumps on at once: jumps take precedence)
+        segments = [(lo, hi)]
+        start = meets(lo, hi, mode.invariant)
+        if start is not None:
+            segments += _segments(mode, forms, start, t_end, step, t_index)
         for seg_lo, seg_hi in segments:
             sets.append(
                 ReachSet(

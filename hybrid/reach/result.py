@@ -11,7 +11,7 @@ Examples
 ... ''')
 >>> r = hybrid.reach(m, t_end=1.0, step=0.01)
 >>> r.verdict, r.variables, len(r.sets)
-('proved', ('x',), 100)
+('proved', ('x',), 101)
 >>> lo, hi = r.hull()
 >>> bool(lo[0] <= 2.0 * 2.718281828 ** -1.0 <= 1.0 and 2.0 <= hi[0] < 2.01)
 True

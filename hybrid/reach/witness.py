@@ -21,7 +21,7 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from hybrid.compose import System
 from hybrid.errors import HybridError
-from hybrid.model import Automaton, Forbidden
+from hybrid.model import Automaton
 from hybrid.reach.affine import Condition, Forms
 from hybrid.reach.flowpipe import exp_matrices
 from hybrid.simulation.engine import simulate
@@ -143,31 +143,27 @@ def simulate_candidate(
         return None
 
 
-def reaches(run: Run, forms: Forms, entry: Forbidden, condition: Condition) -> float | None:
+def reaches(run: Run, forms: Forms, conditions: Mapping[str, Condition]) -> float | None:
     """The first time a stored point of ``run`` is in the forbidden set, or ``None``.
 
-    A point is in it when the run is in the entry's locations and every row of
-    one case holds up to :data:`WITNESS_TOL` relative to the row's magnitude.
+    ``conditions`` gives the entry's condition per mode name (``run.location``) of
+    the modes in the entry's locations (a location may define the signals it
+    reads its own way); a point is in the set when its mode is one of them and
+    every row of one case holds up to :data:`WITNESS_TOL` relative to the row's
+    magnitude.
     """
-    system = forms.system
-    wanted = []
-    for comp, loc in entry.locations.items():
-        index = 0 if comp == "" else [c.name for c in system.components].index(comp)
-        wanted.append((index, system.qualified(index, loc)))
-    parts = [str(name).split("|") for name in run.location.tolist()]
-    if system.single:
-        parts = [[str(name)] for name in run.location.tolist()]
-    here = np.array([all(p[i] == q for i, q in wanted) for p in parts], dtype=bool)
-    if not here.any():
-        return None
+    locations = run.location.tolist()
     points = np.column_stack([run.states, run.t])
     hits = np.zeros(len(points), dtype=bool)
-    for case in condition:
-        lhs = points @ case.mat.T
-        scale = np.abs(points) @ np.abs(case.mat).T + np.abs(case.vec)[None, :]
-        ok = np.all(lhs <= case.vec[None, :] + WITNESS_TOL * (1.0 + scale), axis=1)
-        hits |= ok
-    hits &= here
+    for name, condition in conditions.items():
+        here = np.array([str(loc) == name for loc in locations], dtype=bool)
+        if not here.any():
+            continue
+        for case in condition:
+            lhs = points @ case.mat.T
+            scale = np.abs(points) @ np.abs(case.mat).T + np.abs(case.vec)[None, :]
+            ok = np.all(lhs <= case.vec[None, :] + WITNESS_TOL * (1.0 + scale), axis=1)
+            hits |= ok & here
     if not hits.any():
         return None
     return float(run.t[int(np.argmax(hits))])

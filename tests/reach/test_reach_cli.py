@@ -109,12 +109,12 @@ def test_sets_files_hold_what_the_api_returns(tmp_path: Path) -> None:
             document = json.loads(out.read_text())
             assert document["variables"] == ["x"]
             sets = document["sets"]
-            assert len(sets) == len(result.sets) == 200
+            assert len(sets) == len(result.sets) == 201  # the initial box, then 200 steps
             assert sets[7]["location"] == "on" and sets[7]["t"] == list(result.sets[7].t)
             assert sets[7]["lo"] == result.sets[7].lo.tolist()
         else:
             with np.load(out) as data:
-                assert data["lo"].shape == (200, 1) and data["t"].shape == (200, 2)
+                assert data["lo"].shape == (201, 1) and data["t"].shape == (201, 2)
                 assert np.array_equal(data["hi"][:, 0], [s.hi[0] for s in result.sets])
                 assert set(data["location"].tolist()) == {"on"}
 
