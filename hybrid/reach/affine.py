@@ -127,8 +127,20 @@ class Forms:
 
     def _not_affine(self, node: ir.Expr, lin: Linearizer, what: str) -> str:
         culprit = _culprit(node, lin)
+        text = f"'{_name_of(culprit)}'"
+        chain = []
+        for _ in range(8):  # signals defined by signals: follow them to the culprit
+            if not (isinstance(culprit, ir.Var) and culprit.kind == ir.SIGNAL):
+                break
+            definition = lin.evaluator.signals.get(culprit.name)
+            if definition is None:
+                break
+            chain.append(f"{culprit.name} = '{_name_of(definition)}'")
+            culprit = _culprit(definition, lin)
+        if chain:
+            text += f" (signals: {'; '.join(chain)})"
         return (
-            f"{what} is not affine in the state and inputs: '{_name_of(culprit)}'; "
+            f"{what} is not affine in the state and inputs: {text}; "
             "reach handles x' = A x + B u + c, affine resets and linear conditions "
             "(nonlinear dynamics are not supported yet)"
         )
@@ -282,12 +294,31 @@ def _col(node: ir.Expr, lin: Linearizer) -> int:
 
 
 def _culprit(node: ir.Expr, lin: Linearizer) -> ir.Expr:
-    """The first sub-expression the linearizer had to stand in for with a bounded variable."""
+    """The first sub-expression the linearizer had to stand in for with a bounded variable.
+
+    A signal whose definition holds one counts as the culprit (its place is in
+    ``node``; the message follows the definitions).
+    """
     for sub in ir.walk(node):
-        found = lin.aux.get(structural_key(sub))
-        if found is not None and not found[1].is_point:
+        if _opaque(sub, lin) or _signal_hides(sub, lin, 0):
             return sub
     return node
+
+
+def _opaque(node: ir.Expr, lin: Linearizer) -> bool:
+    found = lin.aux.get(structural_key(node))
+    return found is not None and not found[1].is_point
+
+
+def _signal_hides(node: ir.Expr, lin: Linearizer, depth: int) -> bool:
+    if depth > 8 or not (isinstance(node, ir.Var) and node.kind == ir.SIGNAL):
+        return False
+    definition = lin.evaluator.signals.get(node.name)
+    if definition is None:
+        return False
+    return any(
+        _opaque(sub, lin) or _signal_hides(sub, lin, depth + 1) for sub in ir.walk(definition)
+    )
 
 
 _NEGATE = {"<": ">=", "<=": ">", ">": "<=", ">=": "<"}

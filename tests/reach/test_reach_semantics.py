@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 import hybrid
 
 OUTSIDE = """
@@ -59,3 +61,16 @@ def test_a_signal_is_read_as_each_location_defines_it() -> None:
     assert b.verdict == "refuted" and b.witness is not None
     assert b.witness_time == 1.0 or math.isclose(b.witness_time or 0.0, 1.0, rel_tol=1e-6)
     assert a.verdict == "unknown" and a.first_contact is not None and a.first_contact > 4.9
+
+
+def test_a_signal_that_is_not_affine_is_named_with_its_definitions() -> None:
+    model = hybrid.load_text(
+        "automaton: a\nstate: {x: {initial: 1}}\nsignals: {s: x * x, r: s}\n"
+        "locations: {l: {flow: {x: 2 * r}}}\n",
+        file="a.yaml",
+    )
+    with pytest.raises(hybrid.SpecError) as info:
+        hybrid.reach(model, 1.0)
+    assert (info.value.file, info.value.line, info.value.column) == ("a.yaml", 4, 31)
+    assert "the flow of x in location 'l' is not affine" in str(info.value)
+    assert "'r' (signals: r = 's'; s = 'x * x')" in str(info.value)
