@@ -39,6 +39,7 @@ from hybrid.reach.result import PropertyResult, ReachResult
 from hybrid.reach.witness import (
     Candidate,
     corner_candidates,
+    random_candidates,
     reaches,
     simulate_candidate,
     support_candidate,
@@ -50,6 +51,8 @@ __all__ = ["DEFAULT_STEPS", "reach"]
 Array = NDArray[np.float64]
 DEFAULT_STEPS = 4000
 """Steps over the horizon when no step is given (``step = t_end / DEFAULT_STEPS``)."""
+RANDOM_RUNS = 4
+"""Seeded random runs tried for a witness after the support and corner candidates."""
 
 
 def reach(
@@ -248,8 +251,10 @@ def _witness(
                 candidates.append(
                     support_candidate(forms, a, b, x_lo, x_hi, direction, step, target)
                 )
+    candidates = candidates[:6]
     candidates.extend(corner_candidates(forms, x_lo[:-1], x_hi[:-1], t_end))
-    for candidate in candidates[:8]:
+    candidates.extend(random_candidates(forms, x_lo[:-1], x_hi[:-1], t_end, RANDOM_RUNS))
+    for candidate in candidates:
         run = simulate_candidate(model, forms, candidate, max_jumps)
         if run is None:
             continue

@@ -9,7 +9,7 @@ support function is a sum of such maxima). :func:`support_candidate` builds
 that run for the direction in which a forbidden case is met; it is simulated
 with :func:`hybrid.simulate` and kept only if a stored point of the run lies in
 the forbidden set (:func:`reaches`). Other candidates (the nominal run, the
-corners of the initial box) are tried the same way.
+corners of the initial box, a few seeded random runs) are tried the same way.
 
 Examples
 --------
@@ -39,6 +39,7 @@ __all__ = [
     "Candidate",
     "PiecewiseConstant",
     "corner_candidates",
+    "random_candidates",
     "reaches",
     "simulate_candidate",
     "support_candidate",
@@ -118,6 +119,25 @@ def corner_candidates(forms: Forms, x_lo: Array, x_hi: Array, t_end: float) -> l
                 f"{side} corner",
             )
         )
+    return found
+
+
+def random_candidates(
+    forms: Forms, x_lo: Array, x_hi: Array, t_end: float, count: int, seed: int = 24
+) -> list[Candidate]:
+    """``count`` seeded random runs: initial points in the box, inputs switching 4 times."""
+    rng = np.random.default_rng(seed)
+    names = forms.system.state_names
+    found = []
+    for k in range(count):
+        point = rng.uniform(x_lo, x_hi)
+        starts = np.concatenate([[0.0], np.sort(rng.uniform(0.0, max(t_end, 0.0), 4))])
+        inputs: dict[str, Callable[[float], float]] = {
+            n: PiecewiseConstant(starts, rng.uniform(forms.u_lo[j], forms.u_hi[j], 5))
+            for j, n in enumerate(forms.inputs)
+        }
+        initial = {v: float(point[i]) for i, v in enumerate(names)}
+        found.append(Candidate(initial, inputs, t_end, f"random sample {k + 1}"))
     return found
 
 
