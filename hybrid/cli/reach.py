@@ -15,13 +15,15 @@ import json
 import os
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from hybrid.analysis.findings import Finding, Report
 from hybrid.analysis.formats import FORMATS, write
 from hybrid.cli.exits import EXIT_FINDINGS, EXIT_OK
 from hybrid.errors import UsageError
-from hybrid.reach.result import PropertyResult, ReachResult
+
+if TYPE_CHECKING:  # the reach modules (scipy) load only when the command runs
+    from hybrid.reach.result import PropertyResult, ReachResult
 
 __all__ = ["EXIT_UNKNOWN", "add_reach_command", "findings_of", "run_reach"]
 
