@@ -30,6 +30,9 @@ EXTERNAL = REPO.parent.parent / "shared" / "external-models"
 if not EXTERNAL.exists():  # a worktree beside the main checkout
     EXTERNAL = Path("/work/shared/external-models")
 T_END = 2.0
+LARGE = 40
+"""Models with more state variables than this are sampled over ``T_END_LARGE``."""
+T_END_LARGE = 0.5
 MAX_JUMPS = 6
 STEP = 0.01
 TOL = 1e-9
@@ -39,7 +42,11 @@ def _sources() -> list[tuple[str, Path, Path | None]]:
     found: list[tuple[str, Path, Path | None]] = []
     for spec in sorted((REPO / "specs").glob("*.yaml")):
         found.append((spec.name, spec, None))
-    for root in (REPO / "tests" / "data" / "spaceex", EXTERNAL / "spaceex", EXTERNAL / "hyst"):
+    roots = (
+        REPO / "tests" / "data" / "spaceex",
+        *(EXTERNAL / d for d in ("spaceex", "hyst", "arch")),
+    )
+    for root in roots:
         for xml in sorted(root.glob("*/*.xml")):
             for cfg in sorted(xml.parent.glob("*.cfg")):
                 if cfg.stem == xml.stem or cfg.stem.startswith(xml.stem.split("_flattened")[0]):
@@ -92,7 +99,9 @@ def _accepted(tmp: Path) -> list[tuple[str, hybrid.Automaton | hybrid.System]]:
 def _escapes(
     model: hybrid.Automaton | hybrid.System, runs: int, seed: int
 ) -> tuple[int, int, list[str]]:
-    result = hybrid.reach(model, T_END, max_jumps=MAX_JUMPS, step=STEP, witness=False)
+    # large models (Building, 48 states) over a shorter horizon: each run costs more
+    t_end = T_END if len(model.state_names) <= LARGE else T_END_LARGE
+    result = hybrid.reach(model, t_end, max_jumps=MAX_JUMPS, step=STEP, witness=False)
     system = as_system(model)
     by_location: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
     for loc in {s.location for s in result.sets}:
@@ -112,13 +121,13 @@ def _escapes(
         initial = {v: float(rng.uniform(r.lo, r.hi)) for v, r in ranges.items()}
         given = {}
         for name, r in inputs.items():
-            starts = np.concatenate([[0.0], np.sort(rng.uniform(0.0, T_END, 3))])
+            starts = np.concatenate([[0.0], np.sort(rng.uniform(0.0, t_end, 3))])
             given[name] = PiecewiseConstant(starts, rng.uniform(r.lo, r.hi, 4))
         for name in free:
             given[name] = PiecewiseConstant(np.zeros(1), np.zeros(1))
         run = hybrid.simulate(
             model,
-            T_END,
+            t_end,
             max_jumps=MAX_JUMPS,
             rtol=1e-10,
             atol=1e-12,
