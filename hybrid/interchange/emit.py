@@ -68,6 +68,11 @@ def automaton_text(
             comments[("state",)] = start["exact_comment"]
         if not top:
             comments[("state",)] = "initial values: set per instance by the system file"
+    if t.signals:
+        data["signals"] = {t.names[y]: next(iter(d.values())) for y, d in t.signals.items()}
+        comments[("signals",)] = (
+            "outputs: variables every location's invariant defines by an equation y == e"
+        )
     inputs = [t.names[i] for i in t.inputs]
     if inputs:
         if t.ranges:
@@ -88,6 +93,13 @@ def automaton_text(
         entry: dict[str, Any] = {}
         if loc.flow:
             entry["flow"] = {t.names[k]: v for k, v in loc.flow.items()}
+        own = {
+            t.names[y]: d[loc.name]
+            for y, d in t.signals.items()
+            if d[loc.name] != data["signals"][t.names[y]]
+        }
+        if own:
+            entry["signals"] = own
         if loc.invariant:
             entry["invariant"] = condition_text(
                 sx.And(tuple(loc.invariant), comp.position), t.names.__getitem__
@@ -98,7 +110,7 @@ def automaton_text(
             remarks.append(f"SpaceEx location '{loc.spaceex_name}' (id {loc.id})")
         if loc.removed:
             remarks.append(
-                f"SpaceEx invariant: {loc.invariant_text}; the bounds on inputs became their ranges"
+                f"SpaceEx invariant: {loc.invariant_text}; taken out: {', '.join(dict.fromkeys(loc.removed))}"
             )
         if remarks:
             comments[("locations", loc.name)] = "\n".join(remarks)

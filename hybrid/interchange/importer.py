@@ -197,7 +197,8 @@ def _system_files(
         if t.file not in files:
             files[t.file] = automaton_text(t, leaf, None, [], source, top=False)
         block: dict[str, Any] = {"spec": t.file, "as": leaf.name}
-        rename = {t.names[k]: names[v] for k, v in leaf.variables.items()}
+        kept = {*t.states, *t.inputs, *t.signals}
+        rename = {t.names[k]: names[v] for k, v in leaf.variables.items() if k in kept}
         rename |= {t.names[k]: label_names[v] for k, v in leaf.labels.items()}
         rename = {k: v for k, v in rename.items() if k != v}
         if rename:
@@ -268,7 +269,8 @@ def _owners(flat: Flat, templates: dict[str, Template]) -> dict[str, Leaf]:
                     leaf.position if leaf.path else leaf.component.position,
                 )
             seen[outer] = inner
-        for state in templates[leaf.component.id].states:
+        t = templates[leaf.component.id]
+        for state in [*t.states, *t.signals]:
             outer = leaf.variables[state]
             if outer in owners:
                 raise SpecError(

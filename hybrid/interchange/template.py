@@ -28,13 +28,16 @@ from hybrid.errors import Position, SpecError
 from hybrid.expr.printer import expression_text
 from hybrid.interchange import sxexpr as sx
 from hybrid.interchange.naming import location_names, ours
+from hybrid.interchange.outputs import identifiers, output_equations
 from hybrid.interchange.safexml import SourceText
 from hybrid.interchange.sxmodel import Component
 from hybrid.interchange.translate import (
     Rename,
     condition_ir,
+    condition_text,
     constant_value,
     flows,
+    number_text,
     reset_nodes,
     resets,
     substitute,
@@ -79,6 +82,10 @@ class Template:
     edges: list[EdgeInfo]
     ranges: dict[str, tuple[float, float]]
     notes: list[str]
+    signals: dict[str, dict[str, str]] = field(default_factory=dict)
+    """Output variable -> {our location name: its definition} (see :mod:`.outputs`)."""
+    dropped: list[str] = field(default_factory=list)
+    """Inputs nothing reads, left out."""
 
     @property
     def file(self) -> str:
@@ -153,10 +160,14 @@ def analyse(comp: Component, free: set[str]) -> Template:
         _location(loc.id, loc_names[loc.id], loc.name, parsed_flows[loc.id], loc.invariant)
         for loc in comp.locations
     ]
+    signals = _outputs(comp, inputs, locations, rename, notes)
+    inputs = [i for i in inputs if i not in signals]
     ranges = _input_ranges(comp, [i for i in inputs if i in free], locations, notes)
     edges = [
         _edge(comp, i, locations, rename, parsed_resets[i]) for i in range(len(comp.transitions))
     ]
+    dropped = _unused(comp, inputs, locations, edges, signals, names, notes)
+    inputs = [i for i in inputs if i not in dropped]
     return Template(
         comp,
         ours(comp.id),
@@ -169,7 +180,64 @@ def analyse(comp: Component, free: set[str]) -> Template:
         edges,
         ranges,
         notes,
+        signals,
+        dropped,
     )
+
+
+def _outputs(
+    comp: Component,
+    inputs: list[str],
+    locations: list[LocationInfo],
+    rename: Rename,
+    notes: list[str],
+) -> dict[str, dict[str, str]]:
+    """The output variables (see :mod:`.outputs`), their equations taken out of the invariants."""
+    found = output_equations(inputs, {loc.id: loc.invariant for loc in locations})
+    signals: dict[str, dict[str, str]] = {}
+    for var, per_location in found.items():
+        signals[var] = {}
+        for loc in locations:
+            item, value = per_location[loc.id]
+            loc.invariant = [c for c in loc.invariant if c is not item]
+            loc.removed.append(f"the definition of the output {var}")
+            signals[var][loc.name] = number_text(value, rename)
+        shown = next(iter(signals[var].values()))
+        notes.append(
+            f"component '{comp.id}': variable '{var}' is an output: every location's invariant "
+            f"defines it ({var} == {shown}{', ...' if len(set(signals[var].values())) > 1 else ''}),"
+            f" so it is the signal {rename(var)}"
+        )
+    return signals
+
+
+def _unused(
+    comp: Component,
+    inputs: list[str],
+    locations: list[LocationInfo],
+    edges: list[EdgeInfo],
+    signals: dict[str, dict[str, str]],
+    names: dict[str, str],
+    notes: list[str],
+) -> list[str]:
+    """The inputs nothing of the component reads (once their bounds became ranges)."""
+    texts: list[str] = []
+    for loc in locations:
+        texts.extend(loc.flow.values())
+        texts.extend(condition_text(c, names.__getitem__) for c in loc.invariant)
+    for edge in edges:
+        texts.append(edge.guard)
+        texts.extend(edge.reset.values())
+    for per_location in signals.values():
+        texts.extend(per_location.values())
+    used = identifiers(texts)
+    dropped = [i for i in inputs if names[i] not in used]
+    for var in dropped:
+        notes.append(
+            f"component '{comp.id}': variable '{var}' is declared but nothing reads it (no flow, "
+            "invariant, guard, assignment or output): left out"
+        )
+    return dropped
 
 
 def _check_variable(comp: Component, var: str, where: Position, constants: list[str]) -> None:
