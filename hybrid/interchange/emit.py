@@ -91,6 +91,8 @@ def automaton_text(
     locations: dict[str, Any] = {}
     for loc in t.locations:
         entry: dict[str, Any] = {}
+        if loc.urgent:
+            entry["urgent"] = True
         if loc.flow:
             entry["flow"] = {t.names[k]: v for k, v in loc.flow.items()}
         own = {
@@ -108,6 +110,8 @@ def automaton_text(
         remarks = []
         if loc.name != loc.spaceex_name:
             remarks.append(f"SpaceEx location '{loc.spaceex_name}' (id {loc.id})")
+        if loc.urgent:
+            remarks.append("SpaceEx flow: false (no time may pass here)")
         if loc.removed:
             remarks.append(
                 f"SpaceEx invariant: {loc.invariant_text}; taken out: {', '.join(dict.fromkeys(loc.removed))}"

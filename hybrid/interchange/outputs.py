@@ -27,10 +27,16 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterable, Mapping
+from typing import TYPE_CHECKING
 
 from hybrid.interchange import sxexpr as sx
+from hybrid.interchange.sxmodel import Component
+from hybrid.interchange.translate import Rename, condition_text, number_text
 
-__all__ = ["definition", "identifiers", "output_equations", "reads"]
+if TYPE_CHECKING:
+    from hybrid.interchange.template import EdgeInfo, LocationInfo
+
+__all__ = ["definition", "identifiers", "output_equations", "outputs", "reads", "unused"]
 
 _TOKEN = re.compile(r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|([A-Za-z_][A-Za-z0-9_]*)")
 
@@ -114,3 +120,58 @@ def identifiers(texts: Iterable[str]) -> set[str]:
     for text in texts:
         found.update(name for name in _TOKEN.findall(text) if name)
     return found
+
+
+def outputs(
+    comp: Component,
+    inputs: list[str],
+    locations: list[LocationInfo],
+    rename: Rename,
+    notes: list[str],
+) -> dict[str, dict[str, str]]:
+    """The output variables (see the module docstring), their equations taken out of the invariants."""
+    found = output_equations(inputs, {loc.id: loc.invariant for loc in locations})
+    signals: dict[str, dict[str, str]] = {}
+    for var, per_location in found.items():
+        signals[var] = {}
+        for loc in locations:
+            item, value = per_location[loc.id]
+            loc.invariant = [c for c in loc.invariant if c is not item]
+            loc.removed.append(f"the definition of the output {var}")
+            signals[var][loc.name] = number_text(value, rename)
+        shown = next(iter(signals[var].values()))
+        notes.append(
+            f"component '{comp.id}': variable '{var}' is an output: every location's invariant "
+            f"defines it ({var} == {shown}{', ...' if len(set(signals[var].values())) > 1 else ''}),"
+            f" so it is the signal {rename(var)}"
+        )
+    return signals
+
+
+def unused(
+    comp: Component,
+    inputs: list[str],
+    locations: list[LocationInfo],
+    edges: list[EdgeInfo],
+    signals: dict[str, dict[str, str]],
+    names: dict[str, str],
+    notes: list[str],
+) -> list[str]:
+    """The inputs nothing of the component reads (once their bounds became ranges)."""
+    texts: list[str] = []
+    for loc in locations:
+        texts.extend(loc.flow.values())
+        texts.extend(condition_text(c, names.__getitem__) for c in loc.invariant)
+    for edge in edges:
+        texts.append(edge.guard)
+        texts.extend(edge.reset.values())
+    for per_location in signals.values():
+        texts.extend(per_location.values())
+    used = identifiers(texts)
+    dropped = [i for i in inputs if names[i] not in used]
+    for var in dropped:
+        notes.append(
+            f"component '{comp.id}': variable '{var}' is declared but nothing reads it (no flow, "
+            "invariant, guard, assignment or output): left out"
+        )
+    return dropped

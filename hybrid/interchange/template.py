@@ -22,22 +22,23 @@ holds and is not repeated; one that the guard already has is not repeated.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from hybrid.errors import Position, SpecError
 from hybrid.expr.printer import expression_text
 from hybrid.interchange import sxexpr as sx
-from hybrid.interchange.naming import location_names, ours
-from hybrid.interchange.outputs import identifiers, output_equations
+from hybrid.interchange.inputs import input_ranges
+from hybrid.interchange.naming import component_name, location_names, ours
+from hybrid.interchange.outputs import outputs, unused
+from hybrid.interchange.rectangular import flow_parts, rate_inputs
 from hybrid.interchange.safexml import SourceText
 from hybrid.interchange.sxmodel import Component
 from hybrid.interchange.translate import (
     Rename,
     condition_ir,
-    condition_text,
     constant_value,
     flows,
-    number_text,
     reset_nodes,
     resets,
     substitute,
@@ -55,6 +56,7 @@ class LocationInfo:
     invariant: list[sx.Node]
     invariant_text: str
     removed: list[str] = field(default_factory=list)
+    urgent: bool = False
 
 
 @dataclass
@@ -86,6 +88,8 @@ class Template:
     """Output variable -> {our location name: its definition} (see :mod:`.outputs`)."""
     dropped: list[str] = field(default_factory=list)
     """Inputs nothing reads, left out."""
+    rates: dict[str, str] = field(default_factory=dict)
+    """Input standing for a rectangular rate -> the variable whose rate it is."""
 
     @property
     def file(self) -> str:
@@ -106,8 +110,17 @@ def _rename(names: dict[str, str], comp: Component) -> Rename:
     return rename
 
 
-def analyse(comp: Component, free: set[str]) -> Template:
+def analyse(
+    comp: Component,
+    free: set[str],
+    values: Mapping[str, float] | None = None,
+    promoted: frozenset[str] = frozenset(),
+) -> Template:
     """Read base component ``comp``; ``free`` holds its variables the system leaves free.
+
+    ``values`` are the constants' values every instance agrees on (bounds
+    written with constants use them); ``promoted`` are constants the ``.cfg``
+    gives a range: state variables with derivative 0 (the SpaceEx meaning).
 
     Raises
     ------
@@ -124,17 +137,39 @@ def analyse(comp: Component, free: set[str]) -> Template:
                 f"reserved in our expressions{'; t is the time' if old == 't' else ''})"
             )
     rename = _rename(names, comp)
-    constants = [n for n in reals if comp.params[n].dynamics == "const"]
+    values = dict(values or {})
+    constants = [n for n in reals if comp.params[n].dynamics == "const" and n not in promoted]
     labels = [p.name for p in comp.params.values() if p.kind == "label"]
     loc_names = location_names([(loc.id, loc.name) for loc in comp.locations])
     parsed_flows: dict[str, dict[str, str]] = {}
+    urgent: set[str] = set()
+    rates: dict[str, dict[str, tuple[float, float]]] = {}
     for loc in comp.locations:
-        parsed_flows[loc.id] = flows(sx.parse(loc.flow), rename)
-        for var in parsed_flows[loc.id]:
+        parts = flow_parts(sx.parse(loc.flow), values)
+        parsed_flows[loc.id] = flows(sx.And(tuple(parts.equations), loc.position), rename)
+        if parts.urgent:
+            urgent.add(loc.id)
+        rates[loc.id] = parts.rates
+        for var in [*parsed_flows[loc.id], *parts.rates]:
             _check_variable(comp, var, loc.flow.where(0), constants)
+        for var in promoted:
+            parsed_flows[loc.id].setdefault(var, "0")
+    rated = rate_inputs(comp, rates, parsed_flows, names, notes)
+    for loc in comp.locations:
+        if loc.id in urgent:
+            notes.append(
+                f"component '{comp.id}': location '{loc.name}' has the flow false (no time may "
+                "pass there): it is urgent"
+            )
+    for var in sorted(promoted):
+        notes.append(
+            f"component '{comp.id}': constant '{var}' is given a range in the .cfg: it is a "
+            f"state variable with {names[var]}' = 0 that starts anywhere in that range"
+        )
     parsed_resets: list[dict[str, str]] = []
+    single: list[sx.Node] = []
     for tr in comp.transitions:
-        parsed = resets(sx.parse(tr.assignment), rename)
+        parsed = resets(sx.parse(tr.assignment), rename, single)
         for var in parsed:
             _check_variable(comp, var, tr.assignment.where(0), constants)
         parsed_resets.append(parsed)
@@ -144,10 +179,20 @@ def analyse(comp: Component, free: set[str]) -> Template:
                 'type="label"/> to the component',
                 tr.label_position,
             )
+    if single:
+        first = single[0].position
+        others = f" (and {len(single) - 1} more)" if len(single) > 1 else ""
+        notes.append(
+            f"component '{comp.id}': the assignment at line {first.line}, column {first.column}"
+            f"{others} is written x = e: it is read as the reset x := e, as SpaceEx, PHAVer "
+            "and HyST read it"
+        )
     driven = {v for f in parsed_flows.values() for v in f} | {v for r in parsed_resets for v in r}
     states = [n for n in reals if n in driven]
     inputs = [n for n in reals if n not in driven and n not in constants]
     for loc in comp.locations:
+        if loc.id in urgent:
+            continue
         missing = [v for v in states if v not in parsed_flows[loc.id]]
         if missing:
             raise SpecError(
@@ -160,17 +205,27 @@ def analyse(comp: Component, free: set[str]) -> Template:
         _location(loc.id, loc_names[loc.id], loc.name, parsed_flows[loc.id], loc.invariant)
         for loc in comp.locations
     ]
-    signals = _outputs(comp, inputs, locations, rename, notes)
+    for info in locations:
+        info.urgent = info.id in urgent
+    candidates = [i for i in inputs if i in free and comp.params[i].controlled is not False]
+    signals = outputs(comp, candidates, locations, rename, notes)
     inputs = [i for i in inputs if i not in signals]
-    ranges = _input_ranges(comp, [i for i in inputs if i in free], locations, notes)
+    ranges = input_ranges(comp, [i for i in inputs if i in free], locations, notes, values)
+    inputs += list(rated)
+    ranges.update({name: bounds for name, (_, bounds) in rated.items()})
     edges = [
         _edge(comp, i, locations, rename, parsed_resets[i]) for i in range(len(comp.transitions))
     ]
-    dropped = _unused(comp, inputs, locations, edges, signals, names, notes)
+    dropped = unused(comp, inputs, locations, edges, signals, names, notes)
     inputs = [i for i in inputs if i not in dropped]
+    if component_name(comp.id) != comp.id:
+        notes.append(
+            f"component id '{comp.id}' is not one of our names: it is "
+            f"'{component_name(comp.id)}' here"
+        )
     return Template(
         comp,
-        ours(comp.id),
+        component_name(comp.id),
         names,
         states,
         inputs,
@@ -182,62 +237,8 @@ def analyse(comp: Component, free: set[str]) -> Template:
         notes,
         signals,
         dropped,
+        {name: var for name, (var, _) in rated.items()},
     )
-
-
-def _outputs(
-    comp: Component,
-    inputs: list[str],
-    locations: list[LocationInfo],
-    rename: Rename,
-    notes: list[str],
-) -> dict[str, dict[str, str]]:
-    """The output variables (see :mod:`.outputs`), their equations taken out of the invariants."""
-    found = output_equations(inputs, {loc.id: loc.invariant for loc in locations})
-    signals: dict[str, dict[str, str]] = {}
-    for var, per_location in found.items():
-        signals[var] = {}
-        for loc in locations:
-            item, value = per_location[loc.id]
-            loc.invariant = [c for c in loc.invariant if c is not item]
-            loc.removed.append(f"the definition of the output {var}")
-            signals[var][loc.name] = number_text(value, rename)
-        shown = next(iter(signals[var].values()))
-        notes.append(
-            f"component '{comp.id}': variable '{var}' is an output: every location's invariant "
-            f"defines it ({var} == {shown}{', ...' if len(set(signals[var].values())) > 1 else ''}),"
-            f" so it is the signal {rename(var)}"
-        )
-    return signals
-
-
-def _unused(
-    comp: Component,
-    inputs: list[str],
-    locations: list[LocationInfo],
-    edges: list[EdgeInfo],
-    signals: dict[str, dict[str, str]],
-    names: dict[str, str],
-    notes: list[str],
-) -> list[str]:
-    """The inputs nothing of the component reads (once their bounds became ranges)."""
-    texts: list[str] = []
-    for loc in locations:
-        texts.extend(loc.flow.values())
-        texts.extend(condition_text(c, names.__getitem__) for c in loc.invariant)
-    for edge in edges:
-        texts.append(edge.guard)
-        texts.extend(edge.reset.values())
-    for per_location in signals.values():
-        texts.extend(per_location.values())
-    used = identifiers(texts)
-    dropped = [i for i in inputs if names[i] not in used]
-    for var in dropped:
-        notes.append(
-            f"component '{comp.id}': variable '{var}' is declared but nothing reads it (no flow, "
-            "invariant, guard, assignment or output): left out"
-        )
-    return dropped
 
 
 def _check_variable(comp: Component, var: str, where: Position, constants: list[str]) -> None:
@@ -256,72 +257,6 @@ def _location(
 ) -> LocationInfo:
     items = sx.conjuncts(sx.parse(invariant))
     return LocationInfo(lid, name, spaceex_name, flow, items, invariant.text.strip())
-
-
-def _bound(item: sx.Node, var: str) -> tuple[float, float] | None:
-    """The interval a conjunct puts on ``var`` if it is a bound by numbers, else ``None``."""
-    if not isinstance(item, sx.Cmp):
-        return None
-    lo, hi = -float("inf"), float("inf")
-    found = False
-    for op, a, b in zip(item.ops, item.operands, item.operands[1:], strict=False):
-        a_is = isinstance(a, sx.Name) and a.name == var and not a.primed
-        b_is = isinstance(b, sx.Name) and b.name == var and not b.primed
-        a_val = constant_value(a, {})
-        b_val = constant_value(b, {})
-        if a_is and b_val is not None:
-            value, side = b_val, op
-        elif b_is and a_val is not None:
-            value, side = (
-                a_val,
-                {"<=": ">=", "<": ">", ">=": "<=", ">": "<", "==": "=="}.get(op, op),
-            )
-        else:
-            return None
-        found = True
-        if side in ("<=", "<"):
-            hi = min(hi, value)
-        elif side in (">=", ">"):
-            lo = max(lo, value)
-        elif side == "==":
-            lo, hi = max(lo, value), min(hi, value)
-        else:
-            return None
-    return (lo, hi) if found else None
-
-
-def _input_ranges(
-    comp: Component, free: list[str], locations: list[LocationInfo], notes: list[str]
-) -> dict[str, tuple[float, float]]:
-    ranges: dict[str, tuple[float, float]] = {}
-    for var in free:
-        per_location: list[tuple[float, float] | None] = []
-        for loc in locations:
-            bounds = [b for b in (_bound(c, var) for c in loc.invariant) if b is not None]
-            if not bounds:
-                per_location.append(None)
-                continue
-            lo = max(b[0] for b in bounds)
-            hi = min(b[1] for b in bounds)
-            per_location.append((lo, hi))
-        if not per_location or any(r is None for r in per_location) or len(set(per_location)) > 1:
-            notes.append(
-                f"component '{comp.id}': input '{var}' is not bounded by the same numbers in "
-                "every location's invariant, so it gets no range"
-            )
-            continue
-        first = per_location[0]
-        assert first is not None
-        ranges[var] = first
-        for loc in locations:
-            kept = []
-            for c in loc.invariant:
-                if _bound(c, var) is not None:
-                    loc.removed.append(f"input range of {var}")
-                else:
-                    kept.append(c)
-            loc.invariant = kept
-    return ranges
 
 
 def _edge(

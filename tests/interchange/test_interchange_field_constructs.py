@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import hybrid
+from hybrid.errors import SpecError
 from hybrid.interchange import ImportResult, export_spaceex, import_spaceex_text
 
 HEAD = '<?xml version="1.0"?>\n<sspaceex version="0.2" math="SpaceEx">\n'
@@ -92,3 +93,121 @@ def test_an_output_some_location_leaves_free_stays_an_input(where: str) -> None:
     result = import_spaceex_text(xml, 'system = tank\ninitially = "loc(tank)==fill & x==0"')
     assert "signals:" not in result.files["tank.yaml"]
     assert "inputs:" in result.files["tank.yaml"]
+
+
+# --- true conjuncts, x = e in an assignment, rectangular flows (Fischer's idiom) -----------
+
+TIMER = (
+    HEAD
+    + f"""<component id="timer">{real("x")}
+<location id="1" name="wait"><invariant>true &amp;&amp; x &lt;= 3</invariant>
+  <flow>true &amp;&amp; - x' &lt;= -1 &amp;&amp; x' &lt;= 3</flow></location>
+<location id="2" name="go"><invariant>x &lt;= 3</invariant><flow>x' == 1</flow></location>
+<transition source="1" target="2"><guard>true &amp;&amp; x &gt;= 3</guard><assignment>x = 0</assignment></transition>
+<transition source="2" target="1"><guard>x &gt;= 1</guard><assignment>x = 00</assignment></transition>
+</component>"""
+    + TAIL
+)
+TIMER_CFG = 'system = timer\ninitially = "loc(timer)==wait & x==0 & true"'
+
+
+def test_a_rectangular_flow_is_a_bounded_input_and_x_equals_e_a_reset(tmp_path: Path) -> None:
+    result, run, _ = round_trip(TIMER, TIMER_CFG, tmp_path, 10.0)
+    text = result.files["timer.yaml"]
+    assert "x_rate: {range: [1.0, 3.0]}" in text
+    assert "flow: {x: x_rate}" in text
+    assert 'reset: {x: "0"}' in text
+    spec = [line for line in text.splitlines() if not line.lstrip().startswith("#")]
+    assert not any("true" in line for line in spec)  # the true conjuncts left no trace
+    notes = " ".join(result.notes)
+    assert "the flow x' in [1, 3] is nondeterministic: it is the input x_rate" in notes
+    assert "is read as the reset x := e" in notes and "(and 1 more)" in notes
+    # wait: x' held at the midpoint 2 from 0 to 3 (1.5 s); go: x' = 1 from 0 to 1 (1 s); ...
+    np.testing.assert_allclose(run.jump_times, [1.5, 2.5, 4.0, 5.0, 6.5, 7.5, 9.0], atol=1e-9)
+
+
+def test_a_bound_on_one_side_of_a_rate_is_refused_at_its_place() -> None:
+    xml = TIMER.replace(" &amp;&amp; x' &lt;= 3</flow>", "</flow>")
+    with pytest.raises(SpecError, match="bounded on one side only") as info:
+        import_spaceex_text(xml, TIMER_CFG)
+    assert (info.value.line, info.value.column) == (5, 25)  # the '- x'' conjunct
+
+
+def test_x_equals_equals_e_in_an_assignment_is_still_refused() -> None:
+    xml = TIMER.replace("<assignment>x = 0</assignment>", "<assignment>x == 0</assignment>")
+    with pytest.raises(SpecError, match="a condition here belongs in the <guard>"):
+        import_spaceex_text(xml, TIMER_CFG)
+
+
+# --- flow false: urgent --------------------------------------------------------------------
+
+PASS = (
+    HEAD
+    + f"""<component id="relay">{real("x")}
+<location id="1" name="run"><invariant>x &lt;= 2</invariant><flow>x' == 1</flow></location>
+<location id="2" name="pass"><flow>false</flow></location>
+<transition source="1" target="2"><guard>x &gt;= 2</guard><assignment>x := 0</assignment></transition>
+<transition source="2" target="1"></transition>
+</component>"""
+    + TAIL
+)
+
+
+def test_a_flow_false_is_an_urgent_location(tmp_path: Path) -> None:
+    cfg = 'system = relay\ninitially = "loc(relay)==run & x==0"'
+    result, run, _ = round_trip(PASS, cfg, tmp_path, 9.0)
+    assert "pass: {urgent: true}" in result.files["relay.yaml"]
+    assert any("'pass' has the flow false" in n and "urgent" in n for n in result.notes)
+    # x reaches 2 every 2 s; the urgent location is left at the instant it is entered
+    np.testing.assert_allclose(run.jump_times, [2, 2, 4, 4, 6, 6, 8, 8], atol=1e-9)
+    assert [j.target for j in run.jumps[:2]] == ["pass", "run"]
+
+
+# --- constants: in bounds by their values; given a range in the .cfg, a state ---------------
+
+DRIFT = (
+    HEAD
+    + f"""<component id="clock">{real("x")}{real("w", 'controlled="false"')}
+<param name="c" type="real" local="false" d1="1" d2="1" dynamics="const"/>
+<location id="1" name="tick"><invariant>-c &lt;= w &lt;= c &amp; x &lt;= 2</invariant>
+  <flow>x' == 1 + w</flow></location>
+<transition source="1" target="1"><guard>x &gt;= 2</guard><assignment>x := 0</assignment></transition>
+</component>
+<component id="sys">{real("x")}{real("w")}
+<bind component="clock" as="clk"><map key="x">x</map><map key="w">w</map><map key="c">0.5</map></bind>
+</component>"""
+    + TAIL
+)
+
+
+def test_bounds_written_with_constants_use_their_values(tmp_path: Path) -> None:
+    cfg = 'system = sys\ninitially = "x == 0"'
+    result, run, _ = round_trip(DRIFT, cfg, tmp_path, 9.0)
+    assert "w: {range: [-0.5, 0.5]}" in result.files["clock.yaml"]
+    assert any("written with the constants c" in n and "[-0.5, 0.5]" in n for n in result.notes)
+    np.testing.assert_allclose(run.jump_times, [2, 4, 6, 8], atol=1e-9)  # w held at 0
+
+
+RAMP = (
+    HEAD
+    + f"""<component id="ramp">{real("x")}
+<param name="u" type="real" local="false" d1="1" d2="1" dynamics="const"/>
+<location id="1" name="up"><invariant>x &lt;= 4</invariant><flow>x' == u</flow></location>
+<transition source="1" target="1"><guard>x &gt;= 4</guard><assignment>x := 0</assignment></transition>
+</component>
+<component id="sys">{real("x")}
+<param name="u" type="real" local="false" d1="1" d2="1" dynamics="const"/>
+<bind component="ramp" as="r"><map key="x">x</map><map key="u">u</map></bind>
+</component>"""
+    + TAIL
+)
+
+
+def test_a_constant_given_a_range_in_the_cfg_is_a_state_that_stays(tmp_path: Path) -> None:
+    cfg = 'system = sys\ninitially = "x == 0 & u >= 1 & u <= 3"'
+    result, run, _ = round_trip(RAMP, cfg, tmp_path, 9.0)
+    assert "u: [1.0, 3.0]" in result.files["sys.yaml"]
+    assert 'flow: {x: u, u: "0"}' in result.files["ramp.yaml"]
+    assert any("constant 'u' is given a range in the .cfg" in n for n in result.notes)
+    np.testing.assert_allclose(run.jump_times, [2, 4, 6, 8], atol=1e-9)  # u starts at 2
+    assert set(run["u"]) == {2.0}

@@ -36,6 +36,8 @@ REFUSED = {
 }
 FAST = {
     "BLDF01-BDS01.cfg",
+    "PLAD01-BND42-spec.cfg",
+    "DISC02-UBS02.cfg",
     "heaterLygeros.cfg",
     "toy_unsafe.cfg",
 }
