@@ -27,13 +27,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from hybrid.errors import SpecError
+from hybrid.errors import Position, SpecError
 from hybrid.interchange.cfg import SpaceExConfig, parse_cfg, read_cfg
 from hybrid.interchange.emit import SEMANTICS, automaton_text
 from hybrid.interchange.flatten import Flat, Leaf, flatten
 from hybrid.interchange.initial import InitialSet, Resolver, forbidden_set, initial_set
 from hybrid.interchange.naming import component_name, system_names
 from hybrid.interchange.safexml import parse_xml_file, parse_xml_text
+from hybrid.interchange.selfcheck import check_loads
 from hybrid.interchange.starts import exact_comment, location_name, start_of
 from hybrid.interchange.sxmodel import SpaceExModel, read_model
 from hybrid.interchange.template import Template, analyse
@@ -147,9 +148,30 @@ def _translate(
         if forbidden and config is not None and config.forbidden is not None:
             start["forbidden_comment"] = f"forbidden set of the .cfg: {config.forbidden.text}"
         files = {t.file: automaton_text(t, leaf, start, forbidden, source, top=True)}
+        origins = {**t.origins, **_cfg_origins(config, ("initial",), ("properties",))}
+        check_loads(files, t.file, {t.file: origins})
         return ImportResult(files, t.file, notes)
     files, top = _system_files(flat, templates, names, init, config, forbidden, source, notes)
+    provenance = {t.file: t.origins for t in templates.values()}
+    system_origins: dict[tuple[str | int, ...], Position] = {(): flat.system.position}
+    for i, leaf in enumerate(flat.leaves):
+        system_origins[("components", i)] = leaf.position
+        system_origins |= _cfg_origins(config, ("components", i, "initial"), ("properties",))
+    provenance[top] = system_origins
+    check_loads(files, top, provenance)
     return ImportResult(files, top, notes)
+
+
+def _cfg_origins(
+    config: SpaceExConfig | None, initial: tuple[str | int, ...], forbidden: tuple[str | int, ...]
+) -> dict[tuple[str | int, ...], Position]:
+    """The ``.cfg`` places of a spec's initial set and forbidden states."""
+    found: dict[tuple[str | int, ...], Position] = {}
+    if config is not None and config.initially is not None:
+        found[initial] = config.initially.where(0)
+    if config is not None and config.forbidden is not None:
+        found[forbidden] = config.forbidden.where(0)
+    return found
 
 
 def _forbidden(

@@ -29,6 +29,7 @@ import re
 from collections.abc import Iterable, Mapping
 from typing import TYPE_CHECKING
 
+from hybrid.errors import Position
 from hybrid.interchange import sxexpr as sx
 from hybrid.interchange.sxmodel import Component
 from hybrid.interchange.translate import Rename, condition_text, number_text
@@ -128,6 +129,7 @@ def outputs(
     locations: list[LocationInfo],
     rename: Rename,
     notes: list[str],
+    origins: dict[tuple[str | int, ...], Position],
 ) -> dict[str, dict[str, str]]:
     """The output variables (see the module docstring), their equations taken out of the invariants."""
     found = output_equations(inputs, {loc.id: loc.invariant for loc in locations})
@@ -139,6 +141,8 @@ def outputs(
             loc.invariant = [c for c in loc.invariant if c is not item]
             loc.removed.append(f"the definition of the output {var}")
             signals[var][loc.name] = number_text(value, rename)
+            origins.setdefault(("signals", rename(var)), item.position)
+            origins[("locations", loc.name, "signals", rename(var))] = item.position
         shown = next(iter(signals[var].values()))
         notes.append(
             f"component '{comp.id}': variable '{var}' is an output: every location's invariant "

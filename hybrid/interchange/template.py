@@ -90,6 +90,8 @@ class Template:
     """Inputs nothing reads, left out."""
     rates: dict[str, str] = field(default_factory=dict)
     """Input standing for a rectangular rate -> the variable whose rate it is."""
+    origins: dict[tuple[str | int, ...], Position] = field(default_factory=dict)
+    """YAML path of the automaton file -> the SpaceEx position it comes from."""
 
     @property
     def file(self) -> str:
@@ -208,7 +210,8 @@ def analyse(
     for info in locations:
         info.urgent = info.id in urgent
     candidates = [i for i in inputs if i in free and comp.params[i].controlled is not False]
-    signals = outputs(comp, candidates, locations, rename, notes)
+    origins: dict[tuple[str | int, ...], Position] = {(): comp.position}
+    signals = outputs(comp, candidates, locations, rename, notes, origins)
     inputs = [i for i in inputs if i not in signals]
     ranges = input_ranges(comp, [i for i in inputs if i in free], locations, notes, values)
     inputs += list(rated)
@@ -238,7 +241,31 @@ def analyse(
         signals,
         dropped,
         {name: var for name, (var, _) in rated.items()},
+        _origins(comp, names, locations, origins),
     )
+
+
+def _origins(
+    comp: Component,
+    names: dict[str, str],
+    locations: list[LocationInfo],
+    origins: dict[tuple[str | int, ...], Position],
+) -> dict[tuple[str | int, ...], Position]:
+    """Where each part of the automaton file comes from (see :mod:`.selfcheck`)."""
+    for name, param in comp.params.items():
+        for section in ("state", "inputs", "parameters", "labels"):
+            origins[(section, names[name])] = param.position
+    by_id = {loc.id: loc for loc in comp.locations}
+    for info in locations:
+        loc = by_id[info.id]
+        origins[("locations", info.name)] = loc.position
+        origins[("locations", info.name, "flow")] = loc.flow.where(0)
+        origins[("locations", info.name, "invariant")] = loc.invariant.where(0)
+    for i, tr in enumerate(comp.transitions):
+        origins[("edges", i)] = tr.position
+        origins[("edges", i, "guard")] = tr.guard.where(0) if tr.guard.text.strip() else tr.position
+        origins[("edges", i, "reset")] = tr.assignment.where(0)
+    return origins
 
 
 def _check_variable(comp: Component, var: str, where: Position, constants: list[str]) -> None:

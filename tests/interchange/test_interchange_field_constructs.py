@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support import assert_no_traceback, run_cli
 
 import hybrid
 from hybrid.errors import SpecError
@@ -211,3 +212,95 @@ def test_a_constant_given_a_range_in_the_cfg_is_a_state_that_stays(tmp_path: Pat
     assert any("constant 'u' is given a range in the .cfg" in n for n in result.notes)
     np.testing.assert_allclose(run.jump_times, [2, 4, 6, 8], atol=1e-9)  # u starts at 2
     assert set(run["u"]) == {2.0}
+
+
+# --- the initial set within the initial location's invariant --------------------------------
+
+HOLD = (
+    HEAD
+    + f"""<component id="hold">{real("x")}{real("u")}
+<location id="1" name="on"><invariant>0.8 &lt;= u &amp; u &lt;= 1 &amp; x &lt;= 4</invariant>
+  <flow>x' == u &amp; u' == 0</flow></location>
+<transition source="1" target="1"><guard>x &gt;= 3.6</guard><assignment>x := 0</assignment></transition>
+</component>"""
+    + TAIL
+)
+
+
+def test_a_variable_the_cfg_leaves_free_starts_within_the_invariant(tmp_path: Path) -> None:
+    result, run, _ = round_trip(HOLD, 'system = hold\ninitially = "x == 0"', tmp_path, 9.0)
+    assert "u: {initial: [0.8, 1.0]}" in result.files["hold.yaml"]
+    assert any("leaves it free for 'u'" in n and "[0.8, 1]" in n for n in result.notes)
+    # u starts at the midpoint 0.9 and stays: x reaches 3.6 every 4 s
+    np.testing.assert_allclose(run.jump_times, [4.0, 8.0], atol=1e-9)
+
+
+def test_the_cfg_set_is_narrowed_by_the_invariant() -> None:
+    result = import_spaceex_text(HOLD, 'system = hold\ninitially = "x == 0 & u >= 0.9 & u <= 2"')
+    assert "u: {initial: [0.9, 1.0]}" in result.files["hold.yaml"]
+    assert any("gives [0.9, 2] for 'u'" in n for n in result.notes)
+
+
+# --- component ids that are not names -------------------------------------------------------
+
+
+def test_component_ids_that_are_not_names_are_renamed(tmp_path: Path) -> None:
+    xml = TANK.replace('id="tank"', 'id="1 tank>"') + ""
+    result = import_spaceex_text(xml, 'system = "1 tank>"\ninitially = "x == 0 & loc() == fill"')
+    assert result.top == "c_1_tank_.yaml"
+    assert "automaton: c_1_tank_" in result.files[result.top]
+    assert any("'1 tank>' is not one of our names: it is 'c_1_tank_'" in n for n in result.notes)
+    network = DRIFT.replace('as="clk"', 'as="the clock"').replace('id="sys"', 'id="sys-1"')
+    result = import_spaceex_text(network, 'system = "sys-1"\ninitially = "x == 0"')
+    assert "as: the_clock" in result.files[result.top] and result.top == "sys_1.yaml"
+    assert any("instance 'the clock' is 'the_clock'" in n for n in result.notes)
+    load(result, tmp_path)
+
+
+# --- an import that would not load is refused at the construct -------------------------------
+
+TWO_OUTPUTS = (
+    HEAD
+    + f"""<component id="tank"><param name="x" type="real" local="true" d1="1" d2="1" dynamics="any"/>
+{real("y")}
+<location id="1" name="fill"><invariant>y == 2*x</invariant><flow>x' == 1</flow></location>
+</component>
+<component id="sys">{real("y")}
+<bind component="tank" as="a"><map key="y">y</map></bind>
+<bind component="tank" as="b"><map key="y">y</map></bind>
+</component>"""
+    + TAIL
+)
+
+
+def test_a_translation_that_does_not_load_is_refused_where_it_comes_from() -> None:
+    """Two instances define the same output: no counterpart (a signal has one owner)."""
+    with pytest.raises(SpecError, match="the translation of this construct does not load") as info:
+        import_spaceex_text(TWO_OUTPUTS, 'system = sys\ninitially = "a.x == 0 & b.x == 1"')
+    assert (info.value.file, info.value.line, info.value.column) == ("model.xml", 5, 41)  # y == 2*x
+    assert "clashes with the signal of component 'a'" in info.value.message
+    assert "hybrid-import-" not in info.value.message  # no temporary path shown
+
+
+def test_the_command_refuses_it_with_exit_2_and_writes_nothing(tmp_path: Path) -> None:
+    (tmp_path / "two.xml").write_text(TWO_OUTPUTS)
+    (tmp_path / "two.cfg").write_text('system = sys\ninitially = "a.x == 0 & b.x == 1"\n')
+    done = run_cli("import", "spaceex", tmp_path / "two.xml", "--out", tmp_path / "out")
+    assert done.returncode == 2, done.stderr
+    assert f"{tmp_path / 'two.xml'}:5:41: the translation of this construct" in done.stderr
+    assert_no_traceback(done.stderr)
+    assert not (tmp_path / "out").exists() and done.stdout == ""
+
+
+def test_the_command_prints_the_notes_and_writes_what_loads(tmp_path: Path) -> None:
+    (tmp_path / "timer.xml").write_text(TIMER)
+    (tmp_path / "timer.cfg").write_text(TIMER_CFG + "\n")
+    done = run_cli("import", "spaceex", tmp_path / "timer.xml", "--out", tmp_path / "out")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == str(tmp_path / "out" / "timer.yaml")
+    assert (
+        f"{tmp_path / 'timer.xml'}: note: component 'timer': the flow x' in [1, 3]" in done.stderr
+    )
+    assert "is read as the reset x := e" in done.stderr
+    checked = run_cli("validate", tmp_path / "out" / "timer.yaml")
+    assert checked.returncode == 0, checked.stderr
