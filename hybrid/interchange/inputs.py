@@ -101,6 +101,11 @@ def input_ranges(
             }
             - {var}
         )
+        notes.append(
+            f"component '{comp.id}': '{var}' is changed by nothing and bounded in every "
+            f"invariant: it is a free input with range [{first[0]:g}, {first[1]:g}] (simulate "
+            "holds it at the midpoint; check and reach take the range)"
+        )
         if named:
             notes.append(
                 f"component '{comp.id}': the bounds of input '{var}' are written with the "

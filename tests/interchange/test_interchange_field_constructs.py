@@ -8,6 +8,8 @@ export, import, simulate: the same jumps at the same times).
 
 from __future__ import annotations
 
+import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -304,3 +306,39 @@ def test_the_command_prints_the_notes_and_writes_what_loads(tmp_path: Path) -> N
     assert "is read as the reset x := e" in done.stderr
     checked = run_cli("validate", tmp_path / "out" / "timer.yaml")
     assert checked.returncode == 0, checked.stderr
+
+
+def test_x_prime_equals_a_bounded_uncontrolled_variable_is_a_bounded_input(tmp_path: Path) -> None:
+    """``x' == w`` with ``lo <= w <= hi`` in every invariant: the input w with that range."""
+    xml = DRIFT.replace("x' == 1 + w", "x' == w").replace(
+        "-c &lt;= w &lt;= c", "0.5 &lt;= w &lt;= 1.5"
+    )
+    result, run, _ = round_trip(xml, 'system = sys\ninitially = "x == 0"', tmp_path, 9.0)
+    assert "w: {range: [0.5, 1.5]}" in result.files["clock.yaml"]
+    assert any("'w' is changed by nothing" in n and "range [0.5, 1.5]" in n for n in result.notes)
+    np.testing.assert_allclose(run.jump_times, [2, 4, 6, 8], atol=1e-9)  # w held at 1
+
+
+def test_a_renamed_component_round_trips(tmp_path: Path) -> None:
+    xml = TANK.replace('id="tank"', 'id="a>b"')
+    result, run, _ = round_trip(
+        xml, 'system = "a>b"\ninitially = "x==0 & loc()==fill"', tmp_path, 10.0
+    )
+    assert result.top == "a_b.yaml"
+    np.testing.assert_allclose(run.jump_times, [3.0, 5.0, 7.0, 9.0], atol=1e-9)
+
+
+def test_a_long_sum_is_written_in_groups_that_load_and_keep_its_value(tmp_path: Path) -> None:
+    """A flow of 200 terms (flat: 200 levels of nesting, over our 64) gives the same derivative."""
+    terms = " + ".join(f"{k}*x" if k % 3 else f"-{k}*x" for k in range(1, 201)).replace("+ -", "- ")
+    xml = TANK.replace(
+        'x\' == 1</flow></location>\n<location id="2"',
+        f'x\' == 1e-6*({terms}) + 1</flow></location>\n<location id="2"',
+        1,
+    )
+    result = import_spaceex_text(xml, 'system = tank\ninitially = "loc(tank)==fill & x==2"')
+    model = load(result, tmp_path)
+    run = hybrid.simulate(model, t_end=0.5, rtol=1e-11, atol=1e-12, handle_sigint=False)
+    a = 1e-6 * sum(k if k % 3 else -k for k in range(1, 201))  # x' = a x + 1, x(0) = 2
+    assert math.isclose(run["x"][-1], (2 + 1 / a) * math.exp(a / 2) - 1 / a, rel_tol=1e-9)
+    assert re.search(r"\* x [+-] \(\d+ \* x", result.files["tank.yaml"])  # a group starts
