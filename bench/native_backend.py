@@ -89,7 +89,9 @@ def single_runs(repeats: int = 9) -> list[Comparison]:
                    for _ in range(repeats)]  # fmt: skip
         c.extra = {
             "jumps": len(ours),
-            "max_jump_time_difference_s": max(abs(a - b) for a, b in zip(ours, reference, strict=True)),
+            "max_jump_time_difference_s": max(
+                abs(a - b) for a, b in zip(ours, reference, strict=True)
+            ),
             "cold_call_ratio_median": cold.ratio_median,
             "cold_call_ratio_min": cold.ratio_min,
             "cold_call_compiled_median_s": cold.contender_median_s,
@@ -104,7 +106,9 @@ def mission_without_requirements() -> Any:
     from dataclasses import replace
 
     mission = hybrid.load(ROOT / "specs" / "uvms_mission_2.yaml")
-    parts = tuple(replace(c, automaton=replace(c.automaton, requirements=())) for c in mission.components)
+    parts = tuple(
+        replace(c, automaton=replace(c.automaton, requirements=())) for c in mission.components
+    )
     return replace(mission, requirements=(), components=parts)
 
 

@@ -23,13 +23,14 @@ from hybrid.lazy import lazy_attributes
 from hybrid.version import __version__
 
 if TYPE_CHECKING:
-    from hybrid.analysis.api import check
     from hybrid.analysis.findings import Report
     from hybrid.campaigns.falsify import Falsification, falsify
     from hybrid.campaigns.sweep import sweep
     from hybrid.campaigns.table import SweepTable
     from hybrid.compose import System, compose
     from hybrid.model import Automaton, Range
+    from hybrid.reach import ReachResult, reach
+    from hybrid.reach.check import check
     from hybrid.reader.loader import load, load_text
     from hybrid.simulation.bounds import BoundsWarning
     from hybrid.simulation.engine import simulate
@@ -45,6 +46,7 @@ __all__ = [
     "Jump",
     "Position",
     "Range",
+    "ReachResult",
     "Report",
     "Run",
     "SimulationError",
@@ -59,6 +61,7 @@ __all__ = [
     "falsify",
     "load",
     "load_text",
+    "reach",
     "simulate",
     "simulate_many",
     "sweep",
@@ -81,11 +84,12 @@ _LAZY = {
     "simulate_many": "hybrid.simulation.native.many",
     "Ensemble": "hybrid.simulation.native.many",
     "Report": "hybrid.analysis.findings",
-    "check": "hybrid.analysis.api",
+    "check": "hybrid.reach.check",
     "sweep": "hybrid.campaigns.sweep",
     "falsify": "hybrid.campaigns.falsify",
     "SweepTable": "hybrid.campaigns.table",
     "Falsification": "hybrid.campaigns.falsify",
+    "ReachResult": "hybrid.reach.result",
 }
 _lazy_getattr, _lazy_dir = lazy_attributes(__name__, _LAZY)
 
@@ -97,11 +101,11 @@ def __getattr__(name: str) -> object:
 
 
 class _Package(_types.ModuleType):
-    """``hybrid.compose`` is the function, though ``hybrid/compose.py`` is a module too.
+    """``hybrid.compose`` and ``hybrid.reach`` are functions, though each names a module too.
 
     Importing a submodule sets the package's attribute of that name to the module,
-    which would hide the lazily loaded function of the same name; this property
-    keeps the function (and ignores the import system's assignment).
+    which would hide the lazily loaded function of the same name; these properties
+    keep the functions (and ignore the import system's assignment).
     """
 
     @property
@@ -112,6 +116,16 @@ class _Package(_types.ModuleType):
 
     @compose.setter
     def compose(self, value: object) -> None:
+        pass
+
+    @property
+    def reach(self) -> object:
+        from hybrid.reach.api import reach
+
+        return reach
+
+    @reach.setter
+    def reach(self, value: object) -> None:
         pass
 
 

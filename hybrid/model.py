@@ -109,6 +109,8 @@ class Location:
     invariant_position: Position = field(default_factory=lambda: Position("<spec>"))
     urgent: bool = False
     """No time may pass here: an edge must fire at once on entry, else the run is blocked."""
+    flow_positions: Mapping[str, Position] = field(default_factory=dict)
+    """Where each flow expression starts in the spec (for messages about one flow)."""
 
 
 @dataclass(frozen=True)
@@ -126,6 +128,8 @@ class Edge:
     guard_source: str = "true"
     position: Position = field(default_factory=lambda: Position("<spec>"))
     guard_position: Position = field(default_factory=lambda: Position("<spec>"))
+    reset_positions: Mapping[str, Position] = field(default_factory=dict)
+    """Where each reset expression starts in the spec (for messages about one reset)."""
 
 
 @dataclass(frozen=True)
@@ -163,6 +167,12 @@ class Properties:
     """Rules `hybrid check` does not report for this file (its ``checks: {ignore: [...]}``)."""
     forbidden: tuple[Forbidden, ...] = ()
     """States no run may reach (`properties.forbidden`)."""
+    reach_t_end: float | None = None
+    """The horizon of `hybrid reach` for `hybrid check` (``checks: {reach: {t_end}}``)."""
+    reach_max_jumps: int | None = None
+    """Its jump bound (``checks: {reach: {max_jumps}}``)."""
+    reach_step: float | None = None
+    """Its step (``checks: {reach: {step}}``)."""
 
 
 @dataclass(frozen=True)

@@ -97,3 +97,34 @@ def plain(r: float) -> float:
 def native_library() -> dict[str, object]:
     """The function table a package would register under ``hybrid.functions``."""
     return {"polar": polar, "spin": spin, "plain": plain}
+
+
+# --- the same run on both backends (tests/simulation/native, tests/interchange) ------------
+
+BACKEND_TOL = {"rtol": 1e-10, "atol": 1e-12, "handle_sigint": False}
+"""Solver tolerances under which the compiled and scipy backends are compared."""
+
+
+def assert_backends_agree(model: Any, **settings: Any) -> tuple[Any, Any]:
+    """Simulate ``model`` on scipy and on the compiled backend; assert the same run.
+
+    The same edges and targets in the same order, jump times within 1e-9, the
+    same termination (cause and location) and start. Returns both runs
+    (scipy's first). ``settings`` go to both (``t_end``, ``max_jumps``...), over
+    :data:`BACKEND_TOL`.
+    """
+    import numpy as np
+
+    import hybrid
+
+    common = {**BACKEND_TOL, **settings}
+    reference = hybrid.simulate(model, **common)
+    compiled = hybrid.simulate(model, backend="compiled", **common)
+    assert [(j.edge, j.target) for j in compiled.jumps] == [
+        (j.edge, j.target) for j in reference.jumps
+    ]
+    np.testing.assert_allclose(compiled.jump_times, reference.jump_times, rtol=1e-10, atol=1e-9)
+    assert compiled.termination.cause == reference.termination.cause
+    assert compiled.termination.location == reference.termination.location
+    assert compiled.settings["start"] == reference.settings["start"]
+    return reference, compiled

@@ -26,6 +26,7 @@ LAYERS: tuple[frozenset[str], ...] = (
     frozenset({"compose"}),
     frozenset({"modes", "reader"}),
     frozenset({"simulation", "analysis"}),
+    frozenset({"reach"}),
     frozenset({"campaigns", "interchange", "export"}),
     frozenset({"cli"}),
     frozenset({"__init__", "__main__"}),

@@ -6,6 +6,8 @@ Severities, and why:
 rule                              severity  reason
 ================================  ========  ============================================
 ``property-violated``             error     the spec promised it; CI must fail
+``property-unproved``             warning   a property not proved and not refuted either
+``property-proved``               note      ``hybrid reach`` proved a forbidden entry
 ``sink-location``                 error     a run that gets there ends ``blocked``
 ``invalid-spec``                  error     the file cannot be checked at all
 ``unreachable-location``          warning   dead model text, often a typo in a guard
@@ -107,8 +109,26 @@ RULES: dict[str, Rule] = {
             "property-violated",
             "error",
             "Declared property does not hold",
-            "A property under `properties:` (reachable, unreachable, deadlock_free, "
-            "deterministic) is refuted, with a witness path where there is one.",
+            "A property under `properties:` is refuted: a forbidden state reached by a "
+            "simulated run (`hybrid reach`), or a location declared reachable that no run "
+            "can reach (a proof), or a property naming an unknown location.",
+        ),
+        Rule(
+            "property-unproved",
+            "warning",
+            "Declared property not proved",
+            "A property under `properties:` (unreachable, deadlock_free, deterministic, "
+            "forbidden) that the analysis could neither prove nor refute: the "
+            "over-approximation meets it, with a candidate path; no run was found that "
+            "violates it. For an affine model, `checks: {reach: {t_end: T}}` lets "
+            "`hybrid check` decide forbidden entries with `hybrid reach`.",
+        ),
+        Rule(
+            "property-proved",
+            "note",
+            "Forbidden state proved unreachable",
+            "`hybrid reach` proved that no run reaches the forbidden entry within the "
+            "horizon and the jump bound.",
         ),
         Rule(
             "analysis-incomplete",

@@ -20,8 +20,10 @@ locations at once with ``when`` holding; the proof combines:
 Components ``when`` reads but the entry does not name are tried in each of
 their reachable locations (up to :data:`MAX_COMBINATIONS` combinations; beyond
 that, anywhere within their bounds). When the condition may hold somewhere,
-the entry is reported as ``property-violated`` at its line with a shortest path
-to the locations as witness: a *candidate* run, as for every witness of check.
+the entry is reported as ``property-unproved`` (a warning: not proved, not
+refuted either) at its line with a shortest path to the locations as a
+*candidate* run; ``hybrid check`` then decides it with ``hybrid reach`` when the
+model is affine and a horizon is given (:mod:`hybrid.reach.check`).
 
 Examples
 --------
@@ -214,7 +216,7 @@ def _witness(analysis: Analysis, combo: Mapping[int, str | None]) -> tuple[Witne
 
 
 def forbidden_states(analysis: Analysis) -> list[Finding]:
-    """The forbidden entries that may be reached, each with a witness path."""
+    """The forbidden entries not proved unreachable, each with a candidate path."""
     found: list[Finding] = []
     for entry in analysis.system.properties.forbidden:
         for combo in _combinations(analysis, entry):
@@ -228,7 +230,7 @@ def forbidden_states(analysis: Analysis) -> list[Finding]:
                 continue  # not together in any reachable mode (or not explored)
             found.append(
                 Finding.at(
-                    "property-violated",
+                    "property-unproved",
                     entry.position,
                     f"forbidden state '{entry.text()}' may be reached: {path_text(witness)}"
                     + _how(analysis, entry, located),

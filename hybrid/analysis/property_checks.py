@@ -79,8 +79,11 @@ def blocked_entries(analysis: Analysis, component: int, location: str) -> str:
 
 
 def property_violations(analysis: Analysis) -> list[Finding]:
-    """The declared properties refuted, each with a witness path where there is one
-    (forbidden states: :func:`hybrid.analysis.forbidden.forbidden_states`)."""
+    """The declared properties refuted (``property-violated``: a location declared
+    reachable that is proved unreachable, an unknown location) or not proved
+    (``property-unproved``, with a candidate path: the over-approximation meets
+    them, no run was simulated); forbidden states:
+    :func:`hybrid.analysis.forbidden.forbidden_states`."""
     props = analysis.system.properties
     exploration = analysis.exploration
     tables = analysis.tables
@@ -125,7 +128,7 @@ def property_violations(analysis: Analysis) -> list[Finding]:
             witness = analysis.witness(exploration.first_reach[(i, k)])
             found.append(
                 Finding.at(
-                    "property-violated",
+                    "property-unproved",
                     where.get(f"unreachable:{name}", position),
                     f"location '{name}' is declared unreachable but may be reached: "
                     f"{path_text(witness)}",
@@ -140,7 +143,7 @@ def property_violations(analysis: Analysis) -> list[Finding]:
         )
         found.append(
             Finding.at(
-                "property-violated",
+                "property-unproved",
                 where.get("deadlock_free", position),
                 f"deadlock_free: the flow may leave the invariant of {stuck} at a point where "
                 f"no transition is enabled ({exploration.deadlocks} reachable mode(s)); "
@@ -156,7 +159,7 @@ def property_violations(analysis: Analysis) -> list[Finding]:
         )
         found.append(
             Finding.at(
-                "property-violated",
+                "property-unproved",
                 where.get("deterministic", position),
                 f"deterministic: edges of the same priority can be enabled at once in {places} "
                 f"({exploration.conflicts} reachable mode(s)); witness: {path_text(witness)}",

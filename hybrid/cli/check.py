@@ -30,7 +30,7 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import TextIO
 
-from hybrid.analysis import check, system_graph
+from hybrid.analysis import system_graph
 from hybrid.analysis.findings import Finding, Report
 from hybrid.analysis.formats import FORMATS, write
 from hybrid.analysis.ignore import check_rule_ids
@@ -40,6 +40,7 @@ from hybrid.export.atomic import atomic_write
 from hybrid.export.diagrams import DIAGRAM_FORMATS
 from hybrid.export.pictures import RENDERED_FORMATS, render
 from hybrid.progress import Reporter, Tracker, terminal_reporter
+from hybrid.reach.check import check
 from hybrid.reader.loader import load
 from hybrid.reader.project import CheckConfig, read_check_config
 
@@ -56,6 +57,8 @@ def run_check(
     err: TextIO | None = None,
     config: CheckConfig | None = None,
     quiet: bool = False,
+    reach_t_end: float | None = None,
+    reach_max_jumps: int | None = None,
 ) -> int:
     """Check ``files`` and print the report; returns the exit code (0, 1 or 2).
 
@@ -75,6 +78,9 @@ def run_check(
         The repository's defaults (default: read from the nearest pyproject.toml).
     quiet
         No progress line on ``err`` (it is drawn only when ``err`` is a terminal).
+    reach_t_end, reach_max_jumps
+        Decide unproved forbidden entries of affine models with ``hybrid reach``
+        over this horizon (default: each spec's ``checks: {reach: {...}}``).
     """
     if fmt not in FORMATS:
         raise ValueError(f"unknown format '{fmt}'; choose from {', '.join(FORMATS)}")
@@ -100,7 +106,13 @@ def run_check(
         line = terminal_reporter(quiet, err)
         tracker, progress = exploration_progress(f"check {file}", line)
         try:
-            report = check(model, ignore=rules, progress=progress)
+            report = check(
+                model,
+                ignore=rules,
+                progress=progress,
+                reach_t_end=reach_t_end,
+                reach_max_jumps=reach_max_jumps,
+            )
         finally:
             if line is not None:
                 line.clear()

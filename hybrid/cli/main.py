@@ -41,9 +41,7 @@ def _param(text: str) -> tuple[str, float]:
             f"value of '{key}' must be a number, got '{value}'"
         ) from None
     if not math.isfinite(number):
-        raise argparse.ArgumentTypeError(
-            f"value of '{key}' must be a finite number, got '{value}'"
-        )
+        raise argparse.ArgumentTypeError(f"value of '{key}' must be a finite number, got '{value}'")
     return key.strip(), number
 
 
@@ -110,6 +108,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--quiet", action="store_true", help="no progress on stderr (shown only on a terminal)"
+    )
+    p.add_argument(
+        "--reach-t-end",
+        type=_positive,
+        default=None,
+        metavar="T",
+        help="decide unproved forbidden entries of affine models with reach over [0, T]",
+    )
+    p.add_argument(
+        "--reach-max-jumps", type=_count, default=None, metavar="J", help="jump bound of reach"
     )
 
     p = sub.add_parser("simulate", help="simulate a spec")
@@ -182,6 +190,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     types = {"positive": _positive, "count": _count, "param": _param, "assignment": _assignment}
     add_campaign_commands(sub, types)
+    from hybrid.cli.reach import add_reach_command
+
+    add_reach_command(sub, types)
     return parser
 
 
@@ -303,6 +314,8 @@ def _run(args: argparse.Namespace) -> int:
                 strict=args.strict,
                 ignore=args.ignore,
                 quiet=args.quiet,
+                reach_t_end=args.reach_t_end,
+                reach_max_jumps=args.reach_max_jumps,
             )
         if args.command == "graph":
             from hybrid.cli.check import run_graph
@@ -316,6 +329,10 @@ def _run(args: argparse.Namespace) -> int:
             from hybrid.cli.campaigns import run_falsify, run_sweep
 
             return run_sweep(args) if args.command == "sweep" else run_falsify(args)
+        if args.command == "reach":
+            from hybrid.cli.reach import run_reach
+
+            return run_reach(args)
         if args.command in ("import", "export"):
             from hybrid.cli.interchange import run_export, run_import
 

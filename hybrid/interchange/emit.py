@@ -68,6 +68,11 @@ def automaton_text(
             comments[("state",)] = start["exact_comment"]
         if not top:
             comments[("state",)] = "initial values: set per instance by the system file"
+    if t.signals:
+        data["signals"] = {t.names[y]: next(iter(d.values())) for y, d in t.signals.items()}
+        comments[("signals",)] = (
+            "outputs: variables every location's invariant defines by an equation y == e"
+        )
     inputs = [t.names[i] for i in t.inputs]
     if inputs:
         if t.ranges:
@@ -86,8 +91,17 @@ def automaton_text(
     locations: dict[str, Any] = {}
     for loc in t.locations:
         entry: dict[str, Any] = {}
+        if loc.urgent:
+            entry["urgent"] = True
         if loc.flow:
             entry["flow"] = {t.names[k]: v for k, v in loc.flow.items()}
+        own = {
+            t.names[y]: d[loc.name]
+            for y, d in t.signals.items()
+            if d[loc.name] != data["signals"][t.names[y]]
+        }
+        if own:
+            entry["signals"] = own
         if loc.invariant:
             entry["invariant"] = condition_text(
                 sx.And(tuple(loc.invariant), comp.position), t.names.__getitem__
@@ -96,9 +110,11 @@ def automaton_text(
         remarks = []
         if loc.name != loc.spaceex_name:
             remarks.append(f"SpaceEx location '{loc.spaceex_name}' (id {loc.id})")
+        if loc.urgent:
+            remarks.append("SpaceEx flow: false (no time may pass here)")
         if loc.removed:
             remarks.append(
-                f"SpaceEx invariant: {loc.invariant_text}; the bounds on inputs became their ranges"
+                f"SpaceEx invariant: {loc.invariant_text}; taken out: {', '.join(dict.fromkeys(loc.removed))}"
             )
         if remarks:
             comments[("locations", loc.name)] = "\n".join(remarks)

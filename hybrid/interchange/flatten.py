@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 from hybrid.errors import Position, SpecError
 from hybrid.interchange import sxexpr as sx
+from hybrid.interchange.naming import component_name
 from hybrid.interchange.safexml import SourceText
 from hybrid.interchange.sxmodel import Component, SpaceExModel
 from hybrid.interchange.translate import constant_value
@@ -65,8 +66,8 @@ class Leaf:
 
     @property
     def name(self) -> str:
-        """The component name in our system: the instance path joined by ``_``."""
-        return "_".join(self.path) if self.path else self.component.id
+        """The component name in our system: the instance path joined by ``_`` (made a name)."""
+        return component_name("_".join(self.path) if self.path else self.component.id)
 
 
 @dataclass

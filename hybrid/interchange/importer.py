@@ -27,13 +27,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from hybrid.errors import SpecError
+from hybrid.errors import Position, SpecError
 from hybrid.interchange.cfg import SpaceExConfig, parse_cfg, read_cfg
 from hybrid.interchange.emit import SEMANTICS, automaton_text
 from hybrid.interchange.flatten import Flat, Leaf, flatten
 from hybrid.interchange.initial import InitialSet, Resolver, forbidden_set, initial_set
-from hybrid.interchange.naming import ours, system_names
+from hybrid.interchange.naming import component_name, system_names
 from hybrid.interchange.safexml import parse_xml_file, parse_xml_text
+from hybrid.interchange.selfcheck import check_loads
 from hybrid.interchange.starts import exact_comment, location_name, start_of
 from hybrid.interchange.sxmodel import SpaceExModel, read_model
 from hybrid.interchange.template import Template, analyse
@@ -114,12 +115,6 @@ def _translate(
     notes: list[str] = []
     if config is None:
         notes.append("no .cfg: every state starts at 0, in the first location of each component")
-    templates = _templates(flat)
-    owners = _owners(flat, templates)
-    free = {v for v in flat.variable_ids if v not in owners}
-    templates = _templates(flat, free)
-    for t in templates.values():
-        notes.extend(t.notes)
     open_constants = {c for leaf in flat.leaves for c in leaf.open_constants.values()}
     resolver = Resolver(
         [*flat.variable_ids, *sorted(open_constants)],
@@ -129,7 +124,15 @@ def _translate(
     if config is not None and config.initially is not None:
         init = initial_set(config.initially, resolver, open_constants)
         notes.extend(init.notes)
-    _close_constants(flat, init, config)
+    missing = _close_constants(flat, init, config)
+    templates = _templates(flat)
+    if missing is not None:
+        raise missing
+    owners = _owners(flat, templates)
+    free = {v for v in flat.variable_ids if v not in owners}
+    templates = _templates(flat, free)
+    for t in templates.values():
+        notes.extend(t.notes)
     names = system_names(flat.variable_ids)
     forbidden = _forbidden(flat, templates, resolver, names, config)
     source = f"From {Path(model.file).name}" + (
@@ -139,14 +142,36 @@ def _translate(
         leaf = flat.leaves[0]
         t = templates[leaf.component.id]
         start = start_of(leaf, t, init, config)
+        notes.extend(start["notes"])
         if start["exact"]:
             start["exact_comment"] = exact_comment(start["exact"])
         if forbidden and config is not None and config.forbidden is not None:
             start["forbidden_comment"] = f"forbidden set of the .cfg: {config.forbidden.text}"
         files = {t.file: automaton_text(t, leaf, start, forbidden, source, top=True)}
+        origins = {**t.origins, **_cfg_origins(config, ("initial",), ("properties",))}
+        check_loads(files, t.file, {t.file: origins})
         return ImportResult(files, t.file, notes)
-    files, top = _system_files(flat, templates, names, init, config, forbidden, source)
+    files, top = _system_files(flat, templates, names, init, config, forbidden, source, notes)
+    provenance = {t.file: t.origins for t in templates.values()}
+    system_origins: dict[tuple[str | int, ...], Position] = {(): flat.system.position}
+    for i, leaf in enumerate(flat.leaves):
+        system_origins[("components", i)] = leaf.position
+        system_origins |= _cfg_origins(config, ("components", i, "initial"), ("properties",))
+    provenance[top] = system_origins
+    check_loads(files, top, provenance)
     return ImportResult(files, top, notes)
+
+
+def _cfg_origins(
+    config: SpaceExConfig | None, initial: tuple[str | int, ...], forbidden: tuple[str | int, ...]
+) -> dict[tuple[str | int, ...], Position]:
+    """The ``.cfg`` places of a spec's initial set and forbidden states."""
+    found: dict[tuple[str | int, ...], Position] = {}
+    if config is not None and config.initially is not None:
+        found[initial] = config.initially.where(0)
+    if config is not None and config.forbidden is not None:
+        found[forbidden] = config.forbidden.where(0)
+    return found
 
 
 def _forbidden(
@@ -186,6 +211,7 @@ def _system_files(
     config: SpaceExConfig | None,
     forbidden: list[dict[str, Any]],
     source: str,
+    notes: list[str],
 ) -> tuple[dict[str, str], str]:
     """The automaton files of the base components and the system file (its name last)."""
     files: dict[str, str] = {}
@@ -197,7 +223,13 @@ def _system_files(
         if t.file not in files:
             files[t.file] = automaton_text(t, leaf, None, [], source, top=False)
         block: dict[str, Any] = {"spec": t.file, "as": leaf.name}
-        rename = {t.names[k]: names[v] for k, v in leaf.variables.items()}
+        written = "_".join(leaf.path)
+        if leaf.path and leaf.name != written:
+            notes.append(f"instance '{'.'.join(leaf.path)}' is '{leaf.name}' here (not a name)")
+        kept = {*t.states, *t.inputs, *t.signals}
+        rename = {t.names[k]: names[v] for k, v in leaf.variables.items() if k in kept}
+        for rate, var in t.rates.items():
+            rename[rate] = f"{names[leaf.variables[var]]}_{rate.removeprefix(t.names[var] + '_')}"
         rename |= {t.names[k]: label_names[v] for k, v in leaf.labels.items()}
         rename = {k: v for k, v in rename.items() if k != v}
         if rename:
@@ -205,11 +237,16 @@ def _system_files(
         if leaf.constants:
             block["parameters"] = {t.names[k]: v for k, v in leaf.constants.items()}
         start = start_of(leaf, t, init, config)
+        notes.extend(start["notes"])
         block["initial"] = {"location": start["location"], "state": start["state"]}
         if start["exact"]:
             comments[("components", len(components), "initial")] = exact_comment(start["exact"])
         components.append(block)
     name = _system_name(flat)
+    if name != flat.system.id:
+        notes.append(
+            f"component id '{flat.system.id}' is not one of our names: it is '{name}' here"
+        )
     data: dict[str, Any] = {"system": name, "description": _description(flat)}
     data["components"] = components
     if forbidden and config is not None and config.forbidden is not None:
@@ -229,7 +266,7 @@ def _single(flat: Flat) -> bool:
 
 
 def _system_name(flat: Flat) -> str:
-    return ours(flat.system.id)
+    return component_name(flat.system.id)
 
 
 def _description(flat: Flat) -> str:
@@ -238,7 +275,11 @@ def _description(flat: Flat) -> str:
 
 
 def _templates(flat: Flat, free: set[str] | None = None) -> dict[str, Template]:
-    """Each base component the system uses, read with the variables it leaves free."""
+    """Each base component the system uses, read with the variables it leaves free.
+
+    A constant's value is given to the reading when every instance has the same;
+    a constant the ``.cfg`` gives a range (a variable of every instance) is a state.
+    """
     found: dict[str, Template] = {}
     for leaf in flat.leaves:
         comp = leaf.component
@@ -250,7 +291,21 @@ def _templates(flat: Flat, free: set[str] | None = None) -> dict[str, Template]:
             for v in comp.params
             if free is not None and all(other.variables.get(v) in free for other in uses)
         }
-        found[comp.id] = analyse(comp, free_here)
+        values: dict[str, float] = {}
+        for c in leaf.constants:
+            seen = {other.constants.get(c) for other in uses}
+            value = seen.pop() if len(seen) == 1 else None
+            if value is not None:
+                values[c] = value
+        promoted = frozenset(
+            p
+            for p, param in comp.params.items()
+            if param.dynamics == "const" and all(p in other.variables for other in uses)
+        )
+        t = analyse(comp, free_here, values, promoted)
+        while t.name in {other.name for other in found.values()}:
+            t.name += "_"  # two ids made the same name (a>b, a_b)
+        found[comp.id] = t
     return found
 
 
@@ -268,7 +323,8 @@ def _owners(flat: Flat, templates: dict[str, Template]) -> dict[str, Leaf]:
                     leaf.position if leaf.path else leaf.component.position,
                 )
             seen[outer] = inner
-        for state in templates[leaf.component.id].states:
+        t = templates[leaf.component.id]
+        for state in [*t.states, *t.signals]:
             outer = leaf.variables[state]
             if outer in owners:
                 raise SpecError(
@@ -282,19 +338,36 @@ def _owners(flat: Flat, templates: dict[str, Template]) -> dict[str, Leaf]:
     return owners
 
 
-def _close_constants(flat: Flat, init: InitialSet, config: SpaceExConfig | None) -> None:
-    """Give every constant left open by the system the value the ``.cfg`` gives it."""
+def _close_constants(
+    flat: Flat, init: InitialSet, config: SpaceExConfig | None
+) -> SpecError | None:
+    """Give every constant left open by the system the value the ``.cfg`` gives it.
+
+    A constant the ``.cfg`` gives a range becomes a system variable (each
+    instance's template makes it a state with derivative 0). Returns the error
+    for a constant with no value (raised once the components are read, so that
+    a component's own mistake is reported first).
+    """
+    missing: SpecError | None = None
     for leaf in flat.leaves:
-        for inner, outer in leaf.open_constants.items():
+        for inner, outer in list(leaf.open_constants.items()):
+            if outer in init.ranged:
+                leaf.variables[inner] = outer
+                del leaf.constants[inner], leaf.open_constants[inner]
+                if outer not in flat.variable_ids:
+                    flat.variable_ids.append(outer)
+                continue
             if outer not in init.constants:
                 where = (
                     config.initially.where(0)
                     if config and config.initially
                     else flat.system.position
                 )
-                raise SpecError(
+                missing = missing or SpecError(
                     f"constant '{outer}' of the system has no value: add '{outer} == value' to "
                     "the .cfg's initially (or bind it to a number)",
                     where,
                 )
+                continue
             leaf.constants[inner] = init.constants[outer]
+    return missing

@@ -83,6 +83,8 @@ class InitialSet:
     """Leaf index -> every initial location, when a union (``|``) gives several."""
     location_positions: dict[int, Position] = field(default_factory=dict)
     constants: dict[str, float] = field(default_factory=dict)
+    ranged: set[str] = field(default_factory=set)
+    """Constants the initial set gives a range (their interval stays in ``bounds``)."""
     notes: list[str] = field(default_factory=list)
 
 
@@ -240,10 +242,11 @@ def _union(parts: list[InitialSet], items: tuple[sx.Node, ...], where: Position)
     """
     first = parts[0]
     for part, item in zip(parts, items, strict=True):
-        if (part.bounds, part.nominal, part.constants) != (
+        if (part.bounds, part.nominal, part.constants, part.ranged) != (
             first.bounds,
             first.nominal,
             first.constants,
+            first.ranged,
         ) or set(part.locations) != set(first.locations):
             raise SpecError(
                 "an initial set with '|' (a union) has a counterpart only when its parts are "
@@ -317,11 +320,17 @@ def _conjunction(
         )
     for name in list(init.bounds):
         if name in open_constants:
-            lo, hi = init.bounds.pop(name)
+            lo, hi = init.bounds[name]
             if lo != hi:
-                raise SpecError(
-                    f"constant '{name}' must be given one value (c == number)", text.where(0)
-                )
+                if not (math.isfinite(lo) and math.isfinite(hi)):
+                    raise SpecError(
+                        f"constant '{name}' must be given one value (c == number) or a bounded "
+                        "range (lo <= c & c <= hi)",
+                        text.where(0),
+                    )
+                init.ranged.add(name)
+                continue
+            del init.bounds[name]
             init.constants[name] = lo
     return init
 
@@ -360,6 +369,8 @@ def forbidden_set(
         return rename(resolver.variable(n))
 
     for part in parts:
+        if not sx.conjuncts(part):
+            continue  # forbidden = "" (or true): no entry of its own
         locations: dict[int, str] = {}
         positions: dict[int, Position] = {}
         rest: list[sx.Node] = []

@@ -27,7 +27,7 @@ from collections.abc import Iterable, Sequence
 
 from hybrid.expr.functions import BUILTINS
 
-__all__ = ["RESERVED", "location_names", "ours", "system_names"]
+__all__ = ["RESERVED", "component_name", "location_names", "ours", "system_names"]
 
 RESERVED = frozenset(
     {"t", "pi", "true", "false", "and", "or", "not", "inf", "nan"}
@@ -49,6 +49,20 @@ def ours(name: str, taken: Iterable[str] = ()) -> str:
     return candidate
 
 
+def component_name(cid: str) -> str:
+    """A component id or instance name as one of our names (``a>b``, ``a b`` -> ``a_b``; ``1ab`` -> ``c_1ab``).
+
+    Examples
+    --------
+    >>> component_name("a>b"), component_name("1ab"), component_name("plant"), component_name("")
+    ('a_b', 'c_1ab', 'plant', 'c_')
+    """
+    candidate = _NOT_NAME.sub("_", cid.strip())
+    if not candidate or not (candidate[0].isalpha() or candidate[0] == "_"):
+        candidate = "c_" + candidate
+    return ours(candidate)
+
+
 def system_names(ids: Sequence[str]) -> dict[str, str]:
     """Our name for each system-level variable or label id (see the module docstring)."""
     result: dict[str, str] = {}
@@ -59,9 +73,10 @@ def system_names(ids: Sequence[str]) -> dict[str, str]:
     dotted = [i for i in ids if "." in i]
     last = [i.rsplit(".", 1)[1] for i in dotted]
     for i, tail in zip(dotted, last, strict=True):
-        candidate = ours(tail) if last.count(tail) == 1 else ours(i.replace(".", "_"))
+        joined = component_name(i.replace(".", "_"))
+        candidate = ours(tail) if last.count(tail) == 1 else joined
         if candidate in used:
-            candidate = ours(i.replace(".", "_"))
+            candidate = joined
         while candidate in used:
             candidate += "_"
         result[i] = candidate

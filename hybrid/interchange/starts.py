@@ -18,6 +18,7 @@ from hybrid.interchange import sxexpr as sx
 from hybrid.interchange.cfg import SpaceExConfig
 from hybrid.interchange.flatten import Leaf
 from hybrid.interchange.initial import InitialSet
+from hybrid.interchange.inputs import bound
 from hybrid.interchange.template import Template
 from hybrid.interchange.translate import condition_ir
 
@@ -51,6 +52,9 @@ def start_of(
     state: dict[str, Any] = {}
     box: dict[str, Interval] = {}
     point: dict[str, Interval] = {}
+    notes: list[str] = []
+    where_cfg = config.initially.where(0) if config and config.initially else Position("<cfg>")
+    invariant = _initial_invariant(leaf, t, init)
     for inner in t.states:
         outer = leaf.variables[inner]
         ours = t.names[inner]
@@ -60,6 +64,8 @@ def start_of(
             lo, hi = init.bounds[outer]
         else:
             lo, hi = float("-inf"), float("inf")
+        if invariant is not None and config is not None and config.initially is not None:
+            lo, hi = _intersect(leaf, inner, outer, (lo, hi), invariant, notes, where_cfg)
         if not (math.isfinite(lo) and math.isfinite(hi)):
             where = config.initially.where(0) if config and config.initially else Position("<cfg>")
             how = "unbounded" if math.isfinite(lo) or math.isfinite(hi) else "free (any number)"
@@ -88,10 +94,65 @@ def start_of(
         "location": chosen[0] if len(chosen) == 1 else chosen,
         "state": state,
         "exact": exact,
+        "notes": notes,
     }
     if leaf.index in init.alternatives:
         found["locations_comment"] = "the .cfg's initial set is a union over these locations"
     return found
+
+
+def _initial_invariant(
+    leaf: Leaf, t: Template, init: InitialSet
+) -> tuple[str, list[sx.Node]] | None:
+    """The name and invariant of the one location the instance starts in, if it is known."""
+    if leaf.index in init.locations and leaf.index not in init.alternatives:
+        loc = t.location(init.locations[leaf.index])
+    elif len(t.locations) == 1:
+        loc = t.locations[0]
+    else:
+        return None
+    return None if loc is None else (loc.name, loc.invariant)
+
+
+def _intersect(
+    leaf: Leaf,
+    inner: str,
+    outer: str,
+    interval: tuple[float, float],
+    invariant: tuple[str, list[sx.Node]],
+    notes: list[str],
+    where: Position,
+) -> tuple[float, float]:
+    """``interval`` within the numeric bounds the initial location's invariant puts on ``inner``.
+
+    SpaceEx's initial states are those of the initial set that satisfy the
+    invariant: a variable the ``.cfg`` leaves free (the constant-input variants'
+    ``u' == 0`` with ``0.8 <= u <= 1`` in the invariant) starts anywhere in its bounds.
+    """
+    values = {k: v for k, v in leaf.constants.items() if v is not None}
+    lo, hi = interval
+    name, items = invariant
+    for item in items:
+        found = bound(item, inner, values)
+        if found is not None:
+            lo, hi = max(lo, found[0]), min(hi, found[1])
+    if lo > hi:
+        raise SpecError(
+            f"the initial set and the invariant of the initial location '{name}' leave no value "
+            f"of '{outer}'",
+            where,
+        )
+    if (lo, hi) != interval:
+        was = (
+            "leaves it free"
+            if not any(map(math.isfinite, interval))
+            else (f"gives [{interval[0]:g}, {interval[1]:g}]")
+        )
+        notes.append(
+            f"the .cfg {was} for '{outer}'; with the invariant of the initial location "
+            f"'{name}' (SpaceEx's initial states satisfy it) it starts in [{lo:g}, {hi:g}]"
+        )
+    return lo + 0.0, hi + 0.0
 
 
 def _initial_locations(

@@ -96,11 +96,16 @@ class BinOp:
 
 @dataclass(frozen=True)
 class Cmp:
-    """A comparison chain; ``ops`` from ``== != <= >= < >``."""
+    """A comparison chain; ``ops`` from ``== != <= >= < >``.
+
+    ``single`` marks ``a = b`` written with one ``=`` (read as ``==``, except in an
+    ``<assignment>``, where ``x = e`` is the reset ``x := e``).
+    """
 
     ops: tuple[str, ...]
     operands: tuple[Node, ...]
     position: Position
+    single: bool = False
 
 
 @dataclass(frozen=True)
@@ -255,14 +260,16 @@ class _Parser:
                 raise SpecError("the left side of ':=' must be a variable", self.at(first))
             return Assign(left, self.sum(), self.at(first))
         ops: list[str] = []
+        written: list[str] = []
         operands = [left]
         while (token := self.peek()) is not None and token.kind == "op" and token.text in _RELOPS:
             self.i += 1
+            written.append(token.text)
             ops.append("==" if token.text == "=" else token.text)
             operands.append(self.sum())
         if not ops:
             return left
-        return Cmp(tuple(ops), tuple(operands), self.at(first))
+        return Cmp(tuple(ops), tuple(operands), self.at(first), written == ["="])
 
     def sum(self) -> Node:
         first = self.peek()
@@ -373,10 +380,16 @@ def parse(source: SourceText) -> Node:
 
 
 def conjuncts(node: Node) -> list[Node]:
-    """The items of a top-level conjunction (``[node]`` for anything else)."""
+    """The items of a top-level conjunction (``[node]`` for anything else).
+
+    A ``true`` item is dropped (``true && x' <= 2`` is ``x' <= 2``), so what
+    follows is read, and refused, for what it is.
+    """
     if isinstance(node, And):
         found: list[Node] = []
         for item in node.items:
             found.extend(conjuncts(item))
         return found
+    if isinstance(node, Bool) and node.value:
+        return []
     return [node]

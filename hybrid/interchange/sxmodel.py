@@ -204,7 +204,7 @@ def _component(node: XmlNode) -> Component:
         comp.binds.append(
             Bind(
                 _attr(bind, "component"),
-                _identifier(_attr(bind, "as"), "instance name", bind.position),
+                _attr(bind, "as").strip(),
                 maps,
                 bind.position,
             )

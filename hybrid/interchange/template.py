@@ -22,12 +22,16 @@ holds and is not repeated; one that the guard already has is not repeated.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from hybrid.errors import Position, SpecError
 from hybrid.expr.printer import expression_text
 from hybrid.interchange import sxexpr as sx
-from hybrid.interchange.naming import location_names, ours
+from hybrid.interchange.inputs import input_ranges
+from hybrid.interchange.naming import component_name, location_names, ours
+from hybrid.interchange.outputs import outputs, unused
+from hybrid.interchange.rectangular import flow_parts, rate_inputs
 from hybrid.interchange.safexml import SourceText
 from hybrid.interchange.sxmodel import Component
 from hybrid.interchange.translate import (
@@ -52,6 +56,7 @@ class LocationInfo:
     invariant: list[sx.Node]
     invariant_text: str
     removed: list[str] = field(default_factory=list)
+    urgent: bool = False
 
 
 @dataclass
@@ -79,6 +84,14 @@ class Template:
     edges: list[EdgeInfo]
     ranges: dict[str, tuple[float, float]]
     notes: list[str]
+    signals: dict[str, dict[str, str]] = field(default_factory=dict)
+    """Output variable -> {our location name: its definition} (see :mod:`.outputs`)."""
+    dropped: list[str] = field(default_factory=list)
+    """Inputs nothing reads, left out."""
+    rates: dict[str, str] = field(default_factory=dict)
+    """Input standing for a rectangular rate -> the variable whose rate it is."""
+    origins: dict[tuple[str | int, ...], Position] = field(default_factory=dict)
+    """YAML path of the automaton file -> the SpaceEx position it comes from."""
 
     @property
     def file(self) -> str:
@@ -99,8 +112,17 @@ def _rename(names: dict[str, str], comp: Component) -> Rename:
     return rename
 
 
-def analyse(comp: Component, free: set[str]) -> Template:
+def analyse(
+    comp: Component,
+    free: set[str],
+    values: Mapping[str, float] | None = None,
+    promoted: frozenset[str] = frozenset(),
+) -> Template:
     """Read base component ``comp``; ``free`` holds its variables the system leaves free.
+
+    ``values`` are the constants' values every instance agrees on (bounds
+    written with constants use them); ``promoted`` are constants the ``.cfg``
+    gives a range: state variables with derivative 0 (the SpaceEx meaning).
 
     Raises
     ------
@@ -117,17 +139,39 @@ def analyse(comp: Component, free: set[str]) -> Template:
                 f"reserved in our expressions{'; t is the time' if old == 't' else ''})"
             )
     rename = _rename(names, comp)
-    constants = [n for n in reals if comp.params[n].dynamics == "const"]
+    values = dict(values or {})
+    constants = [n for n in reals if comp.params[n].dynamics == "const" and n not in promoted]
     labels = [p.name for p in comp.params.values() if p.kind == "label"]
     loc_names = location_names([(loc.id, loc.name) for loc in comp.locations])
     parsed_flows: dict[str, dict[str, str]] = {}
+    urgent: set[str] = set()
+    rates: dict[str, dict[str, tuple[float, float]]] = {}
     for loc in comp.locations:
-        parsed_flows[loc.id] = flows(sx.parse(loc.flow), rename)
-        for var in parsed_flows[loc.id]:
+        parts = flow_parts(sx.parse(loc.flow), values)
+        parsed_flows[loc.id] = flows(sx.And(tuple(parts.equations), loc.position), rename)
+        if parts.urgent:
+            urgent.add(loc.id)
+        rates[loc.id] = parts.rates
+        for var in [*parsed_flows[loc.id], *parts.rates]:
             _check_variable(comp, var, loc.flow.where(0), constants)
+        for var in promoted:
+            parsed_flows[loc.id].setdefault(var, "0")
+    rated = rate_inputs(comp, rates, parsed_flows, names, notes)
+    for loc in comp.locations:
+        if loc.id in urgent:
+            notes.append(
+                f"component '{comp.id}': location '{loc.name}' has the flow false (no time may "
+                "pass there): it is urgent"
+            )
+    for var in sorted(promoted):
+        notes.append(
+            f"component '{comp.id}': constant '{var}' is given a range in the .cfg: it is a "
+            f"state variable with {names[var]}' = 0 that starts anywhere in that range"
+        )
     parsed_resets: list[dict[str, str]] = []
+    single: list[sx.Node] = []
     for tr in comp.transitions:
-        parsed = resets(sx.parse(tr.assignment), rename)
+        parsed = resets(sx.parse(tr.assignment), rename, single)
         for var in parsed:
             _check_variable(comp, var, tr.assignment.where(0), constants)
         parsed_resets.append(parsed)
@@ -137,10 +181,20 @@ def analyse(comp: Component, free: set[str]) -> Template:
                 'type="label"/> to the component',
                 tr.label_position,
             )
+    if single:
+        first = single[0].position
+        others = f" (and {len(single) - 1} more)" if len(single) > 1 else ""
+        notes.append(
+            f"component '{comp.id}': the assignment at line {first.line}, column {first.column}"
+            f"{others} is written x = e: it is read as the reset x := e, as SpaceEx, PHAVer "
+            "and HyST read it"
+        )
     driven = {v for f in parsed_flows.values() for v in f} | {v for r in parsed_resets for v in r}
     states = [n for n in reals if n in driven]
     inputs = [n for n in reals if n not in driven and n not in constants]
     for loc in comp.locations:
+        if loc.id in urgent:
+            continue
         missing = [v for v in states if v not in parsed_flows[loc.id]]
         if missing:
             raise SpecError(
@@ -153,13 +207,28 @@ def analyse(comp: Component, free: set[str]) -> Template:
         _location(loc.id, loc_names[loc.id], loc.name, parsed_flows[loc.id], loc.invariant)
         for loc in comp.locations
     ]
-    ranges = _input_ranges(comp, [i for i in inputs if i in free], locations, notes)
+    for info in locations:
+        info.urgent = info.id in urgent
+    candidates = [i for i in inputs if i in free and comp.params[i].controlled is not False]
+    origins: dict[tuple[str | int, ...], Position] = {(): comp.position}
+    signals = outputs(comp, candidates, locations, rename, notes, origins)
+    inputs = [i for i in inputs if i not in signals]
+    ranges = input_ranges(comp, [i for i in inputs if i in free], locations, notes, values)
+    inputs += list(rated)
+    ranges.update({name: bounds for name, (_, bounds) in rated.items()})
     edges = [
         _edge(comp, i, locations, rename, parsed_resets[i]) for i in range(len(comp.transitions))
     ]
+    dropped = unused(comp, inputs, locations, edges, signals, names, notes)
+    inputs = [i for i in inputs if i not in dropped]
+    if component_name(comp.id) != comp.id:
+        notes.append(
+            f"component id '{comp.id}' is not one of our names: it is "
+            f"'{component_name(comp.id)}' here"
+        )
     return Template(
         comp,
-        ours(comp.id),
+        component_name(comp.id),
         names,
         states,
         inputs,
@@ -169,7 +238,34 @@ def analyse(comp: Component, free: set[str]) -> Template:
         edges,
         ranges,
         notes,
+        signals,
+        dropped,
+        {name: var for name, (var, _) in rated.items()},
+        _origins(comp, names, locations, origins),
     )
+
+
+def _origins(
+    comp: Component,
+    names: dict[str, str],
+    locations: list[LocationInfo],
+    origins: dict[tuple[str | int, ...], Position],
+) -> dict[tuple[str | int, ...], Position]:
+    """Where each part of the automaton file comes from (see :mod:`.selfcheck`)."""
+    for name, param in comp.params.items():
+        for section in ("state", "inputs", "parameters", "labels"):
+            origins[(section, names[name])] = param.position
+    by_id = {loc.id: loc for loc in comp.locations}
+    for info in locations:
+        loc = by_id[info.id]
+        origins[("locations", info.name)] = loc.position
+        origins[("locations", info.name, "flow")] = loc.flow.where(0)
+        origins[("locations", info.name, "invariant")] = loc.invariant.where(0)
+    for i, tr in enumerate(comp.transitions):
+        origins[("edges", i)] = tr.position
+        origins[("edges", i, "guard")] = tr.guard.where(0) if tr.guard.text.strip() else tr.position
+        origins[("edges", i, "reset")] = tr.assignment.where(0)
+    return origins
 
 
 def _check_variable(comp: Component, var: str, where: Position, constants: list[str]) -> None:
@@ -188,72 +284,6 @@ def _location(
 ) -> LocationInfo:
     items = sx.conjuncts(sx.parse(invariant))
     return LocationInfo(lid, name, spaceex_name, flow, items, invariant.text.strip())
-
-
-def _bound(item: sx.Node, var: str) -> tuple[float, float] | None:
-    """The interval a conjunct puts on ``var`` if it is a bound by numbers, else ``None``."""
-    if not isinstance(item, sx.Cmp):
-        return None
-    lo, hi = -float("inf"), float("inf")
-    found = False
-    for op, a, b in zip(item.ops, item.operands, item.operands[1:], strict=False):
-        a_is = isinstance(a, sx.Name) and a.name == var and not a.primed
-        b_is = isinstance(b, sx.Name) and b.name == var and not b.primed
-        a_val = constant_value(a, {})
-        b_val = constant_value(b, {})
-        if a_is and b_val is not None:
-            value, side = b_val, op
-        elif b_is and a_val is not None:
-            value, side = (
-                a_val,
-                {"<=": ">=", "<": ">", ">=": "<=", ">": "<", "==": "=="}.get(op, op),
-            )
-        else:
-            return None
-        found = True
-        if side in ("<=", "<"):
-            hi = min(hi, value)
-        elif side in (">=", ">"):
-            lo = max(lo, value)
-        elif side == "==":
-            lo, hi = max(lo, value), min(hi, value)
-        else:
-            return None
-    return (lo, hi) if found else None
-
-
-def _input_ranges(
-    comp: Component, free: list[str], locations: list[LocationInfo], notes: list[str]
-) -> dict[str, tuple[float, float]]:
-    ranges: dict[str, tuple[float, float]] = {}
-    for var in free:
-        per_location: list[tuple[float, float] | None] = []
-        for loc in locations:
-            bounds = [b for b in (_bound(c, var) for c in loc.invariant) if b is not None]
-            if not bounds:
-                per_location.append(None)
-                continue
-            lo = max(b[0] for b in bounds)
-            hi = min(b[1] for b in bounds)
-            per_location.append((lo, hi))
-        if not per_location or any(r is None for r in per_location) or len(set(per_location)) > 1:
-            notes.append(
-                f"component '{comp.id}': input '{var}' is not bounded by the same numbers in "
-                "every location's invariant, so it gets no range"
-            )
-            continue
-        first = per_location[0]
-        assert first is not None
-        ranges[var] = first
-        for loc in locations:
-            kept = []
-            for c in loc.invariant:
-                if _bound(c, var) is not None:
-                    loc.removed.append(f"input range of {var}")
-                else:
-                    kept.append(c)
-            loc.invariant = kept
-    return ranges
 
 
 def _edge(

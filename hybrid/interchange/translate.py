@@ -27,13 +27,14 @@ Examples
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 
 from hybrid.errors import Position, SpecError
 from hybrid.expr import ir
 from hybrid.expr.functions import BUILTINS
 from hybrid.expr.printer import expression_text
 from hybrid.interchange import sxexpr as sx
+from hybrid.interchange.sxvalues import constant_value, substitute
 
 __all__ = [
     "FUNCTIONS",
@@ -108,6 +109,8 @@ def to_ir(node: sx.Node, rename: Rename) -> ir.Expr:
             return ir.Var(mapped, ir.STATE)
     if isinstance(node, sx.Neg):
         return ir.Unary("-", to_ir(node.operand, rename))
+    if isinstance(node, sx.BinOp) and node.op in "+-":
+        return _sum(node, rename)
     if isinstance(node, sx.BinOp):
         op = "**" if node.op == "^" else node.op
         return ir.Bin(op, to_ir(node.left, rename), to_ir(node.right, rename))
@@ -115,11 +118,17 @@ def to_ir(node: sx.Node, rename: Rename) -> ir.Expr:
         return _call(node, rename)
     if isinstance(node, sx.Cmp):
         return ir.Cmp(node.ops, tuple(to_ir(o, rename) for o in node.operands))
-    if isinstance(node, sx.And | sx.Or):
+    if isinstance(node, sx.And):
+        items = sx.conjuncts(node)
+        if not items:
+            return ir.BoolConst(True)
+        if len(items) == 1:
+            return to_ir(items[0], rename)
+        return ir.BoolOp("and", tuple(to_ir(i, rename) for i in items))
+    if isinstance(node, sx.Or):
         if not node.items:
             return ir.BoolConst(True)
-        op = "and" if isinstance(node, sx.And) else "or"
-        return ir.BoolOp(op, tuple(to_ir(i, rename) for i in node.items))
+        return ir.BoolOp("or", tuple(to_ir(i, rename) for i in node.items))
     if isinstance(node, sx.Interval):
         raise SpecError(f"a range [lo, hi] is not a value: {_RANGE_HINT}", node.position)
     if isinstance(node, sx.Assign):
@@ -127,6 +136,38 @@ def to_ir(node: sx.Node, rename: Rename) -> ir.Expr:
     if isinstance(node, sx.Loc):
         raise SpecError("loc(...) belongs in the .cfg file only", node.position)
     raise TypeError(f"unknown SpaceEx node {node!r}")
+
+
+LONG_SUM = 32
+"""Sums of more terms than this are written in parenthesised groups (see :func:`_sum`)."""
+
+
+def _sum(node: sx.BinOp, rename: Rename) -> ir.Expr:
+    """A chain ``t0 ± t1 ± ...`` as IR; a long one in groups of about sqrt(n) terms.
+
+    Our expressions refuse trees deeper than 64 levels, and a sum of n terms
+    written flat is n levels deep (the ISS model's outputs have 135 terms):
+    ``t0 + ... + t15 + (t16 - ... ) - (...)`` is about 2 sqrt(n) deep.
+    """
+    terms: list[tuple[str, sx.Node]] = []
+    current: sx.Node = node
+    while isinstance(current, sx.BinOp) and current.op in "+-":
+        terms.append((current.op, current.right))
+        current = current.left
+    terms.append(("+", current))
+    terms.reverse()
+    converted = [(sign, to_ir(term, rename)) for sign, term in terms]
+    size = len(converted) if len(converted) <= LONG_SUM else math.isqrt(len(converted)) + 1
+    result: ir.Expr | None = None
+    for start in range(0, len(converted), size):
+        chunk = converted[start : start + size]
+        outer = chunk[0][0]
+        group = chunk[0][1]
+        for sign, term in chunk[1:]:
+            group = ir.Bin("+" if sign == outer else "-", group, term)
+        result = group if result is None else ir.Bin(outer, result, group)
+    assert result is not None
+    return result
 
 
 def _call(node: sx.Call, rename: Rename) -> ir.Expr:
@@ -255,12 +296,30 @@ def flows(node: sx.Node, rename: Rename) -> dict[str, str]:
     return found
 
 
-def resets(node: sx.Node, rename: Rename) -> dict[str, str]:
-    """``{x: text of e}`` for an assignment ``x := e & ...`` (or ``x' == e``); identities dropped."""
+def _single_equals(item: sx.Node) -> tuple[sx.Name, sx.Node] | None:
+    """``(x, e)`` for ``x = e`` written with one ``=`` (the reset ``x := e``), else ``None``."""
+    if isinstance(item, sx.Cmp) and item.single:
+        left, right = item.operands
+        if isinstance(left, sx.Name) and not left.primed and _has_primed(right) is None:
+            return left, right
+    return None
+
+
+def resets(node: sx.Node, rename: Rename, single: list[sx.Node] | None = None) -> dict[str, str]:
+    """``{x: text of e}`` for an assignment ``x := e & ...`` (or ``x' == e``); identities dropped.
+
+    ``x = e`` (one ``=``) is read as ``x := e``, as SpaceEx, PHAVer and HyST
+    read it; each such item is appended to ``single`` (for the note).
+    """
     found: dict[str, str] = {}
     for item in sx.conjuncts(node):
+        equals = _single_equals(item)
         if isinstance(item, sx.Assign):
             target, value = item.target, item.value
+        elif equals is not None:
+            target, value = equals
+            if single is not None:
+                single.append(item)
         else:
             pair = _primed_target(item)
             if pair is None:
@@ -298,65 +357,13 @@ def reset_nodes(node: sx.Node) -> dict[str, sx.Node]:
     """``{x: e}`` as SpaceEx trees (identities included), for substitution; call after :func:`resets`."""
     found: dict[str, sx.Node] = {}
     for item in sx.conjuncts(node):
+        equals = _single_equals(item)
         if isinstance(item, sx.Assign):
             found[item.target.name] = item.value
+        elif equals is not None:
+            found[equals[0].name] = equals[1]
         else:
             pair = _primed_target(item)
             if pair is not None:
                 found[pair[0].name] = pair[1]
     return found
-
-
-def substitute(node: sx.Node, values: Mapping[str, sx.Node]) -> sx.Node:
-    """``node`` with each unprimed variable in ``values`` replaced (a reset applied to a condition)."""
-    if isinstance(node, sx.Name):
-        return values.get(node.name, node) if not node.primed else node
-    if isinstance(node, sx.Neg):
-        return sx.Neg(substitute(node.operand, values), node.position)
-    if isinstance(node, sx.BinOp):
-        return sx.BinOp(
-            node.op, substitute(node.left, values), substitute(node.right, values), node.position
-        )
-    if isinstance(node, sx.Call):
-        return sx.Call(node.func, tuple(substitute(a, values) for a in node.args), node.position)
-    if isinstance(node, sx.Cmp):
-        return sx.Cmp(node.ops, tuple(substitute(o, values) for o in node.operands), node.position)
-    if isinstance(node, sx.And):
-        return sx.And(tuple(substitute(i, values) for i in node.items), node.position)
-    if isinstance(node, sx.Or):
-        return sx.Or(tuple(substitute(i, values) for i in node.items), node.position)
-    return node
-
-
-def constant_value(node: sx.Node, values: Mapping[str, float]) -> float | None:
-    """The number an arithmetic tree of numbers and known constants stands for, else ``None``."""
-    if isinstance(node, sx.Num):
-        return node.value
-    if isinstance(node, sx.Name):
-        return None if node.primed else values.get(node.name)
-    if isinstance(node, sx.Neg):
-        inner = constant_value(node.operand, values)
-        return None if inner is None else -inner
-    if isinstance(node, sx.BinOp):
-        a = constant_value(node.left, values)
-        b = constant_value(node.right, values)
-        if a is None or b is None:
-            return None
-        try:
-            result = _arith(node.op, a, b)
-        except (ZeroDivisionError, OverflowError, ValueError):
-            return None
-        return result if math.isfinite(result) else None
-    return None
-
-
-def _arith(op: str, a: float, b: float) -> float:
-    if op == "+":
-        return a + b
-    if op == "-":
-        return a - b
-    if op == "*":
-        return a * b
-    if op == "/":
-        return a / b
-    return float(math.pow(a, b))

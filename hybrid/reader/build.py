@@ -92,6 +92,9 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
             position=positions.key(base),
             invariant_position=positions.value((*base, "invariant")),
             urgent=loc.urgent,
+            flow_positions=MappingProxyType(
+                {var: positions.value((*base, "flow", var)) for var in flow}
+            ),
         )
         cycle = find_cycle({**signals, **loc_signals})
         if cycle and not find_cycle(signals):
@@ -114,6 +117,13 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
     )
     if spec.checks is not None:
         properties = replace(properties, ignore=tuple(spec.checks.ignore))
+        if spec.checks.reach is not None:
+            properties = replace(
+                properties,
+                reach_t_end=spec.checks.reach.t_end,
+                reach_max_jumps=spec.checks.reach.max_jumps,
+                reach_step=spec.checks.reach.step,
+            )
     ranges = input_ranges(spec, problems)
     locs = list(spec.locations)
     requirements = build_requirements(spec.requirements, positions, scope, locs, problems.items)
@@ -331,6 +341,9 @@ def _edges(
                 guard_source=edge.guard,
                 position=positions.value(base),
                 guard_position=positions.value((*base, "guard")),
+                reset_positions=MappingProxyType(
+                    {var: positions.value((*base, "reset", var)) for var in reset}
+                ),
             )
         )
     return edges

@@ -33,6 +33,7 @@ __all__ = [
     "InputSpec",
     "LocationSpec",
     "PropertiesSpec",
+    "ReachChecksSpec",
     "RequirementSpec",
     "SignalSpec",
     "StateVarSpec",
@@ -299,6 +300,7 @@ RULE_IDS = (
     "zero-time-cycle",
     "unused-declaration",
     "property-violated",
+    "property-unproved",
     "analysis-incomplete",
 )
 """The rules of `hybrid check` a spec may silence (hybrid.analysis.findings.RULES has them all)."""
@@ -310,8 +312,23 @@ RuleId = Literal[
     "zero-time-cycle",
     "unused-declaration",
     "property-violated",
+    "property-unproved",
     "analysis-incomplete",
 ]
+
+
+class ReachChecksSpec(_Strict):
+    """The horizon of `hybrid reach`, used by `hybrid check` for forbidden entries."""
+
+    t_end: Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)] = Field(
+        description="Horizon: reach proves or refutes forbidden entries over [0, t_end]."
+    )
+    max_jumps: Annotated[int, Field(strict=True, ge=0)] = Field(
+        10, description="Jump bound of the proof."
+    )
+    step: Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)] | None = Field(
+        None, description="Flowpipe step (default t_end / 4000): smaller is tighter and slower."
+    )
 
 
 class ChecksSpec(_Strict):
@@ -320,6 +337,11 @@ class ChecksSpec(_Strict):
     ignore: list[RuleId] = Field(
         default_factory=list,
         description="Rules not to report for findings placed in this file.",
+    )
+    reach: ReachChecksSpec | None = Field(
+        None,
+        description="Decide forbidden entries with `hybrid reach` over this horizon "
+        "(affine models; docs/reach.md).",
     )
 
 

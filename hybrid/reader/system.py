@@ -79,6 +79,13 @@ def build_system(
     )
     if spec.checks is not None:
         properties = replace(properties, ignore=tuple(spec.checks.ignore))
+        if spec.checks.reach is not None:
+            properties = replace(
+                properties,
+                reach_t_end=spec.checks.reach.t_end,
+                reach_max_jumps=spec.checks.reach.max_jumps,
+                reach_step=spec.checks.reach.step,
+            )
     requirements = build_requirements(
         spec.requirements, positions, _scope(system), qualified, problems.items
     )

@@ -45,13 +45,19 @@ def test_a_forbidden_state_is_proved_unreachable_or_reported_with_a_witness() ->
     # level <= 5 while filling (its invariant) and on entry (1 at the start, 1 from `empty`);
     # level >= 1 while draining, 5 on entry: the first two are unreachable, the third is
     # reached at t = 4, entering draining at level 5
+    # the analysis alone does not simulate: the third is not proved, with a candidate path
     (finding,) = report.findings
-    assert (finding.rule, finding.severity) == ("property-violated", "error")
+    assert (finding.rule, finding.severity) == ("property-unproved", "warning")
     assert finding.where == "forbidden: draining with level >= 4.9"
     assert (finding.file, finding.line) == ("tank.yaml", 14)
     assert finding.witness == ((None, "filling"), ("full", "draining"))
     run = hybrid.simulate(hybrid.load_text(TANK), t_end=4.5)
     assert run.jumps[0].t == pytest.approx(4.0) and run.jumps[0].after["level"] >= 4.9
+    # with reach (hybrid.check, a horizon): refuted by that simulated run, an error
+    (violated,) = hybrid.check(hybrid.load_text(TANK, file="tank.yaml"), reach_t_end=5.0).findings
+    assert (violated.rule, violated.severity) == ("property-violated", "error")
+    assert (violated.file, violated.line) == ("tank.yaml", 14)
+    assert "reached at t = 4 " in violated.message
 
 
 def test_flows_narrow_the_states_of_a_location_to_one_side_of_its_entries() -> None:
@@ -86,13 +92,17 @@ def test_a_forbidden_combination_of_locations_in_a_system(tmp_path: Path) -> Non
         "    - {locations: {plant: overflow, ctrl: busy}}\n"
     )
     report = check(hybrid.load(tmp_path / "sys.yaml"))
-    # `go` moves both at once: overflow never meets idle
-    (finding,) = report.by_rule("property-violated")
+    # `go` moves both at once: overflow never meets idle; the other is not proved
+    (finding,) = report.by_rule("property-unproved")
     assert finding.where == "forbidden: plant.overflow, ctrl.busy"
     assert finding.witness == (
         (None, "plant.idle|ctrl.idle"),
         ("plant.idle->overflow#0+ctrl.idle->busy#0", "plant.overflow|ctrl.busy"),
     )
+    # with reach it is refuted by a run: `go` fires at once (its guard is true)
+    (violated,) = hybrid.check(hybrid.load(tmp_path / "sys.yaml"), reach_t_end=1.0).findings
+    assert (violated.rule, violated.where) == ("property-violated", finding.where)
+    assert "reached at t = 0 " in violated.message
 
 
 CORNER = """
@@ -193,8 +203,8 @@ properties: {unreachable: [c]}
     report = check(m)
     assert [f.where for f in report.by_rule("unreachable-location")] == ["d"]
     assert "unreachable from 'a', 'b'" in report.by_rule("unreachable-location")[0].message
-    (violated,) = report.by_rule("property-violated")
-    assert violated.witness == ((None, "b"), ("b->c#0", "c"))
+    (unproved,) = report.by_rule("property-unproved")
+    assert unproved.witness == ((None, "b"), ("b->c#0", "c"))
     alone = hybrid.load_text(
         "automaton: a1\nlocations: {a: {}, b: {}, c: {}}\nedges: [{from: b, to: c}]\n"
     )

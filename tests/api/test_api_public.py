@@ -12,7 +12,7 @@ import pytest
 
 import hybrid
 
-PUBLIC_FUNCTIONS = ["load", "load_text", "simulate", "check", "compose"]
+PUBLIC_FUNCTIONS = ["load", "load_text", "simulate", "check", "compose", "reach"]
 
 
 @pytest.mark.parametrize("name", PUBLIC_FUNCTIONS)

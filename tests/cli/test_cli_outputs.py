@@ -29,6 +29,8 @@ COMMANDS = [
     (["schema"], "--out", ".json"),
     (["graph", THERMOSTAT], "--out", ".dot"),
     (["export", "spaceex", THERMOSTAT], "--out", ".xml"),
+    (["reach", BALL, "--t-end", "1"], "--sets", ".json"),
+    (["reach", BALL, "--t-end", "1", "--plot", "h,v"], "--out", ".svg"),
 ]
 IDS = [f"{words[0]}-{flag}" for words, flag, _ in COMMANDS]
 

@@ -41,13 +41,15 @@ def test_the_speed_limit_is_why_deadlock_freedom_is_not_claimed(tmp_path: Path) 
     assert claimed != text
     (tmp_path / "uvms_singularity.yaml").write_text(claimed)
     report = hybrid.check(hybrid.load(tmp_path / "uvms_singularity.yaml"))
-    assert not report.ok
-    messages = [f.message for f in report.findings if f.rule == "property-violated"]
+    # not proved (a warning: --strict fails on it), with the candidate path
+    assert report.failed(strict=True)
+    messages = [f.message for f in report.findings if f.rule == "property-unproved"]
     assert any("deadlock_free" in m and "invariant" in m for m in messages)
     # without the invariants (no speed limit) the claim would hold
     unlimited = claimed.replace("    invariant: vehicle_speed <= v_max\n", "")
     (tmp_path / "uvms_singularity.yaml").write_text(unlimited)
-    assert hybrid.check(hybrid.load(tmp_path / "uvms_singularity.yaml")).ok
+    unlimited_report = hybrid.check(hybrid.load(tmp_path / "uvms_singularity.yaml"))
+    assert unlimited_report.ok and not unlimited_report.failed(strict=True)
 
 
 def test_polarization_fsm_alone_is_deterministic_and_live() -> None:
@@ -65,5 +67,5 @@ def test_the_checks_would_catch_a_broken_strategy(tmp_path: Path) -> None:
         (tmp_path / name).write_text((specs_dir() / name).read_text())
     report = hybrid.check(hybrid.load(tmp_path / "uvms_mission_2.yaml"))
     rules = {f.rule for f in report.findings}
-    assert not report.ok
-    assert "nondeterminism" in rules and "property-violated" in rules
+    assert report.failed(strict=True)  # warnings: CI with --strict fails on them
+    assert "nondeterminism" in rules and "property-unproved" in rules

@@ -15,9 +15,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import numpy as np
 import pytest
-from support import REPO
+from support import REPO, assert_backends_agree
 
 import hybrid
 from hybrid.errors import SpecError
@@ -27,7 +26,6 @@ pytest.importorskip("numba")
 
 DATA = REPO / "tests" / "data" / "spaceex"
 LARGE = ("filtered_oscillator_16", "filtered_oscillator_32")
-TOL = {"rtol": 1e-10, "atol": 1e-12, "handle_sigint": False}
 
 
 def _models() -> list[tuple[Path, Path | None]]:
@@ -54,11 +52,4 @@ def test_a_field_model_runs_compiled_as_it_runs_on_scipy(
     for name, text in result.files.items():
         (tmp_path / name).write_text(text)
     model = hybrid.load(tmp_path / result.top)
-    common = {"t_end": 10.0, "max_jumps": 200, **TOL}
-    reference = hybrid.simulate(model, **common)  # type: ignore[arg-type]
-    compiled = hybrid.simulate(model, backend="compiled", **common)  # type: ignore[arg-type]
-    assert [(j.edge, j.target) for j in compiled.jumps] == [(j.edge, j.target) for j in reference.jumps]
-    np.testing.assert_allclose(compiled.jump_times, reference.jump_times, rtol=1e-10, atol=1e-9)
-    assert compiled.termination.cause == reference.termination.cause
-    assert compiled.termination.location == reference.termination.location
-    assert compiled.settings["start"] == reference.settings["start"]
+    assert_backends_agree(model, t_end=10.0, max_jumps=200)

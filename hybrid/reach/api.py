@@ -1,0 +1,295 @@
+"""``hybrid.reach``: flowpipes of an affine model and a verdict on each forbidden entry.
+
+Examples
+--------
+>>> import hybrid
+>>> heater = hybrid.load_text('''
+... automaton: heater
+... state: {x: {initial: [18, 19]}}
+... inputs: {u: {range: [0, 1]}}
+... locations: {on: {flow: {x: -0.1 * x + 2 + u}}}
+... properties:
+...   forbidden:
+...     - {when: x > 40}
+...     - {when: x > 25}
+... ''')
+>>> r = hybrid.reach(heater, t_end=10.0, step=0.05)
+>>> [(p.verdict, p.witness is not None) for p in r.properties]
+[('proved', False), ('refuted', True)]
+>>> r.verdict
+'refuted'
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from numpy.typing import NDArray
+
+from hybrid.compose import System
+from hybrid.errors import UsageError
+from hybrid.expr import ir
+from hybrid.model import Automaton, Forbidden
+from hybrid.reach.affine import TIME, Condition, Forms, Rows
+from hybrid.reach.boxes import meets_many
+from hybrid.reach.engine import ReachSet, explore, initial_boxes
+from hybrid.reach.result import PropertyResult, ReachResult
+from hybrid.reach.witness import (
+    Candidate,
+    corner_candidates,
+    random_candidates,
+    reaches,
+    simulate_candidate,
+    support_candidate,
+)
+from hybrid.simulation.result import Run
+
+__all__ = ["DEFAULT_STEPS", "reach"]
+
+Array = NDArray[np.float64]
+DEFAULT_STEPS = 4000
+"""Steps over the horizon when no step is given (``step = t_end / DEFAULT_STEPS``)."""
+RANDOM_RUNS = 4
+"""Seeded random runs tried for a witness after the support and corner candidates."""
+
+
+def reach(
+    model: Automaton | System,
+    t_end: float,
+    *,
+    max_jumps: int = 10,
+    step: float | None = None,
+    witness: bool = True,
+) -> ReachResult:
+    """Over-approximate every state ``model`` reaches within ``t_end`` and ``max_jumps`` jumps.
+
+    Parameters
+    ----------
+    model : Automaton or System
+        Flows affine in the state and inputs (``x' = A x + B u + c``), resets
+        affine, guards and invariants linear (conjunctions and disjunctions of
+        comparisons). Every input a flow or reset reads needs a range; it may
+        take any value in it at any time.
+    t_end : float
+        Horizon.
+    max_jumps : int
+        Jump bound.
+    step : float, optional
+        Time step of the flowpipes (default ``t_end / 4000``): smaller is tighter and slower.
+    witness : bool
+        Search a simulated run into each forbidden entry the sets meet.
+
+    Returns
+    -------
+    ReachResult
+        ``.verdict``, ``.properties`` (per forbidden entry), ``.sets``, ``.hull()``, ``.plot()``.
+
+    Raises
+    ------
+    SpecError
+        Dynamics reach cannot handle, at ``file:line:column`` naming the expression.
+    UsageError
+        A horizon, step or jump bound that is not valid.
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+    >>> r = hybrid.reach(ball, t_end=2.0, max_jumps=3, step=0.001)
+    >>> lo, hi = r.hull()
+    >>> bool(hi[0] >= 10.0 and lo[0] <= 0.0)
+    True
+    """
+    if isinstance(t_end, bool) or not isinstance(t_end, int | float) or not math.isfinite(t_end):
+        raise UsageError(f"t_end must be a finite number, got {t_end!r}")
+    if step is None:
+        step = t_end / DEFAULT_STEPS if t_end > 0 else 1.0
+    if isinstance(max_jumps, bool) or not isinstance(max_jumps, int):
+        raise UsageError(f"max_jumps must be an integer >= 0, got {max_jumps!r}")
+    started = time.process_time()
+    forms = Forms(model)
+    entries = [
+        (e, _condition(forms, e, forms.system.initial_mode)) for e in model.properties.forbidden
+    ]
+    sets, complete = explore(model, t_end=t_end, max_jumps=max_jumps, step=step, forms=forms)
+    results = [
+        _decide(model, forms, entry, cond, sets, complete, t_end, max_jumps, step, witness)
+        for entry, cond in entries
+    ]
+    return ReachResult(
+        model=model.name,
+        variables=tuple(model.state_names),
+        sets=tuple(sets),
+        properties=tuple(results),
+        t_end=float(t_end),
+        max_jumps=max_jumps,
+        step=float(step),
+        complete=complete,
+        seconds=time.process_time() - started,
+        file=model.file,
+        source=model,
+    )
+
+
+def _condition(forms: Forms, entry: Forbidden, mode: tuple[str, ...]) -> Condition:
+    """The entry's condition in ``mode`` over the reach vector (``true`` without ``when``).
+
+    Signals are read as ``mode``'s locations define them (a location may override one).
+    """
+    n = len(forms.variables)
+    if entry.when is None:
+        return (Rows(np.zeros((0, n)), np.zeros(0)),)
+    comp = 0
+    names = [c.name for c in forms.system.components]
+    for name in entry.locations:
+        if name in names:
+            comp = names.index(name)
+            break
+    what = f"the forbidden set '{entry.text()}'"
+    return forms.condition(entry.when, comp, mode, entry.position, what)
+
+
+def _matches(forms: Forms, entry: Forbidden, mode: tuple[str, ...]) -> bool:
+    names = [c.name for c in forms.system.components]
+    for comp, loc in entry.locations.items():
+        index = 0 if comp == "" else names.index(comp) if comp in names else -1
+        if index < 0 or mode[index] != loc:
+            return False
+    return True
+
+
+def _within(cond: Condition, forms: Forms, t_end: float) -> Condition:
+    """The condition cut to ``t <= t_end`` (contact beyond the horizon does not count)."""
+    row = np.zeros(len(forms.variables))
+    row[forms.index[TIME]] = 1.0
+    return tuple(
+        Rows(np.vstack([c.mat, row[None, :]]), np.concatenate([c.vec, [t_end]])) for c in cond
+    )
+
+
+def _decide(
+    model: Automaton | System,
+    forms: Forms,
+    entry: Forbidden,
+    cond: Condition,
+    sets: list[ReachSet],
+    complete: bool,
+    t_end: float,
+    max_jumps: int,
+    step: float,
+    witness: bool,
+) -> PropertyResult:
+    by_mode: dict[tuple[str, ...], list[ReachSet]] = {}
+    for s in sets:
+        if _matches(forms, entry, s.mode):
+            by_mode.setdefault(s.mode, []).append(s)
+    hits: set[int] = set()
+    for mode, chosen in by_mode.items():
+        cut = _within(_condition(forms, entry, mode), forms, t_end)
+        times = np.array([s.t for s in chosen])
+        lo = np.column_stack([np.array([s.lo for s in chosen]), times[:, 0]])
+        hi = np.column_stack([np.array([s.hi for s in chosen]), times[:, 1]])
+        ok = meets_many(lo, hi, cut)[2]
+        hits.update(id(s) for s, hit in zip(chosen, ok.tolist(), strict=True) if hit)
+    contacts = [s for s in sets if id(s) in hits]
+    name = entry.text()
+    horizon = f"within t <= {t_end:g} and {max_jumps} jumps"
+    if not contacts and complete:
+        message = f"forbidden state '{name}' is never reached {horizon}"
+        return PropertyResult(entry, "proved", message, condition=cond)
+    first = min(s.t[0] for s in contacts) if contacts else None
+    reads_inputs = entry.when is not None and bool(ir.names_in(entry.when, ir.INPUT))
+    if witness and contacts and not reads_inputs:
+        conditions = {
+            chosen[0].location: _condition(forms, entry, mode) for mode, chosen in by_mode.items()
+        }
+        found = _witness(model, forms, conditions, cond, contacts, t_end, max_jumps, step)
+        if found is not None:
+            run, at, candidate = found
+            return PropertyResult(
+                entry,
+                "refuted",
+                f"forbidden state '{name}' is reached at t = {at:.9g} "
+                f"by a simulated run ({candidate.how})",
+                first_contact=first,
+                witness=run,
+                witness_time=at,
+                witness_initial=candidate.initial,
+                witness_inputs=dict(candidate.inputs),
+                condition=cond,
+            )
+    if first is None:
+        message = f"forbidden state '{name}' was not proved unreachable: the search stopped early"
+    else:
+        message = (
+            f"forbidden state '{name}' may be reached {horizon}: the over-approximation "
+            f"meets it from t = {first:.9g}, and no simulated run was found that reaches it"
+        )
+    return PropertyResult(entry, "unknown", message, first_contact=first, condition=cond)
+
+
+def _witness(
+    model: Automaton | System,
+    forms: Forms,
+    conditions: dict[str, Condition],
+    cond: Condition,
+    contacts: list[ReachSet],
+    t_end: float,
+    max_jumps: int,
+    step: float,
+) -> tuple[Run, float, Candidate] | None:
+    candidates: list[Candidate] = []
+    starts = initial_boxes(forms)
+    mode0, x_lo, x_hi = starts[0]
+    direct = [s for s in contacts if s.jumps == 0 and s.mode == mode0]
+    if direct:
+        a, b, _ = forms.flow(mode0)
+        for direction in _directions(cond, forms):
+            for target in _target_steps(direct, direction, step, t_end):
+                candidates.append(
+                    support_candidate(forms, a, b, x_lo, x_hi, direction, step, target)
+                )
+    candidates = candidates[:6]
+    candidates.extend(corner_candidates(forms, x_lo[:-1], x_hi[:-1], t_end))
+    candidates.extend(random_candidates(forms, x_lo[:-1], x_hi[:-1], t_end, RANDOM_RUNS))
+    for candidate in candidates:
+        run = simulate_candidate(model, forms, candidate, max_jumps)
+        if run is None:
+            continue
+        at = reaches(run, forms, conditions)
+        if at is not None:
+            return run, at, candidate
+    return None
+
+
+def _directions(cond: Condition, forms: Forms) -> list[Array]:
+    """Per case, the direction that lowers its rows' left-hand sides (time left out)."""
+    t = forms.index[TIME]
+    found = []
+    for case in cond:
+        mat = case.mat.copy()
+        mat[:, t] = 0.0
+        norms = np.linalg.norm(mat, axis=1)
+        keep = norms > 0.0
+        if not keep.any():
+            continue
+        d = -(mat[keep] / norms[keep, None]).sum(axis=0)
+        if np.linalg.norm(d) > 0.0:
+            found.append(d)
+    return found
+
+
+def _target_steps(direct: list[ReachSet], direction: Array, step: float, t_end: float) -> list[int]:
+    """Step counts to aim at: the ends of the set where the contact goes furthest, then of the first."""
+    d = direction[:-1]
+    first = min(direct, key=lambda s: s.t[0])
+    best = max(direct, key=lambda s: float(np.where(d > 0, s.hi, s.lo) @ d))
+    targets = []
+    for s in (best, first):
+        for t in reversed(s.t):
+            k = round(min(t, t_end) / step)
+            if k >= 1 and k not in targets:
+                targets.append(k)
+    return targets

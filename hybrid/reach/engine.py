@@ -1,0 +1,292 @@
+"""The hybrid loop: flowpipes per mode, guards met, resets applied, up to a jump bound.
+
+A waiting list holds boxes to start from: ``(mode, lo, hi, jumps)``. Each is
+kept as a set of its own (a run may enter outside the invariant: the simulator
+then stops there, blocked, or jumps on at once), then clipped to its mode's
+invariant and flowed with :func:`hybrid.reach.flowpipe.flowpipe`
+until the horizon or until a segment's box leaves the invariant (a run that
+stays in a mode satisfies its invariant throughout, so once no state of a
+segment does, no run is still there later), and every segment is kept as a
+set. Where a segment meets an edge's guard, the contracted boxes of
+consecutive segments are joined (clustering: one box per stretch of contact,
+at most :data:`MAX_CLUSTERS` per edge and flowpipe, the closest in time joined
+first), mapped by the reset and queued in the target mode.
+
+This is the *may* semantics of a hybrid automaton (an edge may fire whenever
+its guard holds, time may pass while the invariant holds); the simulator's
+runs (an edge fires as soon as it can) are among its runs, so the sets hold
+every simulated state. A system's edges are taken per component, and edges
+with a shared label together, one from each component that declares it.
+
+Examples
+--------
+>>> import hybrid
+>>> m = hybrid.load_text('''
+... automaton: decay
+... state: {x: {initial: [1, 2]}}
+... locations: {l: {flow: {x: -x}}}
+... ''')
+>>> sets, complete = explore(m, t_end=1.0, max_jumps=0, step=0.01)
+>>> complete, len(sets), sets[-1].t[1] >= 1.0
+(True, 101, True)
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from hybrid.compose import System
+from hybrid.errors import UsageError
+from hybrid.model import Automaton, Edge
+from hybrid.reach.affine import TIME, Condition, Forms, Rows
+from hybrid.reach.boxes import affine_image, meets, meets_many
+from hybrid.reach.flowpipe import Overflow, flowpipe
+
+__all__ = ["MAX_CLUSTERS", "MAX_FLOWPIPES", "Mode", "ReachSet", "Transition", "explore"]
+
+Array = NDArray[np.float64]
+MAX_CLUSTERS = 4
+"""Boxes queued per edge and flowpipe after clustering."""
+MAX_FLOWPIPES = 20_000
+"""Flowpipes computed at most; beyond, the result is incomplete (nothing is proved)."""
+
+
+@dataclass(frozen=True)
+class ReachSet:
+    """The box hull ``[lo, hi]`` of the reachable states of ``location`` over the times ``t``."""
+
+    location: str
+    t: tuple[float, float]
+    lo: Array = field(repr=False)
+    hi: Array = field(repr=False)
+    mode: tuple[str, ...] = field(default=(), repr=False)
+    jumps: int = 0
+
+
+@dataclass(frozen=True)
+class Transition:
+    """Edges that fire together: a guard (disjunction of cases) and an affine reset."""
+
+    name: str
+    target: tuple[str, ...]
+    guard: Condition
+    rmat: Array
+    smat: Array
+    rvec: Array
+
+
+@dataclass(frozen=True)
+class Mode:
+    """One mode's dynamics, invariant and transitions, read once."""
+
+    key: tuple[str, ...]
+    name: str
+    a: Array
+    b: Array
+    c: Array
+    invariant: Condition
+    transitions: tuple[Transition, ...]
+    urgent: bool
+
+
+class _Modes:
+    def __init__(self, forms: Forms) -> None:
+        self.forms = forms
+        self.cache: dict[tuple[str, ...], Mode] = {}
+
+    def get(self, key: tuple[str, ...]) -> Mode:
+        found = self.cache.get(key)
+        if found is None:
+            found = self._read(key)
+            self.cache[key] = found
+        return found
+
+    def _read(self, key: tuple[str, ...]) -> Mode:
+        forms, system = self.forms, self.forms.system
+        a, b, c = forms.flow(key)
+        invariant: Condition = (Rows(np.zeros((0, a.shape[0])), np.zeros(0)),)
+        for i, comp in enumerate(system.components):
+            loc = comp.automaton.locations[key[i]]
+            what = f"the invariant of location '{system.qualified(i, loc.name)}'"
+            part = forms.condition(loc.invariant, i, key, loc.invariant_position, what)
+            invariant = _and(invariant, part)
+        urgent = any(
+            comp.automaton.locations[key[i]].urgent for i, comp in enumerate(system.components)
+        )
+        return Mode(
+            key, system.mode_name(key), a, b, c, invariant, tuple(self._transitions(key)), urgent
+        )
+
+    def _transitions(self, key: tuple[str, ...]) -> Iterator[Transition]:
+        system = self.forms.system
+        shared = system.shared_labels
+        for i, comp in enumerate(system.components):
+            for edge in comp.automaton.outgoing(key[i]):
+                if edge.label is None or edge.label not in shared:
+                    yield self._joint(key, [(i, edge)])
+        for label, owners in shared.items():
+            choices = [
+                [
+                    (i, e)
+                    for e in system.components[i].automaton.outgoing(key[i])
+                    if e.label == label
+                ]
+                for i in owners
+            ]
+            for combo in itertools.product(*choices):
+                yield self._joint(key, list(combo))
+
+    def _joint(self, key: tuple[str, ...], edges: list[tuple[int, Edge]]) -> Transition:
+        forms, system = self.forms, self.forms.system
+        n = len(forms.variables)
+        guard: Condition = (Rows(np.zeros((0, n)), np.zeros(0)),)
+        rmat, smat, rvec = np.eye(n), np.zeros((n, len(forms.inputs))), np.zeros(n)
+        target = list(key)
+        names = []
+        for i, edge in edges:
+            label = system.qualified(i, edge.name)
+            names.append(label)
+            what = f"the guard of edge '{label}'"
+            guard = _and(guard, forms.condition(edge.guard, i, key, edge.guard_position, what))
+            r, s, v = forms.reset(i, key, edge.reset, edge.reset_positions, edge.position, label)
+            for var in edge.reset:
+                row = forms.index[var]
+                rmat[row], smat[row], rvec[row] = r[row], s[row], v[row]
+            target[i] = edge.target
+        return Transition(" + ".join(names), tuple(target), guard, rmat, smat, rvec)
+
+
+def _and(left: Condition, right: Condition) -> Condition:
+    return tuple(
+        Rows(np.vstack([p.mat, q.mat]), np.concatenate([p.vec, q.vec])) for p in left for q in right
+    )
+
+
+def initial_boxes(forms: Forms) -> list[tuple[tuple[str, ...], Array, Array]]:
+    """Every initial mode with the initial box (``t = 0``)."""
+    system = forms.system
+    ranges = system.initial_set()
+    lo = np.array([ranges[v].lo for v in system.state_names] + [0.0])
+    hi = np.array([ranges[v].hi for v in system.state_names] + [0.0])
+    modes = itertools.product(*(c.automaton.initial_locations for c in system.components))
+    return [(tuple(m), lo, hi) for m in modes]
+
+
+def explore(
+    model: Automaton | System,
+    *,
+    t_end: float,
+    max_jumps: int,
+    step: float,
+    forms: Forms | None = None,
+) -> tuple[list[ReachSet], bool]:
+    """Every set reached within ``[0, t_end]`` and ``max_jumps`` jumps, and whether the search finished.
+
+    Raises
+    ------
+    SpecError
+        A flow, guard, invariant or reset that is not affine, at ``file:line:column``.
+    UsageError
+        A horizon or step that is not a positive finite number.
+    """
+    if not (math.isfinite(t_end) and t_end >= 0.0):
+        raise UsageError(f"t_end must be a finite number >= 0, got {t_end}")
+    if not (math.isfinite(step) and step > 0.0):
+        raise UsageError(f"the step must be a finite number > 0, got {step}")
+    if max_jumps < 0:
+        raise UsageError(f"max_jumps must be >= 0, got {max_jumps}")
+    forms = forms or Forms(model)
+    modes = _Modes(forms)
+    t_index = forms.index[TIME]
+    waiting = [(modes.get(m), lo, hi, 0) for m, lo, hi in initial_boxes(forms)]
+    sets: list[ReachSet] = []
+    pipes = 0
+    while waiting:
+        mode, lo, hi, jumps = waiting.pop(0)
+        pipes += 1
+        if pipes > MAX_FLOWPIPES:
+            return sets, False
+        if lo[t_index] > t_end:
+            continue
+        # the entry box itself, unclipped: a run may enter outside the invariant (it
+        # then ends blocked there, or jumps on at once: jumps take precedence)
+        segments = [(lo, hi)]
+        start = meets(lo, hi, mode.invariant)
+        if start is not None:
+            segments += _segments(mode, forms, start, t_end, step, t_index)
+        for seg_lo, seg_hi in segments:
+            sets.append(
+                ReachSet(
+                    mode.name,
+                    (float(seg_lo[t_index]), float(seg_hi[t_index])),
+                    seg_lo[:t_index],
+                    seg_hi[:t_index],
+                    mode.key,
+                    jumps,
+                )
+            )
+        if jumps >= max_jumps:
+            continue
+        for tr in mode.transitions:
+            for box in _clusters(segments, tr.guard):
+                image = affine_image(*box, tr.rmat, tr.smat, tr.rvec, forms.u_lo, forms.u_hi)
+                waiting.append((modes.get(tr.target), image[0], image[1], jumps + 1))
+    return sets, True
+
+
+def _segments(
+    mode: Mode, forms: Forms, start: tuple[Array, Array], t_end: float, step: float, t_index: int
+) -> list[tuple[Array, Array]]:
+    """The mode's segment boxes, clipped to its invariant, until it is left or ``t_end``."""
+    if mode.urgent:
+        return [start]
+    steps = max(1, math.ceil((t_end - float(start[0][t_index])) / step - 1e-9))
+    kept: list[tuple[Array, Array]] = []
+
+    def keep(k: int, lo: Array, hi: Array) -> int:
+        c_lo, c_hi, ok = meets_many(lo, hi, mode.invariant)
+        count = len(ok) if bool(ok.all()) else int(np.argmin(ok))
+        kept.extend(zip(c_lo[:count], c_hi[:count], strict=True))
+        return count
+
+    if not (np.all(np.isfinite(start[0])) and np.all(np.isfinite(start[1]))):
+        raise UsageError(f"the sets entering location '{mode.name}' are not bounded")
+    try:
+        flowpipe(
+            mode.a, mode.b, mode.c, forms.u_lo, forms.u_hi, start[0], start[1], step, steps, keep
+        )
+    except Overflow:
+        norm = float(np.abs(mode.a).sum(axis=1).max()) * step
+        raise UsageError(
+            f"the bounds of location '{mode.name}' overflow at step {step:g} "
+            f"(|A| h = {norm:.3g} in the infinity norm): give a smaller step"
+        ) from None
+    return kept
+
+
+def _clusters(segments: list[tuple[Array, Array]], guard: Condition) -> list[tuple[Array, Array]]:
+    """Boxes of the segments' states in the guard: one per stretch of consecutive contact."""
+    stretches: list[tuple[Array, Array]] = []
+    previous = -2
+    for k, (lo, hi) in enumerate(segments):
+        box = meets(lo, hi, guard)
+        if box is None:
+            continue
+        if k == previous + 1 and stretches:
+            last = stretches[-1]
+            stretches[-1] = (np.minimum(last[0], box[0]), np.maximum(last[1], box[1]))
+        else:
+            stretches.append(box)
+        previous = k
+    while len(stretches) > MAX_CLUSTERS:
+        gaps = [stretches[i + 1][0][-1] - stretches[i][1][-1] for i in range(len(stretches) - 1)]
+        i = int(np.argmin(gaps))
+        a, b = stretches[i], stretches[i + 1]
+        stretches[i : i + 2] = [(np.minimum(a[0], b[0]), np.maximum(a[1], b[1]))]
+    return stretches

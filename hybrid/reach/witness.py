@@ -1,0 +1,189 @@
+"""Witnesses: concrete simulated runs into a forbidden set, searched from the flowpipe's hint.
+
+For an affine flow the reachable set's support in a direction ``d`` at a step
+point ``T`` is attained by a concrete run: the initial point at the corner of
+the initial box that ``e^{A^T T} d`` points to, and the input at the corner of
+its box that ``(Phi1 B)^T e^{A^T (T - t_{i+1})} d`` points to on each step
+``[t_i, t_{i+1}]`` (bang-bang, piecewise constant; Le Guernic and Girard's
+support function is a sum of such maxima). :func:`support_candidate` builds
+that run for the direction in which a forbidden case is met; it is simulated
+with :func:`hybrid.simulate` and kept only if a stored point of the run lies in
+the forbidden set (:func:`reaches`). Other candidates (the nominal run, the
+corners of the initial box, a few seeded random runs) are tried the same way.
+
+Examples
+--------
+>>> import numpy as np
+>>> f = PiecewiseConstant(np.array([0.0, 1.0]), np.array([2.0, 3.0]))
+>>> f(0.5), f(1.0), f(7.0)
+(2.0, 3.0, 3.0)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from hybrid.compose import System
+from hybrid.errors import HybridError
+from hybrid.model import Automaton
+from hybrid.reach.affine import Condition, Forms
+from hybrid.reach.flowpipe import exp_matrices
+from hybrid.simulation.engine import simulate
+from hybrid.simulation.result import Run
+
+__all__ = [
+    "Candidate",
+    "PiecewiseConstant",
+    "corner_candidates",
+    "random_candidates",
+    "reaches",
+    "simulate_candidate",
+    "support_candidate",
+]
+
+Array = NDArray[np.float64]
+WITNESS_TOL = 1e-9
+"""Relative tolerance of a stored point on a forbidden set's boundary (an equality ``t == 20``)."""
+
+
+@dataclass(frozen=True)
+class PiecewiseConstant:
+    """An input held at ``values[i]`` from ``starts[i]`` (a callable of ``t`` that pickles)."""
+
+    starts: Array
+    values: Array
+
+    def __call__(self, t: float) -> float:
+        i = int(np.searchsorted(self.starts, t, side="right")) - 1
+        return float(self.values[max(i, 0)])
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A run to try: its initial state and inputs, and the time to simulate until."""
+
+    initial: dict[str, float]
+    inputs: dict[str, Callable[[float], float]]
+    t_end: float
+    how: str
+
+
+def support_candidate(
+    forms: Forms,
+    a: Array,
+    b: Array,
+    x_lo: Array,
+    x_hi: Array,
+    direction: Array,
+    h: float,
+    steps: int,
+) -> Candidate:
+    """The run maximising ``direction . x(steps * h)`` over the initial box and step-wise inputs."""
+    phi, phi1, _ = exp_matrices(a, h)
+    gain = phi1 @ b
+    w = direction.copy()
+    coefs = np.zeros((steps, b.shape[1]))
+    for i in range(steps - 1, -1, -1):
+        coefs[i] = gain.T @ w
+        w = phi.T @ w
+    x0 = np.where(w > 0.0, x_hi, x_lo)
+    starts = np.arange(steps, dtype=np.float64) * h
+    inputs: dict[str, Callable[[float], float]] = {}
+    for j, name in enumerate(forms.inputs):
+        values = np.where(coefs[:, j] > 0.0, forms.u_hi[j], forms.u_lo[j])
+        inputs[name] = PiecewiseConstant(starts, values)
+    names = forms.system.state_names
+    initial = {v: float(x0[i]) for i, v in enumerate(names)}
+    return Candidate(initial, inputs, steps * h, "support")
+
+
+def corner_candidates(forms: Forms, x_lo: Array, x_hi: Array, t_end: float) -> list[Candidate]:
+    """The nominal run and the two extreme corners of the initial box, inputs at their ends."""
+    names = forms.system.state_names
+    found = []
+    nominal = dict(zip(names, forms.system.initial_vector(), strict=True))
+    found.append(Candidate(nominal, {}, t_end, "nominal"))
+    for side, point, inputs in (("low", x_lo, forms.u_lo), ("high", x_hi, forms.u_hi)):
+        found.append(
+            Candidate(
+                {v: float(point[i]) for i, v in enumerate(names)},
+                {
+                    n: PiecewiseConstant(np.zeros(1), np.array([inputs[j]]))
+                    for j, n in enumerate(forms.inputs)
+                },
+                t_end,
+                f"{side} corner",
+            )
+        )
+    return found
+
+
+def random_candidates(
+    forms: Forms, x_lo: Array, x_hi: Array, t_end: float, count: int, seed: int = 24
+) -> list[Candidate]:
+    """``count`` seeded random runs: initial points in the box, inputs switching 4 times."""
+    rng = np.random.default_rng(seed)
+    names = forms.system.state_names
+    found = []
+    for k in range(count):
+        point = rng.uniform(x_lo, x_hi)
+        starts = np.concatenate([[0.0], np.sort(rng.uniform(0.0, max(t_end, 0.0), 4))])
+        inputs: dict[str, Callable[[float], float]] = {
+            n: PiecewiseConstant(starts, rng.uniform(forms.u_lo[j], forms.u_hi[j], 5))
+            for j, n in enumerate(forms.inputs)
+        }
+        initial = {v: float(point[i]) for i, v in enumerate(names)}
+        found.append(Candidate(initial, inputs, t_end, f"random sample {k + 1}"))
+    return found
+
+
+def simulate_candidate(
+    model: Automaton | System, forms: Forms, candidate: Candidate, max_jumps: int
+) -> Run | None:
+    """The simulated run of ``candidate`` (``None`` if the simulator refuses it)."""
+    inputs: dict[str, Callable[[float], float]] = dict(candidate.inputs)
+    for name in forms.unbounded:
+        inputs.setdefault(name, PiecewiseConstant(np.zeros(1), np.zeros(1)))
+    try:
+        return simulate(
+            model,
+            candidate.t_end,
+            max_jumps=max_jumps,
+            rtol=1e-9,
+            atol=1e-12,
+            initial=candidate.initial,
+            inputs=inputs,
+            handle_sigint=False,
+        )
+    except HybridError:
+        return None
+
+
+def reaches(run: Run, forms: Forms, conditions: Mapping[str, Condition]) -> float | None:
+    """The first time a stored point of ``run`` is in the forbidden set, or ``None``.
+
+    ``conditions`` gives the entry's condition per mode name (``run.location``) of
+    the modes in the entry's locations (a location may define the signals it
+    reads its own way); a point is in the set when its mode is one of them and
+    every row of one case holds up to :data:`WITNESS_TOL` relative to the row's
+    magnitude.
+    """
+    locations = run.location.tolist()
+    points = np.column_stack([run.states, run.t])
+    hits = np.zeros(len(points), dtype=bool)
+    for name, condition in conditions.items():
+        here = np.array([str(loc) == name for loc in locations], dtype=bool)
+        if not here.any():
+            continue
+        for case in condition:
+            lhs = points @ case.mat.T
+            scale = np.abs(points) @ np.abs(case.mat).T + np.abs(case.vec)[None, :]
+            ok = np.all(lhs <= case.vec[None, :] + WITNESS_TOL * (1.0 + scale), axis=1)
+            hits |= ok & here
+    if not hits.any():
+        return None
+    return float(run.t[int(np.argmax(hits))])

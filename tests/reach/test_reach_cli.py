@@ -1,0 +1,179 @@
+"""``hybrid reach`` and ``hybrid check`` with reach, as a user runs them.
+
+Exit codes of the contract: 0 every entry proved, 1 one refuted, 3 none refuted
+and one unknown, 2 invalid input (a model that is not affine, an output that
+cannot be written: refused before the work). The heater below reaches at most
+``3 / 0.7 = 4.2857`` (x0 <= 2, u <= 1.5: ``x = x0 e^{-0.7 t} + (3/0.7)(1 - e^{-0.7 t})``),
+so ``x > 4.3`` is proved and ``x > 4`` refuted (from t = 2.97).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import jsonschema
+import numpy as np
+import pytest
+from support import REPO, assert_no_traceback, read_csv, run_cli
+
+import hybrid
+
+HEATER = """automaton: heater
+state: {x: {initial: [1, 2]}}
+inputs: {u: {range: [0.5, 1.5]}}
+locations: {on: {flow: {x: -0.7 * x + 2 * u}}}
+properties:
+  forbidden:
+    - {when: x > 4.3}
+"""
+REFUTED = HEATER + "    - {when: x > 4.0}\n"
+# `go` fires as soon as x reaches 1 (the simulator's semantics); reach's may-semantics
+# lets `a` flow on, so it meets x > 1.5 in `a` and no run does: unknown
+UNKNOWN = """automaton: early
+state: {x: {initial: 0}}
+locations: {a: {flow: {x: 1}}, b: {flow: {x: 0}}}
+edges: [{name: go, from: a, to: b, guard: x >= 1}]
+properties: {forbidden: [{location: a, when: x > 1.5}]}
+"""
+NONLINEAR = """automaton: sq
+state: {x: {initial: 1}}
+locations: {l: {flow: {x: x * x}}}
+"""
+
+
+def _spec(tmp_path: Path, text: str, name: str = "m.yaml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_exit_codes_follow_the_verdicts(tmp_path: Path) -> None:
+    proved = run_cli("reach", _spec(tmp_path, HEATER, "p.yaml"), "--t-end", "6")
+    assert proved.returncode == 0, proved.stderr
+    assert "p.yaml:7:7: proved: forbidden state 'x > 4.3' is never reached" in proved.stdout
+    refuted = run_cli("reach", _spec(tmp_path, REFUTED, "r.yaml"), "--t-end", "6")
+    assert refuted.returncode == 1, refuted.stderr
+    assert "r.yaml:8:7: refuted: forbidden state 'x > 4.0' is reached at t = " in refuted.stdout
+    unknown = run_cli("reach", _spec(tmp_path, UNKNOWN, "u.yaml"), "--t-end", "3")
+    assert unknown.returncode == 3, unknown.stderr
+    assert "unknown: forbidden state 'a with x > 1.5' may be reached" in unknown.stdout
+    assert re.search(r"meets it from t = 1\.49\d*,", unknown.stdout), unknown.stdout
+
+
+def test_a_model_that_is_not_affine_is_refused_at_its_place(tmp_path: Path) -> None:
+    done = run_cli("reach", _spec(tmp_path, NONLINEAR), "--t-end", "1")
+    assert done.returncode == 2
+    assert_no_traceback(done.stderr)
+    assert "m.yaml:3:27: the flow of x in location 'l' is not affine" in done.stderr
+    assert "'x * x'" in done.stderr
+
+
+def test_a_horizon_is_needed_and_read_from_the_spec(tmp_path: Path) -> None:
+    done = run_cli("reach", _spec(tmp_path, HEATER))
+    assert done.returncode == 2 and "--t-end" in done.stderr
+    done = run_cli("reach", _spec(tmp_path, HEATER + "checks: {reach: {t_end: 6}}\n", "h.yaml"))
+    assert done.returncode == 0, done.stderr
+    assert "t <= 6," in done.stdout
+
+
+@pytest.mark.parametrize(
+    ("flag", "value", "text"),
+    [
+        ("--sets", "/proc/sets.json", "cannot write"),
+        ("--sets", "{tmp}", "is a directory"),
+        ("--sets", "{tmp}/missing/sets.json", "does not exist"),
+        ("--sets", "{tmp}/sets.txt", ".json or .npz"),
+        ("--witness", "{tmp}/m.yaml", "not a directory"),
+    ],
+)
+def test_outputs_that_cannot_be_written_are_refused_first(
+    tmp_path: Path, flag: str, value: str, text: str
+) -> None:
+    spec = _spec(tmp_path, NONLINEAR)  # refused before the model is even read
+    done = run_cli("reach", spec, "--t-end", "1", flag, value.replace("{tmp}", str(tmp_path)))
+    assert done.returncode == 2
+    assert text in done.stderr and "not affine" not in done.stderr
+    assert_no_traceback(done.stderr)
+
+
+def test_sets_files_hold_what_the_api_returns(tmp_path: Path) -> None:
+    spec = _spec(tmp_path, HEATER)
+    result = hybrid.reach(hybrid.load(spec), 2.0, step=0.01)
+    for suffix in ("json", "npz"):
+        out = tmp_path / f"sets.{suffix}"
+        done = run_cli("reach", spec, "--t-end", "2", "--step", "0.01", "--sets", out)
+        assert done.returncode == 0, done.stderr
+        if suffix == "json":
+            document = json.loads(out.read_text())
+            assert document["variables"] == ["x"]
+            sets = document["sets"]
+            assert len(sets) == len(result.sets) == 201  # the initial box, then 200 steps
+            assert sets[7]["location"] == "on" and sets[7]["t"] == list(result.sets[7].t)
+            assert sets[7]["lo"] == result.sets[7].lo.tolist()
+        else:
+            with np.load(out) as data:
+                assert data["lo"].shape == (201, 1) and data["t"].shape == (201, 2)
+                assert np.array_equal(data["hi"][:, 0], [s.hi[0] for s in result.sets])
+                assert set(data["location"].tolist()) == {"on"}
+
+
+def test_witness_files_replay_the_refutation(tmp_path: Path) -> None:
+    spec = _spec(tmp_path, REFUTED)
+    folder = tmp_path / "witness"
+    done = run_cli("reach", spec, "--t-end", "6", "--witness", folder)
+    assert done.returncode == 1, done.stderr
+    overrides = json.loads((folder / "witness-2.overrides.json").read_text())
+    assert 1.0 <= overrides["initial"]["state"]["x"] <= 2.0
+    steps = overrides["inputs"]["u"]
+    assert all(0.5 <= v <= 1.5 for _, v in steps)
+    header, rows = read_csv(folder / "witness-2.csv")
+    assert header[:4] == ["t", "j", "location", "x"]
+    assert max(float(r["x"]) for r in rows) > 4.0
+    events = json.loads((folder / "witness-2.events.json").read_text())
+    assert events["termination"]["cause"] == "t_end"
+    assert not (folder / "witness-1.csv").exists()  # the proved entry has none
+
+
+def test_report_formats_are_those_of_check(tmp_path: Path) -> None:
+    spec = _spec(tmp_path, REFUTED)
+    done = run_cli("reach", spec, "--t-end", "6", "--format", "json")
+    assert done.returncode == 1
+    findings = json.loads(done.stdout)["findings"]
+    assert [(f["rule"], f["severity"]) for f in findings] == [
+        ("property-proved", "note"),
+        ("property-violated", "error"),
+    ]
+    done = run_cli("reach", spec, "--t-end", "6", "--format", "sarif")
+    schema = json.loads((REPO / "tests" / "data" / "sarif-schema-2.1.0.json").read_text())
+    jsonschema.validate(json.loads(done.stdout), schema)
+    done = run_cli("reach", spec, "--t-end", "6", "--format", "github")
+    assert "::error file=" in done.stdout and "title=property-violated" in done.stdout
+
+
+def test_plot_draws_the_sets(tmp_path: Path) -> None:
+    pytest.importorskip("matplotlib")
+    spec = _spec(tmp_path, REFUTED)
+    fig = tmp_path / "fig.svg"
+    done = run_cli("reach", spec, "--t-end", "6", "--plot", "t,x", "--out", fig)
+    assert done.returncode == 1, done.stderr
+    assert fig.read_text().lstrip().startswith("<?xml") and "<svg" in fig.read_text()
+    bad = run_cli("reach", spec, "--t-end", "6", "--plot", "t,y", "--out", fig)
+    assert bad.returncode == 2 and "'y' is not a state variable" in bad.stderr
+
+
+def test_check_decides_forbidden_entries_with_reach(tmp_path: Path) -> None:
+    proved = _spec(tmp_path, HEATER.replace("[1, 2]", "[1, 2], bounds: [0, 100]"), "p.yaml")
+    plain = run_cli("check", proved)
+    assert plain.returncode == 0 and "warning property-unproved" in plain.stdout
+    with_reach = run_cli("check", proved, "--reach-t-end", "6")
+    assert with_reach.returncode == 0 and with_reach.stdout.strip() == f"{proved}: ok"
+    in_spec = _spec(tmp_path, proved.read_text() + "checks: {reach: {t_end: 6}}\n", "s.yaml")
+    assert run_cli("check", in_spec).stdout.strip() == f"{in_spec}: ok"
+    refuted = _spec(tmp_path, REFUTED + "checks: {reach: {t_end: 6}}\n", "r.yaml")
+    done = run_cli("check", refuted)
+    assert done.returncode == 1
+    assert (
+        "r.yaml:8:7: error property-violated: forbidden state 'x > 4.0' is reached" in done.stdout
+    )

@@ -1,0 +1,170 @@
+"""The guarantee, tested: every simulated state lies in a set of its location and time.
+
+For every model of ``specs/``, ``tests/data`` and the shared external models that
+reach accepts (affine ones; the others are refused with a SpecError, which is
+asserted to name a place in a file), random runs start at points of the
+initial set with piecewise-constant inputs within their ranges, simulated with
+tight tolerances; every stored point ``(t, x)`` in location ``L`` must lie in
+some set of ``L`` whose time interval holds ``t``, with ``x`` within the set's
+box, up to 1e-9 relative. In the suite: 200 runs per model; under ``make fuzz``
+(``HYBRID_FUZZ=1``): 10,000.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+from support import REPO
+
+import hybrid
+from hybrid.compose import as_system
+from hybrid.errors import SpecError, UsageError
+from hybrid.interchange import import_spaceex
+from hybrid.reach.witness import PiecewiseConstant
+
+EXTERNAL = REPO.parent.parent / "shared" / "external-models"
+if not EXTERNAL.exists():  # a worktree beside the main checkout
+    EXTERNAL = Path("/work/shared/external-models")
+T_END = 2.0
+LARGE = 40
+"""Models with more state variables than this are sampled over ``T_END_LARGE``."""
+T_END_LARGE = 0.5
+MAX_JUMPS = 6
+STEP = 0.01
+TOL = 1e-9
+
+
+def _sources() -> list[tuple[str, Path, Path | None]]:
+    found: list[tuple[str, Path, Path | None]] = []
+    for spec in sorted((REPO / "specs").glob("*.yaml")):
+        found.append((spec.name, spec, None))
+    roots = (
+        REPO / "tests" / "data" / "spaceex",
+        *(EXTERNAL / d for d in ("spaceex", "hyst", "arch")),
+    )
+    for root in roots:
+        for xml in sorted(root.glob("*/*.xml")):
+            for cfg in sorted(xml.parent.glob("*.cfg")):
+                if cfg.stem == xml.stem or cfg.stem.startswith(xml.stem.split("_flattened")[0]):
+                    found.append((f"{xml.parent.name}/{cfg.name}", xml, cfg))
+    return found
+
+
+def _load(tmp: Path, source: Path, cfg: Path | None) -> hybrid.Automaton | hybrid.System | None:
+    if cfg is None:
+        return hybrid.load(source)
+    try:
+        result = import_spaceex(source, cfg)
+    except SpecError:
+        return None  # the importer refuses it (the interchange tests say why)
+    tmp.mkdir(parents=True, exist_ok=True)
+    for name, text in result.files.items():
+        (tmp / name).write_text(text)
+    try:
+        return hybrid.load(tmp / result.top)
+    except SpecError:
+        return None  # an import gap, tested by the interchange tests
+
+
+def _runs() -> int:
+    return 10_000 if os.environ.get("HYBRID_FUZZ", "0") not in ("", "0") else 200
+
+
+def _accepted(tmp: Path) -> list[tuple[str, hybrid.Automaton | hybrid.System]]:
+    seen: set[str] = set()
+    models = []
+    for name, source, cfg in _sources():
+        model = _load(tmp / hashlib.sha1(name.encode()).hexdigest()[:8], source, cfg)
+        if model is None:
+            continue
+        try:
+            result = hybrid.reach(model, 0.1, max_jumps=0, step=0.01, witness=False)
+        except SpecError as exc:
+            assert exc.line >= 1 and ("not affine" in exc.message or "condition" in exc.message)
+            continue
+        except UsageError:
+            continue  # bounds that overflow at this step: not a model to sample here
+        key = hashlib.sha1(repr((model.state_names, len(result.sets), name.split("/")[0])).encode())
+        if key.hexdigest() in seen:
+            continue
+        seen.add(key.hexdigest())
+        models.append((name, model))
+    return models
+
+
+def _escapes(
+    model: hybrid.Automaton | hybrid.System, runs: int, seed: int
+) -> tuple[int, int, list[str]]:
+    # large models (Building, 48 states) over a shorter horizon: each run costs more
+    t_end = T_END if len(model.state_names) <= LARGE else T_END_LARGE
+    result = hybrid.reach(model, t_end, max_jumps=MAX_JUMPS, step=STEP, witness=False)
+    system = as_system(model)
+    by_location: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+    for loc in {s.location for s in result.sets}:
+        chosen = [s for s in result.sets if s.location == loc]
+        by_location[loc] = (
+            np.array([s.t for s in chosen]),
+            np.array([s.lo for s in chosen]),
+            np.array([s.hi for s in chosen]),
+        )
+    ranges = system.initial_set()
+    inputs = system.input_ranges()
+    free = [n for n in system.free_inputs if n not in inputs]
+    rng = np.random.default_rng(seed)
+    points = 0
+    problems: list[str] = []
+    for _ in range(runs):
+        initial = {v: float(rng.uniform(r.lo, r.hi)) for v, r in ranges.items()}
+        given = {}
+        for name, r in inputs.items():
+            starts = np.concatenate([[0.0], np.sort(rng.uniform(0.0, t_end, 3))])
+            given[name] = PiecewiseConstant(starts, rng.uniform(r.lo, r.hi, 4))
+        for name in free:
+            given[name] = PiecewiseConstant(np.zeros(1), np.zeros(1))
+        run = hybrid.simulate(
+            model,
+            t_end,
+            max_jumps=MAX_JUMPS,
+            rtol=1e-10,
+            atol=1e-12,
+            initial=initial,
+            inputs=given,
+            handle_sigint=False,
+        )
+        for i in range(len(run)):
+            points += 1
+            t, x, loc = float(run.t[i]), run.states[i], str(run.location[i])
+            times, lo, hi = by_location.get(loc, (np.zeros((0, 2)), None, None))
+            slack_t = TOL * max(1.0, abs(t))
+            near = (times[:, 0] - slack_t <= t) & (t <= times[:, 1] + slack_t)
+            if near.any():
+                pad = TOL * np.maximum(1.0, np.abs(x))
+                inside = np.all((lo[near] - pad <= x) & (x <= hi[near] + pad), axis=1)
+                if inside.any():
+                    continue
+            problems.append(f"t={t!r} {loc} x={x.tolist()} initial={initial}")
+    return runs, points, problems
+
+
+ACCEPTED = _accepted(Path(os.environ.get("TMPDIR", "/tmp")) / "hybrid-reach-models")
+
+
+def test_reach_accepts_the_affine_models() -> None:
+    names = {n for n, _ in ACCEPTED}
+    assert "bouncing_ball.yaml" in names and "thermostat.yaml" in names
+    assert any(n.startswith("filtered_oscillator") for n in names)
+    assert any(n.startswith("circle") for n in names)
+
+
+@pytest.mark.fuzz
+@pytest.mark.parametrize(("name", "model"), ACCEPTED, ids=[n for n, _ in ACCEPTED])
+def test_every_simulated_state_is_in_a_set(
+    name: str, model: hybrid.Automaton | hybrid.System
+) -> None:
+    runs, points, problems = _escapes(model, _runs(), seed=24)
+    assert runs >= 200 and points >= runs
+    assert not problems, f"{len(problems)} escapes, first: {problems[:3]}"

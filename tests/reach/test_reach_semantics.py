@@ -1,0 +1,98 @@
+"""Reach against the simulator's semantics where they are easy to get wrong.
+
+- A run may start (or enter a location) outside its invariant: the simulator
+  stores that point and ends ``blocked`` there (docs/semantics.md, "Invariants
+  and blocked"). The entry box is a set of its own, so the point is covered and a
+  forbidden set there is refuted by that run.
+- A location may define a signal its own way: a forbidden condition reading it is
+  decided with each location's definition, not the initial one's.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+import hybrid
+
+OUTSIDE = """
+automaton: outside
+state: {x: {initial: [0, 2]}}
+locations: {l: {flow: {x: 1}, invariant: x <= 1}}
+properties: {forbidden: [{when: x > 1.5}]}
+"""
+
+
+def test_an_entry_outside_the_invariant_is_covered_and_refutes() -> None:
+    model = hybrid.load_text(OUTSIDE)
+    run = hybrid.simulate(model, 2.0, initial={"x": 1.8}, handle_sigint=False)
+    assert run.termination.cause == "blocked" and run.t[-1] == 0.0
+    result = hybrid.reach(model, 2.0, step=0.01)
+    first = [s for s in result.sets if s.t[0] <= 0.0 <= s.t[1]]
+    assert any(s.lo[0] <= 1.8 <= s.hi[0] for s in first)
+    (entry,) = result.properties
+    assert entry.verdict == "refuted" and entry.witness_time == 0.0
+    # while flowing, x stays within the invariant: no set after t = 0 goes above 1 (+ slack)
+    assert max(s.hi[0] for s in result.sets if s.t[0] > 0.0) <= 1.0 + 1e-6
+
+
+SIGNAL = """
+automaton: relabel
+state: {x: {initial: 0}}
+signals: {s: x}
+locations:
+  a: {flow: {x: 1}}
+  b: {flow: {x: 0}, signals: {s: x + 10}}
+edges: [{from: a, to: b, guard: x >= 1}]
+properties: {forbidden: [{location: b, when: s > 5}, {location: a, when: s > 5}]}
+"""
+
+
+def test_a_signal_is_read_as_each_location_defines_it() -> None:
+    # in b, s = x + 10 = 11 > 5 (x is 1 on entry); in a, s = x: runs jump at x = 1, but
+    # the may-semantics lets a flow on (no invariant), reaching x = 5 at t = 5: within
+    # 3 s that is proved, within 6 s unknown (the sets meet it, no run does)
+    model = hybrid.load_text(SIGNAL)
+    result = hybrid.reach(model, 3.0, max_jumps=1, step=0.01)
+    assert [p.verdict for p in result.properties] == ["refuted", "proved"]
+    result = hybrid.reach(model, 6.0, max_jumps=1, step=0.01)
+    b, a = result.properties
+    assert b.verdict == "refuted" and b.witness is not None
+    assert b.witness_time == 1.0 or math.isclose(b.witness_time or 0.0, 1.0, rel_tol=1e-6)
+    assert a.verdict == "unknown" and a.first_contact is not None and a.first_contact > 4.9
+
+
+def test_a_signal_that_is_not_affine_is_named_with_its_definitions() -> None:
+    model = hybrid.load_text(
+        "automaton: a\nstate: {x: {initial: 1}}\nsignals: {s: x * x, r: s}\n"
+        "locations: {l: {flow: {x: 2 * r}}}\n",
+        file="a.yaml",
+    )
+    with pytest.raises(hybrid.SpecError) as info:
+        hybrid.reach(model, 1.0)
+    assert (info.value.file, info.value.line, info.value.column) == ("a.yaml", 4, 31)
+    assert "the flow of x in location 'l' is not affine" in str(info.value)
+    assert "'r' (signals: r = 's'; s = 'x * x')" in str(info.value)
+
+
+def test_a_forbidden_set_behind_a_jump_is_refuted_by_a_simulated_run() -> None:
+    # x climbs from [0, 0.5] in a, jumps to b at x = 1 (reset x := 2 x), climbs on: in b
+    # x = 2 + (t - t_jump) > 2.5 half a second after the jump; runs sampled from the
+    # initial set find it (the support candidate covers the initial mode only)
+    model = hybrid.load_text(
+        """
+automaton: two_stage
+state: {x: {initial: [0, 0.5]}}
+locations: {a: {flow: {x: 1}}, b: {flow: {x: 1}}}
+edges: [{from: a, to: b, guard: x >= 1, reset: {x: 2 * x}}]
+properties: {forbidden: [{location: b, when: x > 2.5}, {location: b, when: x < 1.9}]}
+"""
+    )
+    result = hybrid.reach(model, 2.0, max_jumps=1, step=0.01)
+    reached, below = result.properties
+    assert reached.verdict == "refuted" and reached.witness is not None
+    assert reached.witness.jumps and reached.witness.jumps[0].target == "b"
+    assert 1.5 <= (reached.witness_time or 0.0) <= 2.0
+    # in b, x starts at 2 (the guard x >= 1 is met at 1, widened by 1e-7): never below 1.9
+    assert below.verdict == "proved"
