@@ -26,9 +26,8 @@ from hybrid.errors import SpecError, UsageError
 from hybrid.interchange import import_spaceex
 from hybrid.reach.witness import PiecewiseConstant
 
-EXTERNAL = REPO.parent.parent / "shared" / "external-models"
-if not EXTERNAL.exists():  # a worktree beside the main checkout
-    EXTERNAL = Path("/work/shared/external-models")
+EXTERNAL = REPO.parent / "shared" / "external-models"
+"""The field's models, beside the repository as in CI (none there: only the repo's own)."""
 T_END = 2.0
 LARGE = 40
 """Models with more state variables than this are sampled over ``T_END_LARGE``."""
