@@ -86,6 +86,7 @@ class Forms:
 
     def __init__(self, model: Automaton | System) -> None:
         self.system = as_system(model)
+        self.component_names = [c.name for c in self.system.components]
         self.variables: tuple[str, ...] = (*self.system.state_names, TIME)
         self.index = {v: i for i, v in enumerate(self.variables)}
         ranges = self.system.input_ranges()

@@ -114,8 +114,13 @@ def reach(
         (e, _condition(forms, e, forms.system.initial_mode)) for e in model.properties.forbidden
     ]
     sets, complete = explore(model, t_end=t_end, max_jumps=max_jumps, step=step, forms=forms)
+    grouped: dict[tuple[str, ...], list[ReachSet]] = {}
+    for s in sets:  # once: each entry then looks at the modes, not at every set
+        grouped.setdefault(s.mode, []).append(s)
     results = [
-        _decide(model, forms, entry, cond, sets, complete, t_end, max_jumps, step, witness)
+        _decide(
+            model, forms, entry, cond, sets, grouped, complete, t_end, max_jumps, step, witness
+        )
         for entry, cond in entries
     ]
     return ReachResult(
@@ -142,7 +147,7 @@ def _condition(forms: Forms, entry: Forbidden, mode: tuple[str, ...]) -> Conditi
     if entry.when is None:
         return (Rows(np.zeros((0, n)), np.zeros(0)),)
     comp = 0
-    names = [c.name for c in forms.system.components]
+    names = forms.component_names
     for name in entry.locations:
         if name in names:
             comp = names.index(name)
@@ -152,7 +157,7 @@ def _condition(forms: Forms, entry: Forbidden, mode: tuple[str, ...]) -> Conditi
 
 
 def _matches(forms: Forms, entry: Forbidden, mode: tuple[str, ...]) -> bool:
-    names = [c.name for c in forms.system.components]
+    names = forms.component_names
     for comp, loc in entry.locations.items():
         index = 0 if comp == "" else names.index(comp) if comp in names else -1
         if index < 0 or mode[index] != loc:
@@ -175,16 +180,14 @@ def _decide(
     entry: Forbidden,
     cond: Condition,
     sets: list[ReachSet],
+    grouped: dict[tuple[str, ...], list[ReachSet]],
     complete: bool,
     t_end: float,
     max_jumps: int,
     step: float,
     witness: bool,
 ) -> PropertyResult:
-    by_mode: dict[tuple[str, ...], list[ReachSet]] = {}
-    for s in sets:
-        if _matches(forms, entry, s.mode):
-            by_mode.setdefault(s.mode, []).append(s)
+    by_mode = {mode: chosen for mode, chosen in grouped.items() if _matches(forms, entry, mode)}
     hits: set[int] = set()
     for mode, chosen in by_mode.items():
         cut = _within(_condition(forms, entry, mode), forms, t_end)
