@@ -42,14 +42,14 @@ __all__ = ["definition", "identifiers", "output_equations", "outputs", "reads", 
 _TOKEN = re.compile(r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|([A-Za-z_][A-Za-z0-9_]*)")
 
 
-def reads(node: sx.Node) -> set[str]:
-    """The unprimed variable names a SpaceEx tree reads."""
+def reads(node: sx.Node, *, primed: bool = False) -> set[str]:
+    """The unprimed variable names a SpaceEx tree reads (primed ones too with ``primed``)."""
     found: set[str] = set()
     stack = [node]
     while stack:
         current = stack.pop()
         if isinstance(current, sx.Name):
-            if not current.primed:
+            if primed or not current.primed:
                 found.add(current.name)
         elif isinstance(current, sx.Neg):
             stack.append(current.operand)

@@ -30,7 +30,7 @@ from hybrid.expr.printer import expression_text
 from hybrid.interchange import sxexpr as sx
 from hybrid.interchange.inputs import input_ranges
 from hybrid.interchange.naming import component_name, location_names, ours
-from hybrid.interchange.outputs import outputs, unused
+from hybrid.interchange.outputs import outputs, reads, unused
 from hybrid.interchange.rectangular import flow_parts, rate_inputs
 from hybrid.interchange.safexml import SourceText
 from hybrid.interchange.sxmodel import Component
@@ -314,7 +314,7 @@ def _edge(
         after = substitute(c, values)
         after_text = text(after)
         known = _constant_truth(after) if isinstance(after, sx.Cmp) else None
-        if text(c) in source_texts and not (_variables(c) & changed):
+        if text(c) in source_texts and not (reads(c, primed=True) & changed):
             implied.append(after_text)
         elif known is True:
             implied_by_reset.append(after_text)
@@ -351,23 +351,3 @@ def _constant_truth(node: sx.Cmp) -> bool | None:
         if not holds:
             return False
     return True
-
-
-def _variables(node: sx.Node) -> set[str]:
-    found: set[str] = set()
-    stack = [node]
-    while stack:
-        current = stack.pop()
-        if isinstance(current, sx.Name):
-            found.add(current.name)
-        elif isinstance(current, sx.Neg):
-            stack.append(current.operand)
-        elif isinstance(current, sx.BinOp):
-            stack.extend((current.left, current.right))
-        elif isinstance(current, sx.Call):
-            stack.extend(current.args)
-        elif isinstance(current, sx.Cmp):
-            stack.extend(current.operands)
-        elif isinstance(current, sx.And | sx.Or):
-            stack.extend(current.items)
-    return found
