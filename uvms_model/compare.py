@@ -21,7 +21,6 @@ of every method); ``make demo`` prints :func:`headline`.
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -237,7 +236,7 @@ def write_figure(mission: str, path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from hybrid.export.atomic import atomic_write
+    from uvms_model.figures import save_png
 
     runs = {"the paper's strategy": run_mission(mission, rtol=1e-8, atol=1e-10, dt=DT).run}
     for label, (code, gain, values) in BASELINES.items():
@@ -255,17 +254,14 @@ def write_figure(mission: str, path: Path) -> Path:
     ax2.set_ylabel("vehicle speed [m/s]")
     ax2.set_xlabel("t [s]")
     ax1.set_title(f"{mission}: the paper's strategy against the classical resolutions", fontsize=9)
-    with atomic_write(path) as handle:
-        fig.savefig(handle, format="png", dpi=100)
-    plt.close(fig)
-    return path
+    return save_png(fig, path)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Print the gain study and the tables of both missions; write ``compare.md``."""
-    args = sys.argv[1:] if argv is None else argv
-    out = Path(args[0] if args else "out")
-    out.mkdir(parents=True, exist_ok=True)
+    from uvms_model.figures import output_folder
+
+    out = output_folder(argv)
     parts = []
     for mission in MISSIONS:
         print(f"== {mission}: gains (hybrid.sweep) ==")

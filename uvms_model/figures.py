@@ -19,7 +19,7 @@ import numpy as np
 
 from uvms_model.missions import MissionResult
 
-__all__ = ["write_figures"]
+__all__ = ["output_folder", "save_png", "write_figures"]
 
 _SHADE = {"q0": None, "q1": "tab:red", "q2": "tab:orange"}
 
@@ -166,3 +166,22 @@ def _save(fig: object, path: Path) -> Path:
     with atomic_write(path) as handle:
         fig.savefig(handle, format="png", dpi=100)  # type: ignore[attr-defined]
     return path
+
+
+def save_png(fig: object, path: Path) -> Path:
+    """Write ``fig`` to ``path`` as a PNG, whole or not at all, and close it."""
+    import matplotlib.pyplot as plt
+
+    _save(fig, path)
+    plt.close(fig)  # type: ignore[arg-type]
+    return path
+
+
+def output_folder(argv: list[str] | None) -> Path:
+    """The folder a case-study command writes into: its one argument, else ``out`` (made)."""
+    import sys
+
+    args = sys.argv[1:] if argv is None else argv
+    out = Path(args[0] if args else "out")
+    out.mkdir(parents=True, exist_ok=True)
+    return out

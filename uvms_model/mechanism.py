@@ -35,7 +35,6 @@ True
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -131,7 +130,7 @@ def write_mechanism_figure(result: MissionResult, path: Path, t_from: float = 0.
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from hybrid.export.atomic import atomic_write
+    from uvms_model.figures import save_png
 
     run = result.run
     terms = gamma_rate_terms(result)
@@ -162,19 +161,15 @@ def write_mechanism_figure(result: MissionResult, path: Path, t_from: float = 0.
         "(red: kinematic state 3; orange: q2)",
         fontsize=9,
     )
-    with atomic_write(path) as handle:
-        fig.savefig(handle, format="png", dpi=100)
-    plt.close(fig)
-    return path
+    return save_png(fig, path)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Write mission 2's figure of the terms and print them at its switches."""
+    from uvms_model.figures import output_folder
     from uvms_model.missions import run_mission
 
-    args = sys.argv[1:] if argv is None else argv
-    out = Path(args[0] if args else "out")
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(argv)
     result = run_mission("uvms_mission_2", dt=0.01)
     terms = gamma_rate_terms(result)
     run = result.run

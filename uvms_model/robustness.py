@@ -28,7 +28,6 @@ Examples
 from __future__ import annotations
 
 import math
-import sys
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -405,7 +404,7 @@ def write_map_figure(result: RobustnessMap, path: Path) -> Path:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from hybrid.export.atomic import atomic_write
+    from uvms_model.figures import save_png
 
     gamma = np.array([[o.min_abs_gamma for o in row] for row in result.outcomes])
     fig, ax = plt.subplots(figsize=(7.5, 5.5))
@@ -435,17 +434,14 @@ def write_map_figure(result: RobustnessMap, path: Path) -> Path:
         "red: not (1: epsilon without beta; x: ended early); star: ours; box: +-10%",
         fontsize=9,
     )
-    with atomic_write(path) as handle:
-        fig.savefig(handle, format="png", dpi=100)
-    plt.close(fig)
-    return path
+    return save_png(fig, path)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Write the robustness map of mission 2 and print the one-at-a-time table."""
-    args = sys.argv[1:] if argv is None else argv
-    out = Path(args[0] if args else "out")
-    out.mkdir(parents=True, exist_ok=True)
+    from uvms_model.figures import output_folder
+
+    out = output_folder(argv)
     for mission in ("uvms_mission_1", "uvms_mission_2"):
         variants = one_at_a_time(mission, workers=2)
         kept = sum(v.verdict == "paper" for v in variants)
