@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 from hybrid.errors import Position, SpecError
 from hybrid.interchange import sxexpr as sx
+from hybrid.interchange.affine import Affine, affine_form
 from hybrid.interchange.safexml import SourceText
 from hybrid.interchange.translate import condition_text, constant_value
 
@@ -95,36 +96,19 @@ class ForbiddenEntry:
     positions: dict[int, Position] = field(default_factory=dict)
 
 
-Affine = tuple[str | None, float, float]
-"""``(variable id or None, a, b)`` for ``a * x + b``."""
 
 
 def _affine(node: sx.Node, resolve: Callable[[str, Position], str]) -> Affine | None:
-    if isinstance(node, sx.Num):
-        return None, 0.0, node.value
-    if isinstance(node, sx.Name) and not node.primed:
-        return resolve(node.name, node.position), 1.0, 0.0
-    if isinstance(node, sx.Neg):
-        inner = _affine(node.operand, resolve)
-        return None if inner is None else (inner[0], -inner[1], -inner[2])
-    if isinstance(node, sx.BinOp):
-        left, right = _affine(node.left, resolve), _affine(node.right, resolve)
-        if left is None or right is None:
-            return None
-        if node.op in "+-":
-            sign = 1.0 if node.op == "+" else -1.0
-            if left[0] and right[0] and left[0] != right[0]:
-                return None
-            return left[0] or right[0], left[1] + sign * right[1], left[2] + sign * right[2]
-        if node.op == "*" and (left[0] is None or right[0] is None):
-            k, other = (left[2], right) if left[0] is None else (right[2], left)
-            return other[0], k * other[1], k * other[2]
-        if node.op == "/" and right[0] is None and right[2] != 0:
-            return left[0], left[1] / right[2], left[2] / right[2]
-        if node.op == "^" and left[0] is None and right[0] is None:
-            value = constant_value(node, {})
-            return None if value is None else (None, 0.0, value)
-    return None
+    """:func:`affine_form` in an unprimed variable (named by ``resolve``)."""
+
+    def leaf(n: sx.Node) -> Affine | None:
+        if isinstance(n, sx.Num):
+            return None, 0.0, n.value
+        if isinstance(n, sx.Name) and not n.primed:
+            return resolve(n.name, n.position), 1.0, 0.0
+        return None
+
+    return affine_form(node, leaf)
 
 
 def _squares(

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 from hybrid.errors import SpecError
 from hybrid.interchange import sxexpr as sx
+from hybrid.interchange.affine import Affine, affine_form
 from hybrid.interchange.sxmodel import Component
 from hybrid.interchange.translate import constant_value
 
@@ -43,31 +44,16 @@ class FlowParts:
     urgent: bool = False
 
 
-def _linear(node: sx.Node, values: Mapping[str, float]) -> tuple[str | None, float, float] | None:
+def _linear(node: sx.Node, values: Mapping[str, float]) -> Affine | None:
     """``(x, a, b)`` for ``a * x' + b`` (``x`` ``None`` for a number), else ``None``."""
-    if isinstance(node, sx.Name) and node.primed:
-        return node.name, 1.0, 0.0
-    value = constant_value(node, values)
-    if value is not None:
-        return None, 0.0, value
-    if isinstance(node, sx.Neg):
-        inner = _linear(node.operand, values)
-        return None if inner is None else (inner[0], -inner[1], -inner[2])
-    if isinstance(node, sx.BinOp):
-        left, right = _linear(node.left, values), _linear(node.right, values)
-        if left is None or right is None:
-            return None
-        if node.op in "+-":
-            if left[0] and right[0] and left[0] != right[0]:
-                return None
-            sign = 1.0 if node.op == "+" else -1.0
-            return left[0] or right[0], left[1] + sign * right[1], left[2] + sign * right[2]
-        if node.op == "*" and (left[0] is None or right[0] is None):
-            k, other = (left[2], right) if left[0] is None else (right[2], left)
-            return other[0], k * other[1], k * other[2]
-        if node.op == "/" and right[0] is None and right[2] != 0:
-            return left[0], left[1] / right[2], left[2] / right[2]
-    return None
+
+    def leaf(n: sx.Node) -> Affine | None:
+        if isinstance(n, sx.Name) and n.primed:
+            return n.name, 1.0, 0.0
+        value = constant_value(n, values)
+        return None if value is None else (None, 0.0, value)
+
+    return affine_form(node, leaf)
 
 
 def _rate_bound(item: sx.Cmp, values: Mapping[str, float]) -> tuple[str, float, float] | None:
