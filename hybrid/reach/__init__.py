@@ -47,10 +47,4 @@ _LAZY = {
     "ReachResult": "hybrid.reach.result",
     "ReachSet": "hybrid.reach.result",
 }
-_lazy_getattr, _lazy_dir = lazy_attributes(__name__, _LAZY)
-
-
-def __getattr__(name: str) -> object:
-    value = _lazy_getattr(name)
-    globals()[name] = value
-    return value
+__getattr__, __dir__ = lazy_attributes(__name__, _LAZY)
