@@ -74,6 +74,8 @@ class CompiledCacheNote(Note):
     """A damaged compiled-model cache was discarded and is being rebuilt."""
 
 _LOADED: dict[str, ModuleType] = {}
+_SEALED: set[str] = set()
+"""The compiled modules this process has sealed (their files do not change after)."""
 _LOCK = threading.Lock()
 
 
@@ -196,8 +198,9 @@ def seal(module: ModuleType) -> None:
     lists the same files is left as it is.
     """
     origin = getattr(module, "__file__", None)
-    if not origin:
+    if not origin or origin in _SEALED:  # the kernel: once a process, not once a model
         return
+    _SEALED.add(origin)
     directory = Path(origin).parent
     digests = _digests(directory)
     try:
