@@ -344,10 +344,6 @@ def _run(args: argparse.Namespace) -> int:
         placed = isinstance(exc, UsageError) and exc.at is not None  # file:line:column first
         print(str(exc) if placed else f"{getattr(args, 'file', 'hybrid')}: {exc}", file=sys.stderr)
         return EXIT_INVALID
-    except KeyboardInterrupt as exc:
-        _STOPPED[0] = True
-        print(f"hybrid: {str(exc) or 'interrupted'}", file=sys.stderr)
-        return EXIT_ABANDONED
     except BrokenPipeError:
         return EXIT_OK
     except OSError as exc:  # an output that failed where it could not be known before

@@ -229,9 +229,12 @@ def test_finalizer_errors_are_reported_until_a_ctrl_c_stopped_work(
 
     cli_main = importlib.import_module("hybrid.cli.main")  # hybrid.cli.main is also the function
 
+    from hybrid.simulation import interrupts
+
     reported: list[object] = []
     monkeypatch.setattr(sys, "__unraisablehook__", reported.append)
     monkeypatch.setattr(cli_main, "_STOPPED", [False])
+    monkeypatch.setattr(interrupts, "_SEEN", [False])  # other tests here pressed Ctrl-C
     cli_main._quiet_after_interrupt("finalizer failed")
     assert reported == ["finalizer failed"]
     monkeypatch.setattr(cli_main, "_STOPPED", [True])
