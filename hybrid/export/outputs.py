@@ -53,8 +53,8 @@ def writable_file(path: str | Path, flag: str) -> Path:
     target = Path(path)
     if target.is_dir():
         raise UsageError(f"{flag}: '{path}' is a directory: give a file name inside it")
-    folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
+    if not target.parent.is_dir():  # a bare name's parent is '.'
+
         raise UsageError(f"{flag}: directory of '{path}' does not exist")
     _probe(target, flag, path)
     return target
