@@ -18,8 +18,10 @@ guard starts to hold, the invariant stops holding) is an event too.
 
 **Orientation** (docs/semantics.md, "Equality guards"). A guard with equality
 atoms is watched in its oriented form: atom ``a == b`` reads
-``s * (a - b) <= 0`` with ``s`` the sign of ``a - b`` when the guard is armed,
-so the term falls through 0 when the level is reached; an atom exactly at its
+``s * (a - b) <= 0`` with ``s`` the sign of ``a - b`` when the guard is armed
+(within the band of the level, the side the flow moves to: the sign of a
+rounding error says nothing), so the term falls through 0 when the level is
+reached; an atom exactly at its
 level then (``s = 0``) reads ``a == b`` itself, which holds while the state
 stays on the level, until the state is beyond the band of the level: then it
 is oriented to the side the state is on (like arming), so that a return to the
@@ -51,6 +53,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from hybrid.expr.generated import define
+from hybrid.simulation import boundary
 from hybrid.simulation.compiled import CompiledMode, CompiledTransition
 
 __all__ = ["Watch", "orientation", "watch_factory"]
@@ -83,12 +86,27 @@ def watch_factory(terms: tuple[Term, ...]) -> Factory:
     return factory
 
 
-def orientation(tr: CompiledTransition, t: float, x: Any) -> tuple[int, ...]:
-    """The side of each level of ``tr`` at ``(t, x)``: ``1``, ``-1``, or ``0`` exactly on it."""
+def orientation(
+    tr: CompiledTransition, t: float, x: Any, mode: CompiledMode, width: float
+) -> tuple[int, ...]:
+    """The side of each level of ``tr`` at ``(t, x)``: ``1``, ``-1``, or ``0`` exactly on it.
+
+    A level within ``width`` of the state (on it up to rounding) that the flow
+    leaves takes the side the flow moves to (its slope beyond ``width``), not
+    the sign of the rounding error, so a return to the level is a crossing.
+    """
     signs = []
+    ahead: tuple[float, float, Any] | None = None
     for difference in tr.levels:
         value = difference(t, x)
-        signs.append(1 if value > 0.0 else -1 if value < 0.0 else 0)
+        side = 1 if value > 0.0 else -1 if value < 0.0 else 0
+        if abs(value) <= width:
+            if ahead is None:
+                ahead = boundary.ahead(mode, t, x)
+            h, t1, x1 = ahead
+            rate = (difference(t1, x1) - value) / h
+            side = 1 if rate > width else -1 if rate < -width else side
+        signs.append(side)
     return tuple(signs)
 
 
@@ -127,7 +145,7 @@ class Watch:
         self.factories = factories
         self.width = width
         self.signs: list[tuple[int, ...] | None] = [
-            orientation(tr, t, x) if armed else None
+            orientation(tr, t, x, mode, width) if armed else None
             for tr, armed in zip(mode.transitions, guards_armed, strict=True)
         ]
         self.inv_armed = [inv.rho(t, x) < -width for inv in mode.invariants]
@@ -169,7 +187,7 @@ class Watch:
             side = self.signs[i]
             if side is None:
                 if tr.rho(t, x) > width:
-                    self.signs[i] = orientation(tr, t, x)
+                    self.signs[i] = orientation(tr, t, x, self.mode, width)
                     changed = True
             elif 0 in side:
                 moved = tuple(

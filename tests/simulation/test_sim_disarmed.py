@@ -145,3 +145,30 @@ edges:
     assert jump.t == pytest.approx(1.0, abs=1e-9)
     assert jump.before["y"] == pytest.approx(-0.5, abs=1e-9)
     assert run.termination.cause == "t_end" and run.termination.location == "B"
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("x0", [-1e-13, 0.0, 1e-13])
+def test_a_short_hop_off_a_level_fires_where_it_returns_whatever_the_rounding_side(
+    backend: str, x0: float
+) -> None:
+    # x = x0 + y0 t - t^2 hops 2.5e-9 above the level x == 0 (25 bands) for 1e-4 s, far
+    # shorter than the search's sample spacing (3e-3 s): the return must be a crossing
+    # whichever side of the level rounding put the start on, so the level is oriented by
+    # where the flow takes the state (up), not by the sign of x0 (before: from x0 < 0 the
+    # atom read x >= 0, the samples never saw the hop, and the run fell to the invariant)
+    text = f"""
+automaton: hop
+state: {{x: {{initial: {x0!r}}}, y: {{initial: 1e-4}}}}
+locations:
+  A: {{flow: {{x: y, y: -2}}, invariant: x >= -1}}
+  B: {{flow: {{x: 0, y: 0}}}}
+edges:
+  - {{name: go, from: A, to: B, guard: x == 0 and y <= 0}}
+"""
+    run = hybrid.simulate(hybrid.load_text(text), t_end=3.0, rtol=1e-10, atol=1e-14,
+                          backend=backend)  # fmt: skip
+    (jump,) = run.jumps
+    y0 = 1e-4
+    assert jump.t == pytest.approx((y0 + math.sqrt(y0 * y0 + 4 * x0)) / 2, abs=1e-12)
+    assert run.termination.location == "B"

@@ -13,7 +13,8 @@ the stay (``S_B0``). A term that cannot be evaluated is left out (the failure
 is recorded). Function by function:
 
 - :func:`watch_start` is ``Watch.__init__``: the guards armed at entry
-  (``tr_armed``, set by ``enabled_at_entry``) oriented at the start point;
+  (``tr_armed``, set by ``enabled_at_entry``) oriented at the start point (a
+  level within the band by the side the flow moves to, :func:`orient_by_slope`);
   invariants armed when their rho is below the band; ``b0``;
 - :func:`watch_terms` and :func:`watch_value` are the watch function (one
   call of the model's ``OP_WATCH`` for every term, then the minimum);
@@ -43,17 +44,19 @@ from hybrid.simulation.native.buffers import (
     T_MODE_TR,
     T_N_PARAMS,
     T_TR_LV,
+    W_AHEAD,
     W_ARMV,
+    W_D,
     W_INVARMED,
     W_PE,
     W_SCAL,
     W_TERMS,
     W_TRARMED,
 )
-from hybrid.simulation.native.decide import band, note_failure, value_checked
+from hybrid.simulation.native.decide import band, note_failure, step_ahead, value_checked
 from hybrid.simulation.native.kernel_types import Array, Fns, Ints, at
 
-__all__ = ["arm_at", "orientation", "pending", "watch_at", "watch_min", "watch_start", "watch_terms",
+__all__ = ["arm_at", "orient_by_slope", "orientation", "pending", "watch_at", "watch_min", "watch_start", "watch_terms",
            "watch_value"]
 
 # --- kernel ---
@@ -68,6 +71,35 @@ def orientation(value: float, tr: int, m: int, t: float, x: Array, wf: Array, wi
     if value != value:
         note_failure(F_GUARD, tr, m, t, x, wf, wi)
     return 0.0
+
+
+def orient_by_slope(fns: Fns, tab: Ints, m: int, k: int, t: float, x: Array, width: float,
+                    wf: Array, wi: Ints) -> None:  # fmt: skip
+    """Each level of armed guard ``k`` within ``width`` of ``(t, x)`` takes the side the flow
+    moves it to when its slope is beyond ``width`` (``events.orientation``).
+
+    ``armv`` must hold the model's ``OP_ARM`` values at ``(t, x)``, and holds them again after.
+    """
+    first = tab[tab[T_MODE_TR] + m]
+    n_tr = tab[tab[T_MODE_TR] + m + 1] - first
+    lv0 = tab[tab[T_TR_LV] + first]
+    tr = first + k
+    signs = wi[W_PE] + tab[T_N_PARAMS]
+    armv = wf[wi[W_ARMV] :]
+    for a in range(tab[tab[T_TR_LV] + tr] - lv0, tab[tab[T_TR_LV] + tr + 1] - lv0):
+        value = armv[n_tr + a]
+        if not abs(value) <= width:
+            continue
+        h = step_ahead(fns, m, t, x, wf, wi)
+        ahead = wf[wi[W_AHEAD] : wi[W_AHEAD] + wi[W_D]]
+        fns(OP_ARM, m, t + h, at(ahead, 0), at(wf, wi[W_PE]), at(wf, wi[W_ARMV]))
+        later = armv[n_tr + a]
+        fns(OP_ARM, m, t, at(x, 0), at(wf, wi[W_PE]), at(wf, wi[W_ARMV]))
+        rate = (later - value) / h
+        if rate > width:
+            wf[signs + a] = 1.0
+        elif rate < -width:
+            wf[signs + a] = -1.0
 
 
 def watch_start(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
@@ -86,6 +118,8 @@ def watch_start(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
         armed = wi[wi[W_TRARMED] + k] != 0
         for a in range(tab[tab[T_TR_LV] + tr] - lv0, tab[tab[T_TR_LV] + tr + 1] - lv0):
             wf[signs + a] = orientation(armv[n_tr + a], tr, m, t, x, wf, wi) if armed else 0.0
+        if armed:
+            orient_by_slope(fns, tab, m, k, t, x, width, wf, wi)
     inv0 = tab[tab[T_MODE_INV] + m]
     for k in range(tab[tab[T_MODE_INV] + m + 1] - inv0):
         inv = inv0 + k
@@ -220,6 +254,7 @@ def arm_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints)
             continue
         for a in range(lo, hi):
             wf[signs + a] = orientation(armv[n_tr + a], tr, m, t, x, wf, wi)
+        orient_by_slope(fns, tab, m, k, t, x, width, wf, wi)
         wi[tr_armed + k] = 1
         changed = True
     inv0 = tab[tab[T_MODE_INV] + m]
