@@ -193,7 +193,6 @@ class Requirement:
     within: tuple[float, float] | None = None
     location: str | None = None
     position: Position = field(default_factory=lambda: Position("<spec>"))
-    predicate_position: Position = field(default_factory=lambda: Position("<spec>"))
 
 
 @dataclass(frozen=True)

@@ -206,14 +206,6 @@ class MissionResult:
         )
 
     @cached_property
-    def acceleration_change(self) -> tuple[float, str]:
-        """Largest change of any acceleration within :data:`SMOOTHNESS_WINDOW`."""
-        return max(
-            (windowed_change(self.run.t, self.run[c], SMOOTHNESS_WINDOW), c)
-            for c in ACCELERATION_SIGNALS
-        )
-
-    @cached_property
     def peak_joint_acceleration(self) -> tuple[float, str]:
         """Largest ``|q''|`` of any joint over the run (closed form, on the recording grid)."""
         return max((float(np.max(np.abs(self.run[f"{q}_acc"]))), q) for q in ("q1", "q2", "q3"))

@@ -68,10 +68,6 @@ class Interval:
     def is_point(self) -> bool:
         return self.lo == self.hi
 
-    @property
-    def is_entire(self) -> bool:
-        return self.lo == -INF and self.hi == INF
-
     def contains(self, value: float) -> bool:
         return self.lo <= value <= self.hi
 

@@ -102,7 +102,6 @@ def build_requirements(
                 within=within,
                 location=spec.location,
                 position=positions.value(base),
-                predicate_position=positions.value((*base, kind)),
             )
         )
     return tuple(result)

@@ -176,11 +176,6 @@ class Settings:
         if self.backend not in BACKENDS:
             raise UsageError(f"unknown backend '{self.backend}'; choose one of {', '.join(BACKENDS)}")
 
-    @property
-    def keeps_interpolants(self) -> bool:
-        """Whether each stay's dense output is needed (a ``dt`` grid or ``dense=True``)."""
-        return self.dt is not None or self.dense
-
     def as_dict(self) -> dict[str, Any]:
         """The settings as the events JSON records them (``max_step`` null when not limited)."""
         record = asdict(self)
