@@ -32,6 +32,65 @@ def run_cli(
     )
 
 
+def run_on_a_terminal(*args: str | Path, cwd: Path | None = None) -> tuple[int, str, str]:
+    """``python -m hybrid ARGS`` with stderr on a pseudo-terminal: exit code, stdout, what it showed."""
+    import pty
+
+    master, slave = pty.openpty()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "hybrid", *map(str, args)],
+        stdout=subprocess.PIPE,
+        stderr=slave,
+        cwd=cwd or REPO,
+        env={**os.environ, "PYTHONPATH": str(REPO)},
+        text=True,
+    )
+    os.close(slave)
+    shown = b""
+    while True:
+        try:
+            chunk = os.read(master, 4096)
+        except OSError:  # the child closed the terminal
+            break
+        if not chunk:
+            break
+        shown += chunk
+    os.close(master)
+    stdout = proc.stdout.read() if proc.stdout else ""
+    proc.wait(timeout=120)
+    return proc.returncode, stdout, shown.decode("utf-8", "replace")
+
+
+def spaceex_pairs(folder: Path) -> list[tuple[Path, Path | None]]:
+    """Each ``folder/*/*.xml`` with each ``.cfg`` beside it named after it (``None`` without one)."""
+    found: list[tuple[Path, Path | None]] = []
+    for xml in sorted(folder.glob("*/*.xml")):
+        cfgs = [
+            c
+            for c in sorted(xml.parent.glob("*.cfg"))
+            if c.stem == xml.stem or c.stem.startswith(xml.stem + ".")
+        ]
+        found.extend((xml, c) for c in cfgs) if cfgs else found.append((xml, None))
+    return found
+
+
+def mutate(draw: Any, text: str, alphabet: Any, edits: Any) -> str:
+    """``text`` with ``edits`` (a strategy of counts) random inserts, deletions or replacements."""
+    from hypothesis import strategies as st
+
+    for _ in range(draw(edits)):
+        at = draw(st.integers(0, len(text)))
+        piece = draw(st.text(alphabet, min_size=1, max_size=4))
+        kind = draw(st.sampled_from(["insert", "delete", "replace"]))
+        if kind == "insert":
+            text = text[:at] + piece + text[at:]
+        elif kind == "delete":
+            text = text[:at] + text[at + len(piece) :]
+        else:
+            text = text[:at] + piece + text[at + len(piece) :]
+    return text
+
+
 def read_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:
     """Header and rows of a trajectory CSV."""
     with path.open(newline="") as handle:

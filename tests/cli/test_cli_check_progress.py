@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from support import REPO
+from support import REPO, run_on_a_terminal
 
 COMPONENTS = 16
 LARGE = 20
@@ -42,40 +42,10 @@ edges:
     return spec
 
 
-def run_on_a_terminal(folder: Path, *args: str) -> tuple[int, str, str]:
-    """``hybrid check ARGS`` with stderr on a pseudo-terminal: exit code, stdout, what it showed."""
-    import pty
-
-    master, slave = pty.openpty()
-    env = {**os.environ, "PYTHONPATH": str(REPO)}
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "hybrid", "check", *args],
-        stdout=subprocess.PIPE,
-        stderr=slave,
-        cwd=folder,
-        env=env,
-        text=True,
-    )
-    os.close(slave)
-    shown = b""
-    while True:
-        try:
-            chunk = os.read(master, 4096)
-        except OSError:  # the child closed the terminal
-            break
-        if not chunk:
-            break
-        shown += chunk
-    os.close(master)
-    stdout = proc.stdout.read() if proc.stdout else ""
-    proc.wait(timeout=120)
-    return proc.returncode, stdout, shown.decode("utf-8", "replace")
-
-
 @pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals are POSIX")
 def test_progress_of_a_large_product_is_shown_on_a_terminal_and_erased(tmp_path: Path) -> None:
     write_system(tmp_path, LARGE)
-    code, stdout, shown = run_on_a_terminal(tmp_path, "many.yaml")
+    code, stdout, shown = run_on_a_terminal("check", "many.yaml", cwd=tmp_path)
     assert code == 0, shown
     assert "check many.yaml: " in shown and " modes" in shown and "frontier" in shown
     assert "modes per second" in shown
@@ -93,7 +63,7 @@ def test_progress_of_a_large_product_is_shown_on_a_terminal_and_erased(tmp_path:
 @pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals are POSIX")
 def test_quiet_silences_it(tmp_path: Path) -> None:
     write_system(tmp_path)
-    code, stdout, shown = run_on_a_terminal(tmp_path, "many.yaml", "--quiet")
+    code, stdout, shown = run_on_a_terminal("check", "many.yaml", "--quiet", cwd=tmp_path)
     assert code == 0
     assert shown == "" and stdout == "many.yaml: ok\n"
 
@@ -117,6 +87,6 @@ def test_nothing_is_shown_when_stderr_is_not_a_terminal(tmp_path: Path) -> None:
 @pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals are POSIX")
 def test_a_small_product_shows_nothing() -> None:
     # the thermostat spec is checked well within the reporter's interval
-    code, stdout, shown = run_on_a_terminal(REPO / "specs", "thermostat.yaml")
+    code, stdout, shown = run_on_a_terminal("check", "thermostat.yaml", cwd=REPO / "specs")
     assert code == 0 and stdout == "thermostat.yaml: ok\n"
     assert shown == ""

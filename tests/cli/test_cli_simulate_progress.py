@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import os
-import subprocess
 import sys
 from pathlib import Path
 
 import pytest
-from support import REPO, SPECS
+from support import SPECS, run_on_a_terminal
 
 THERMOSTAT = SPECS / "thermostat.yaml"
 # a run of about a second at least (short steps), so the 0.2 s reporter shows it, and a
@@ -17,37 +15,14 @@ THERMOSTAT = SPECS / "thermostat.yaml"
 ARGS = ["simulate", str(THERMOSTAT), "--t-end", "600", "--dt", "0.0005", "--max-step", "0.05"]
 
 
-def run_on_a_terminal(*extra: str, out: Path) -> tuple[int, str, str]:
-    """Run the command with stderr on a pseudo-terminal; exit code, stdout and what stderr showed."""
-    import pty
-
-    master, slave = pty.openpty()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "hybrid", *ARGS, "--out", str(out), *extra],
-        stdout=subprocess.PIPE,
-        stderr=slave,
-        cwd=REPO,
-        text=True,
-    )
-    os.close(slave)
-    shown = b""
-    while True:
-        try:
-            chunk = os.read(master, 4096)
-        except OSError:  # the child closed the terminal
-            break
-        if not chunk:
-            break
-        shown += chunk
-    os.close(master)
-    stdout = proc.stdout.read() if proc.stdout else ""
-    proc.wait(timeout=120)
-    return proc.returncode, stdout, shown.decode("utf-8", "replace")
+def on_a_terminal(*extra: str, out: Path) -> tuple[int, str, str]:
+    """The simulation with stderr on a pseudo-terminal; exit code, stdout and what stderr showed."""
+    return run_on_a_terminal(*ARGS, "--out", str(out), *extra)
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals are POSIX")
 def test_progress_is_shown_on_a_terminal_and_cleared(tmp_path: Path) -> None:
-    code, stdout, shown = run_on_a_terminal(out=tmp_path / "traj.csv")
+    code, stdout, shown = on_a_terminal(out=tmp_path / "traj.csv")
     assert code == 0
     assert "simulate: " in shown and " s (" in shown and "jumps" in shown and "points" in shown
     assert "per second" in shown and "left" in shown
@@ -58,7 +33,7 @@ def test_progress_is_shown_on_a_terminal_and_cleared(tmp_path: Path) -> None:
 
 @pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals are POSIX")
 def test_quiet_silences_it(tmp_path: Path) -> None:
-    code, _, shown = run_on_a_terminal("--quiet", out=tmp_path / "traj.csv")
+    code, _, shown = on_a_terminal("--quiet", out=tmp_path / "traj.csv")
     assert code == 0
     assert shown == ""
 

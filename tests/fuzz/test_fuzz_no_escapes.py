@@ -13,6 +13,7 @@ import contextlib
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from support import REPO as ROOT
+from support import mutate
 
 import hybrid
 from hybrid.simulation import CAUSES
@@ -24,16 +25,7 @@ ALPHABET = st.sampled_from(list(":{}[]-,. #'\"\n\t*&!|>%@`0123456789abcxyzhvgte(
 @st.composite
 def mutated(draw: st.DrawFn) -> str:
     text = draw(st.sampled_from(SPECS))
-    for _ in range(draw(st.integers(1, 4))):
-        at = draw(st.integers(0, len(text)))
-        kind = draw(st.sampled_from(["insert", "delete", "replace"]))
-        piece = draw(st.text(ALPHABET, min_size=1, max_size=4))
-        if kind == "insert":
-            text = text[:at] + piece + text[at:]
-        elif kind == "delete":
-            text = text[:at] + text[at + len(piece) :]
-        else:
-            text = text[:at] + piece + text[at + len(piece) :]
+    text = mutate(draw, text, ALPHABET, st.integers(1, 4))
     return text
 
 

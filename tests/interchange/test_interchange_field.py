@@ -15,7 +15,7 @@ import re
 from pathlib import Path
 
 import pytest
-from support import REPO, SPECS
+from support import REPO, SPECS, spaceex_pairs
 
 import hybrid
 from hybrid.compose import as_system
@@ -28,19 +28,7 @@ WRONG_SYSTEM = {"1st_order", "8th_order", "16th_order", "32th_order"}
 TIGHT = {"rtol": 1e-12, "atol": 1e-12}
 
 
-def _pairs() -> list[tuple[Path, Path | None]]:
-    found: list[tuple[Path, Path | None]] = []
-    for xml in sorted(DATA.glob("*/*.xml")):
-        cfgs = [
-            c
-            for c in sorted(xml.parent.glob("*.cfg"))
-            if c.stem == xml.stem or c.stem.startswith(xml.stem + ".")
-        ]
-        found.extend((xml, c) for c in cfgs) if cfgs else found.append((xml, None))
-    return found
-
-
-PAIRS = _pairs()
+PAIRS = spaceex_pairs(DATA)
 
 
 def _refused(xml: Path, cfg: Path | None) -> bool:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from support import REPO
+from support import REPO, mutate
 
 from hybrid.errors import SpecError
 from hybrid.interchange import import_spaceex_text
@@ -23,17 +23,7 @@ ALPHABET = st.sampled_from(list("<>/=\"'&;!-[]{}():|^*+.,# \n\t0123456789xvwgcth
 
 
 def _mutate(draw: st.DrawFn, text: str) -> str:
-    for _ in range(draw(st.integers(0, 3))):
-        at = draw(st.integers(0, len(text)))
-        piece = draw(st.text(ALPHABET, min_size=1, max_size=4))
-        kind = draw(st.sampled_from(["insert", "delete", "replace"]))
-        if kind == "insert":
-            text = text[:at] + piece + text[at:]
-        elif kind == "delete":
-            text = text[:at] + text[at + len(piece) :]
-        else:
-            text = text[:at] + piece + text[at + len(piece) :]
-    return text
+    return mutate(draw, text, ALPHABET, st.integers(0, 3))
 
 
 @st.composite

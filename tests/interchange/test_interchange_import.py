@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from support import REPO, run_cli
+from support import REPO, run_cli, spaceex_pairs
 
 from hybrid.errors import SpecError
 from hybrid.interchange import ImportResult, import_spaceex
@@ -24,19 +24,7 @@ DATA = REPO / "tests" / "data" / "spaceex"
 NS = "{http://www-verimag.imag.fr/xml-namespaces/sspaceex}"
 
 
-def _pairs() -> list[tuple[Path, Path | None]]:
-    found: list[tuple[Path, Path | None]] = []
-    for xml in sorted(DATA.glob("*/*.xml")):
-        cfgs = [
-            c
-            for c in sorted(xml.parent.glob("*.cfg"))
-            if c.stem == xml.stem or c.stem.startswith(xml.stem + ".")
-        ]
-        found.extend((xml, c) for c in cfgs) if cfgs else found.append((xml, None))
-    return found
-
-
-PAIRS = _pairs()
+PAIRS = spaceex_pairs(DATA)
 WRONG_SYSTEM = {"1st_order", "8th_order", "16th_order", "32th_order"}
 
 
