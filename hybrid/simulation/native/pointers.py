@@ -10,6 +10,14 @@ function's C wrapper, and that of its compiled code (0 if it has none, as the
 model's ``cfunc``), which numba calls directly.
 
 Imported by the generated kernel modules only (it imports numba).
+
+This is the one module that uses numba's private API: the fields of a
+first-class function's data model (``c_addr``, ``jit_addr``, ``py_addr``) and
+``numba.experimental.function_type._get_wrapper_address`` /
+``_get_jit_address``. It was tested on the numba versions
+:data:`TESTED_NUMBA` spans, and the ``fast`` extra is bounded to them
+(``pyproject.toml``); ``tests/simulation/native/test_native_private_api.py``
+fails, naming the version, on any other.
 """
 
 from __future__ import annotations
@@ -25,7 +33,11 @@ cgutils: Any = numba.core.cgutils
 _function_type: Any = numba.experimental.function_type
 intrinsic: Any = numba.extending.intrinsic
 
-__all__ = ["addresses", "at", "function_at"]
+__all__ = ["TESTED_NUMBA", "addresses", "at", "function_at"]
+
+TESTED_NUMBA = ((0, 60), (0, 68))
+"""The first and last numba ``(major, minor)`` this module's use of numba's private API is
+tested on (the ``fast`` extra's ``numba>=0.60,<0.69``)."""
 
 
 @intrinsic  # type: ignore[untyped-decorator]
