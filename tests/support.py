@@ -9,11 +9,14 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
 REPO = Path(__file__).resolve().parents[1]
 SPECS = REPO / "specs"
 DOCS = REPO / "docs"
+Simulate = Callable[..., Any]
+"""The ``simulate`` fixture of tests/simulation: ``hybrid.simulate`` on the test's backend."""
 
 
 def run_cli(

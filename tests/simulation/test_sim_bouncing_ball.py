@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 import pytest
+from support import Simulate
 
 import hybrid
 
@@ -35,10 +36,10 @@ def test_the_spec_is_the_closed_form_s_ball(ball: hybrid.Automaton) -> None:
 
 
 @pytest.fixture(scope="module")
-def run_before_zeno(ball: hybrid.Automaton) -> hybrid.Run:
+def run_before_zeno(simulate: Simulate, ball: hybrid.Automaton) -> hybrid.Run:
     """Up to shortly after the 30th impact, well before the Zeno time."""
     t_end = float(impact_time(np.array(30.0))) + 1e-4
-    return hybrid.simulate(ball, t_end=t_end, rtol=1e-10, atol=1e-12, max_jumps=1000)
+    return simulate(ball, t_end=t_end, rtol=1e-10, atol=1e-12, max_jumps=1000)
 
 
 def test_first_30_impact_times(run_before_zeno: hybrid.Run) -> None:
@@ -88,8 +89,8 @@ def test_energy_signal_follows_the_state(run_before_zeno: hybrid.Run) -> None:
     assert last == pytest.approx(E**60 * G * H0, rel=1e-6)
 
 
-def test_ends_as_zeno_at_the_accumulation_time(ball: hybrid.Automaton) -> None:
-    run = hybrid.simulate(ball, t_end=20.0, rtol=1e-10, atol=1e-12, max_jumps=10_000)
+def test_ends_as_zeno_at_the_accumulation_time(simulate: Simulate, ball: hybrid.Automaton) -> None:
+    run = simulate(ball, t_end=20.0, rtol=1e-10, atol=1e-12, max_jumps=10_000)
     term = run.termination
     assert term.cause == "zeno"
     assert term.zeno_time is not None
@@ -99,7 +100,7 @@ def test_ends_as_zeno_at_the_accumulation_time(ball: hybrid.Automaton) -> None:
     assert "Zeno" in term.message
 
 
-def test_zeno_not_reported_when_t_end_comes_first(ball: hybrid.Automaton) -> None:
-    run = hybrid.simulate(ball, t_end=T_ZENO - 0.05, rtol=1e-10, atol=1e-12)
+def test_zeno_not_reported_when_t_end_comes_first(simulate: Simulate, ball: hybrid.Automaton) -> None:
+    run = simulate(ball, t_end=T_ZENO - 0.05, rtol=1e-10, atol=1e-12)
     assert run.termination.cause == "t_end"
     assert run.termination.zeno_time is None

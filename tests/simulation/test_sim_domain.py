@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 
 import pytest
+from support import Simulate
 
 import hybrid
 from hybrid.simulation import METHODS
@@ -61,11 +62,12 @@ class Counter:
     ("flow", "culprit"), [("sqrt(x)", "sqrt(-1)"), ("log(x)", "log(-1)"), ("1 / (x + 1)", "")]
 )
 def test_out_of_domain_at_the_start_ends_nonfinite_at_once(
+    simulate: Simulate,
     method: str, flow: str, culprit: str
 ) -> None:
     text = START.replace("FLOW", flow)
     counter = Counter()
-    run = hybrid.simulate(hybrid.load_text(text), t_end=10.0, method=method, inputs={"u": counter})
+    run = simulate(hybrid.load_text(text), t_end=10.0, method=method, inputs={"u": counter})
     term = run.termination
     assert term.cause == "nonfinite", term.message
     assert term.t == 0.0 and len(run) == 1
@@ -75,8 +77,8 @@ def test_out_of_domain_at_the_start_ends_nonfinite_at_once(
 
 
 @pytest.mark.parametrize("method", METHODS)
-def test_leaving_the_domain_during_a_stay_ends_nonfinite(method: str) -> None:
-    run = hybrid.simulate(hybrid.load_text(LATER), t_end=2.0, method=method)
+def test_leaving_the_domain_during_a_stay_ends_nonfinite(simulate: Simulate, method: str) -> None:
+    run = simulate(hybrid.load_text(LATER), t_end=2.0, method=method)
     term = run.termination
     assert term.cause == "nonfinite", term.message
     assert abs(term.t - 1.0) < 5e-3  # the last accepted step before the domain ends
@@ -87,18 +89,18 @@ def test_leaving_the_domain_during_a_stay_ends_nonfinite(method: str) -> None:
 
 
 @pytest.mark.parametrize("method", METHODS)
-def test_a_reset_into_the_domain_error_ends_at_the_jump(method: str) -> None:
-    run = hybrid.simulate(hybrid.load_text(AFTER_JUMP), t_end=2.0, method=method)
+def test_a_reset_into_the_domain_error_ends_at_the_jump(simulate: Simulate, method: str) -> None:
+    run = simulate(hybrid.load_text(AFTER_JUMP), t_end=2.0, method=method)
     term = run.termination
     assert term.cause == "nonfinite" and term.j == 1
     assert term.t == pytest.approx(0.5, abs=1e-9)
     assert "the flow of B failed: log(-2)" in term.message
 
 
-def test_a_non_finite_derivative_without_an_error_is_named() -> None:
+def test_a_non_finite_derivative_without_an_error_is_named(simulate: Simulate) -> None:
     # an input that returns inf: nothing raises, the derivative is not finite
     text = START.replace("FLOW", "0")
-    run = hybrid.simulate(hybrid.load_text(text), t_end=1.0, inputs={"u": lambda t: math.inf})
+    run = simulate(hybrid.load_text(text), t_end=1.0, inputs={"u": lambda t: math.inf})
     term = run.termination
     assert term.cause == "nonfinite" and term.t == 0.0
     assert "the flow of A gives x' = inf" in term.message

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 import pytest
+from support import Simulate
 
 import hybrid
 from hybrid.analysis import check
@@ -36,8 +37,8 @@ def circle(guard: str) -> hybrid.Automaton:
 
 
 @pytest.mark.parametrize("guard", SPELLINGS)
-def test_the_circle_switches_every_pi(guard: str) -> None:
-    run = hybrid.simulate(circle(guard), t_end=20.0, **TOL)
+def test_the_circle_switches_every_pi(simulate: Simulate, guard: str) -> None:
+    run = simulate(circle(guard), t_end=20.0, **TOL)
     assert run.termination.cause == "t_end", run.termination.message
     expected = [math.pi / 2 + k * math.pi for k in range(6)]  # 6 levels before t = 20
     assert [j.edge for j in run.jumps] == ["down", "up"] * 3
@@ -48,10 +49,10 @@ def test_the_circle_switches_every_pi(guard: str) -> None:
     assert max(abs(run["x"] - [math.cos(t) for t in run.t])) < 1e-7
 
 
-def test_with_default_tolerances_the_solution_limits_the_accuracy() -> None:
+def test_with_default_tolerances_the_solution_limits_the_accuracy(simulate: Simulate) -> None:
     # the event is located on the computed solution; at rtol 1e-6 that solution is
     # about 1e-7 off cos t, so the jump times are too
-    run = hybrid.simulate(circle("x == 0"), t_end=5.0)
+    run = simulate(circle("x == 0"), t_end=5.0)
     assert [j.edge for j in run.jumps] == ["down", "up"]
     assert run.jumps[0].t == pytest.approx(math.pi / 2, abs=1e-6)
     assert run.jumps[1].t == pytest.approx(3 * math.pi / 2, abs=1e-6)
@@ -66,13 +67,13 @@ def test_check_agrees_both_edges_can_fire_and_every_exit_is_covered(guard: str) 
     assert report.ok
 
 
-def test_check_and_simulate_agree_on_deadlock_freedom() -> None:
+def test_check_and_simulate_agree_on_deadlock_freedom(simulate: Simulate) -> None:
     text = (
         CIRCLE.replace("GUARD", "x == 0") + "properties: {deadlock_free: true, reachable: [p, n]}\n"
     )
     model = hybrid.load_text(text)
     assert check(model).ok
-    assert hybrid.simulate(model, t_end=10.0, **TOL).termination.cause == "t_end"
+    assert simulate(model, t_end=10.0, **TOL).termination.cause == "t_end"
 
 
 def test_a_level_reached_while_the_rest_of_the_guard_is_false_does_not_fire() -> None:
@@ -140,16 +141,16 @@ edges:
     assert jump.t == 0.0
 
 
-def test_check_and_simulate_agree_on_the_zero_time_cycle_at_the_origin() -> None:
+def test_check_and_simulate_agree_on_the_zero_time_cycle_at_the_origin(simulate: Simulate) -> None:
     # check warns that down and up can fire again and again without time passing: at
     # the origin the state sits on the level x == 0 (the flow is zero there), both
     # guards hold at entry, and the simulator indeed jumps back and forth at t = 0
     model = circle("x == 0")
     cycles = [f for f in check(model).findings if f.rule == "zero-time-cycle"]
     assert len(cycles) == 1 and "down" in cycles[0].message and "up" in cycles[0].message
-    run = hybrid.simulate(model, t_end=1.0, initial={"x": 0.0, "y": 0.0})
+    run = simulate(model, t_end=1.0, initial={"x": 0.0, "y": 0.0})
     assert run.termination.cause == "zeno" and run.termination.t == 0.0
     assert "jumps at the same instant" in run.termination.message
     # from (1, 0) the state only passes the level, so no jump follows another at once
-    run = hybrid.simulate(model, t_end=10.0, **TOL)
+    run = simulate(model, t_end=10.0, **TOL)
     assert len({j.t for j in run.jumps}) == len(run.jumps)

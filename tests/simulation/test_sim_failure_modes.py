@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from support import Simulate
 
 import hybrid
 from hybrid.simulation.compiled import CompiledModel
@@ -86,9 +87,9 @@ def test_a_flow_that_fails_in_the_second_mode_is_said_in_it() -> None:
     assert end.message.startswith("the flow of plant.run|ctrl.busy failed: sqrt(-")
 
 
-def test_an_automaton_alone_is_said_as_before() -> None:
+def test_an_automaton_alone_is_said_as_before(simulate: Simulate) -> None:
     # one component: its modes are its locations, named by the guard's edge already
     text = PLANT.replace("FLOW", "0").replace("GUARD", "log(x) > k").replace("RESET", "{}")
     model = hybrid.load_text(text)
-    run = hybrid.simulate(model, t_end=3.0, inputs={"k": lambda t: 5.0}, handle_sigint=False)
+    run = simulate(model, t_end=3.0, inputs={"k": lambda t: 5.0}, handle_sigint=False)
     assert run.termination.message.startswith("the guard of halt failed: log(-")

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support import assert_no_traceback, read_csv, read_json, run_cli
+from support import Simulate, assert_no_traceback, read_csv, read_json, run_cli
 
 import hybrid
 
@@ -33,8 +33,8 @@ locations:
 
 
 @pytest.mark.parametrize("tolerances", [{}, {"rtol": 1e-10, "atol": 1e-12}])
-def test_blowup_ends_near_the_singularity(tolerances: dict[str, float]) -> None:
-    run = hybrid.simulate(hybrid.load_text(BLOWUP), t_end=2.0, **tolerances)
+def test_blowup_ends_near_the_singularity(simulate: Simulate, tolerances: dict[str, float]) -> None:
+    run = simulate(hybrid.load_text(BLOWUP), t_end=2.0, **tolerances)
     term = run.termination
     assert term.cause in ("nonfinite", "solver_failure")
     assert abs(term.t - 1.0) < 1e-3, term.t
@@ -60,8 +60,8 @@ def test_blowup_from_the_cli(tmp_path: Path) -> None:
     assert abs(float(rows[-1]["t"]) - 1.0) < 1e-3
 
 
-def test_math_domain_error_names_the_function_and_time() -> None:
-    run = hybrid.simulate(hybrid.load_text(DOMAIN), t_end=2.0)
+def test_math_domain_error_names_the_function_and_time(simulate: Simulate) -> None:
+    run = simulate(hybrid.load_text(DOMAIN), t_end=2.0)
     term = run.termination
     assert term.cause == "nonfinite"
     assert abs(term.t - 1.0) < 1e-6, term.t
@@ -87,12 +87,12 @@ def test_math_domain_error_from_the_cli(tmp_path: Path) -> None:
     assert float(rows[-1]["t"]) == term["t"]
 
 
-def test_rejected_trial_point_outside_the_domain_is_not_a_failure() -> None:
+def test_rejected_trial_point_outside_the_domain_is_not_a_failure(simulate: Simulate) -> None:
     # x' = -x stays positive, but once x is tiny the solver tries long steps whose
     # trial stages have x < 0, where sqrt fails; it rejects them and goes on.
     # y' = sqrt(x) = e^(-t/2), so y(T) = 2 (1 - e^(-T/2)).
     text = DOMAIN.replace("x: -1, y: sqrt(x)", "x: -x, y: sqrt(x)")
-    run = hybrid.simulate(hybrid.load_text(text), t_end=100.0)
+    run = simulate(hybrid.load_text(text), t_end=100.0)
     assert run.termination.cause == "t_end", run.termination.message
     assert run["y"][-1] == pytest.approx(2 * (1 - math.exp(-50)), rel=1e-4)
 

@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 import pytest
+from support import Simulate
 
 import hybrid
 from hybrid.simulation import METHODS
@@ -70,8 +71,8 @@ def relay_dense_reference(t_end: float, n: int = 2_000_001) -> list[tuple[str, f
 
 
 @pytest.mark.parametrize("method", METHODS)
-def test_sin_guard_fires_first_at_7pi_over_6_with_every_method(method: str) -> None:
-    run = hybrid.simulate(hybrid.load_text(TRIGGER), t_end=20.0, method=method)
+def test_sin_guard_fires_first_at_7pi_over_6_with_every_method(simulate: Simulate, method: str) -> None:
+    run = simulate(hybrid.load_text(TRIGGER), t_end=20.0, method=method)
     assert run.termination.cause == "t_end"
     (jump,) = run.jumps
     assert jump.t == pytest.approx(7 * math.pi / 6, abs=1e-7), jump.t
@@ -84,8 +85,8 @@ def test_the_dense_reference_agrees_with_the_closed_form() -> None:
 
 
 @pytest.mark.parametrize("method", METHODS)
-def test_relay_driven_by_an_input_takes_every_jump(method: str) -> None:
-    run = hybrid.simulate(
+def test_relay_driven_by_an_input_takes_every_jump(simulate: Simulate, method: str) -> None:
+    run = simulate(
         hybrid.load_text(RELAY), t_end=T_END, method=method, inputs={"u": lambda t: math.sin(2 * t)}
     )
     reference = relay_dense_reference(T_END)
@@ -96,11 +97,11 @@ def test_relay_driven_by_an_input_takes_every_jump(method: str) -> None:
         assert jump.t == pytest.approx(t, abs=1e-7)
 
 
-def test_of_several_zeros_inside_one_step_the_first_is_taken() -> None:
+def test_of_several_zeros_inside_one_step_the_first_is_taken(simulate: Simulate) -> None:
     # x' = 0 and the guard |sin(t)| <= 0.1 holds near every multiple of pi; the first
     # instant is t = pi - asin(0.1) (t = 0 is excluded by starting at t = 0.5)
     text = TRIGGER.replace("sin(t) <= -0.5", "abs(sin(t)) <= 0.1")
-    run = hybrid.simulate(hybrid.load_text(text), t_end=100.0, t_start=0.5)
+    run = simulate(hybrid.load_text(text), t_end=100.0, t_start=0.5)
     (jump,) = run.jumps
     assert jump.t == pytest.approx(math.pi - math.asin(0.1), abs=1e-7)
 

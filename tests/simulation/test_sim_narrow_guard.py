@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support import DOCS, main_in_process, read_json
+from support import DOCS, Simulate, main_in_process, read_json
 
 import hybrid
 from hybrid.simulation.crossing import HORIZON_SAMPLES, parts
@@ -36,8 +36,8 @@ def model() -> hybrid.Automaton:
     return automaton
 
 
-def test_default_steps_miss_the_window(model: hybrid.Automaton) -> None:
-    run = hybrid.simulate(model, t_end=2.0)
+def test_default_steps_miss_the_window(simulate: Simulate, model: hybrid.Automaton) -> None:
+    run = simulate(model, t_end=2.0)
     assert run.termination.cause == "t_end"
     assert run.jumps == [] and set(run.location) == {"moving"}
     # the step ends the page lists, and the window lies inside one step
@@ -58,8 +58,8 @@ def test_the_samples_around_the_window_show_no_dip(model: hybrid.Automaton) -> N
     assert not np.any((samples >= 1.0) & (samples <= 1.0001))
 
 
-def test_max_step_catches_it_at_the_closed_form_time(model: hybrid.Automaton) -> None:
-    run = hybrid.simulate(model, t_end=2.0, max_step=0.0004)
+def test_max_step_catches_it_at_the_closed_form_time(simulate: Simulate, model: hybrid.Automaton) -> None:
+    run = simulate(model, t_end=2.0, max_step=0.0004)
     assert run.termination.cause == "t_end"
     (jump,) = run.jumps
     assert (jump.edge, jump.source, jump.target) == ("window", "moving", "caught")

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support import assert_no_traceback, main_in_process, read_csv, read_json, run_cli
+from support import Simulate, assert_no_traceback, main_in_process, read_csv, read_json, run_cli
 
 import hybrid
 from hybrid.export import write_events
@@ -50,8 +50,8 @@ edges:
 """
 
 
-def test_reset_on_a_boundary_moving_away_does_not_fire() -> None:
-    run = hybrid.simulate(hybrid.load_text(BOUNDARY), t_end=5.0, **TOL)
+def test_reset_on_a_boundary_moving_away_does_not_fire(simulate: Simulate) -> None:
+    run = simulate(hybrid.load_text(BOUNDARY), t_end=5.0, **TOL)
     assert [jump.edge for jump in run.jumps] == ["go", "back"]
     go, back = run.jumps
     assert go.t == pytest.approx(1.0, abs=1e-12)
@@ -62,16 +62,16 @@ def test_reset_on_a_boundary_moving_away_does_not_fire() -> None:
     np.testing.assert_allclose(run["x"][in_b], 2 * (t_b - 1) - (t_b**2 - 1) / 2, atol=1e-9)
 
 
-def test_reset_on_a_boundary_sitting_still_fires() -> None:
+def test_reset_on_a_boundary_sitting_still_fires(simulate: Simulate) -> None:
     # x' = 0 on the boundary x <= 0: the guard holds and stays so, it fires at once
     text = BOUNDARY.replace("B: {flow: {x: 2 - t}}", "B: {flow: {x: 0}}")
-    run = hybrid.simulate(hybrid.load_text(text), t_end=2.0, **TOL)
+    run = simulate(hybrid.load_text(text), t_end=2.0, **TOL)
     assert [jump.edge for jump in run.jumps] == ["go", "back"]
     assert run.jumps[0].t == run.jumps[1].t
 
 
-def test_reset_inside_a_guard_fires_at_once(tmp_path: Path) -> None:
-    run = hybrid.simulate(hybrid.load_text(INSIDE), t_end=3.0, **TOL)
+def test_reset_inside_a_guard_fires_at_once(simulate: Simulate, tmp_path: Path) -> None:
+    run = simulate(hybrid.load_text(INSIDE), t_end=3.0, **TOL)
     assert [jump.edge for jump in run.jumps] == ["go", "at_once"]
     go, at_once = run.jumps
     assert go.t == at_once.t == pytest.approx(1.0, abs=1e-12)
@@ -134,8 +134,8 @@ def test_simultaneous_edges_priority_then_file_order(
     assert jump["target"] == {"first": "B", "second": "C"}[winner]
 
 
-def test_single_enabled_edge_is_logged_as_only() -> None:
-    run = hybrid.simulate(hybrid.load_text(BOUNDARY), t_end=2.0, **TOL)
+def test_single_enabled_edge_is_logged_as_only(simulate: Simulate) -> None:
+    run = simulate(hybrid.load_text(BOUNDARY), t_end=2.0, **TOL)
     assert run.jumps[0].enabled == ("go",) and run.jumps[0].chosen_by == "only"
 
 
@@ -153,8 +153,8 @@ edges:
 """
 
 
-def test_blocked_at_the_closed_form_instant_api() -> None:
-    run = hybrid.simulate(hybrid.load_text(BLOCKED), t_end=5.0, **TOL)
+def test_blocked_at_the_closed_form_instant_api(simulate: Simulate) -> None:
+    run = simulate(hybrid.load_text(BLOCKED), t_end=5.0, **TOL)
     term = run.termination
     assert term.cause == "blocked"
     assert term.t == pytest.approx(math.log(4), abs=1e-9)
@@ -187,8 +187,8 @@ def test_blocked_from_the_cli_writes_complete_output(tmp_path: Path) -> None:
     assert doc["jumps"] == []
 
 
-def test_blocked_at_start_when_the_initial_state_violates_the_invariant() -> None:
-    run = hybrid.simulate(hybrid.load_text(BLOCKED), t_end=5.0, initial={"x": 0.1}, **TOL)
+def test_blocked_at_start_when_the_initial_state_violates_the_invariant(simulate: Simulate) -> None:
+    run = simulate(hybrid.load_text(BLOCKED), t_end=5.0, initial={"x": 0.1}, **TOL)
     assert run.termination.cause == "blocked" and run.termination.t == 0.0
     assert len(run) == 1
 

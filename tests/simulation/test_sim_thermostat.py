@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 import pytest
+from support import Simulate
 
 import hybrid
 
@@ -40,10 +41,10 @@ def test_the_spec_starts_where_the_closed_form_does(thermostat: hybrid.Automaton
     assert thermostat.initial_location == "off" and thermostat.initial_vector() == [20.0]
 
 
-def test_ten_periods_of_switching(thermostat: hybrid.Automaton) -> None:
+def test_ten_periods_of_switching(simulate: Simulate, thermostat: hybrid.Automaton) -> None:
     p = dict(thermostat.parameters)
     expected = np.array(switching_times(p, 20))  # ten periods: ten on and ten off switches
-    run = hybrid.simulate(thermostat, t_end=expected[-1] + 1.0, rtol=1e-12, atol=1e-12)
+    run = simulate(thermostat, t_end=expected[-1] + 1.0, rtol=1e-12, atol=1e-12)
     assert run.termination.cause == "t_end"
     assert len(run.jumps) == 20
     error = np.abs(run.jump_times - expected)
@@ -56,19 +57,19 @@ def test_ten_periods_of_switching(thermostat: hybrid.Automaton) -> None:
         assert jump.after == jump.before  # no reset: T keeps its value
 
 
-def test_switching_follows_changed_parameters(thermostat: hybrid.Automaton) -> None:
+def test_switching_follows_changed_parameters(simulate: Simulate, thermostat: hybrid.Automaton) -> None:
     overrides = {"a": 0.25, "T_low": 16.0, "T_high": 24.0}
     p = {**thermostat.parameters, **overrides}
     expected = np.array(switching_times(p, 6))
-    run = hybrid.simulate(
+    run = simulate(
         thermostat, t_end=expected[-1] + 0.5, rtol=1e-12, atol=1e-12, parameters=overrides
     )
     assert np.abs(run.jump_times - expected).max() < 1e-8
 
 
-def test_heating_power_is_a_location_signal(thermostat: hybrid.Automaton) -> None:
+def test_heating_power_is_a_location_signal(simulate: Simulate, thermostat: hybrid.Automaton) -> None:
     p = dict(thermostat.parameters)
-    run = hybrid.simulate(thermostat, t_end=10.0, rtol=1e-10, atol=1e-12)
+    run = simulate(thermostat, t_end=10.0, rtol=1e-10, atol=1e-12)
     power = run["heating_power"]
     on = run.location == "on"
     assert on.any() and (~on).any()

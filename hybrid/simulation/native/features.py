@@ -27,11 +27,41 @@ backend holds it (a slot of the run's parameter vector,
 
 from __future__ import annotations
 
-from hybrid.compose import System
+from typing import Any
+
+from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
+from hybrid.model import Automaton
 from hybrid.simulation.margins import watched_requirements
 
-__all__ = ["refuse_requirements", "refuse_unsupported"]
+__all__ = ["refusal", "refuse_requirements", "refuse_unsupported"]
+
+
+def refusal(model: Automaton | System, **settings: Any) -> str | None:
+    """Why the compiled backend refuses to simulate ``model`` with ``settings``, or ``None``.
+
+    ``settings`` are :func:`hybrid.simulate`'s keyword arguments. The list:
+    a ``method`` other than RK45; ``inputs`` given as Python functions; a free
+    input without a ``range`` (it needs a function).
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+    >>> refusal(ball) is None, refusal(ball, method="Radau")
+    (True, "method 'Radau' (it integrates with RK45)")
+    """
+    method = settings.get("method", "RK45")
+    if method != "RK45":
+        return f"method '{method}' (it integrates with RK45)"
+    if settings.get("inputs"):
+        return "inputs given as Python functions"
+    system = as_system(model)
+    ranges = system.input_ranges()
+    unheld = [n for n in system.free_inputs if n not in ranges]
+    if unheld:
+        return f"input '{unheld[0]}' has no range, so it needs a Python function"
+    return None
 
 
 def refuse_unsupported(system: System) -> None:
