@@ -12,6 +12,11 @@ checking a large product, a sweep of many runs):
   from :meth:`Tracker.finish`.
 - :class:`TerminalLine`: a reporter that redraws one line of a stream
   (stderr), only when that stream is a terminal, so logs and pipes stay clean.
+- :class:`Bar`: a reporter drawn as a tqdm progress bar (``tqdm.auto``: the
+  notebook's widget in Jupyter with ipywidgets, a text bar elsewhere), and
+  :func:`reporter`, which turns a campaign's ``progress=`` into a reporter: by
+  default a bar in a Jupyter kernel when tqdm is installed, nothing elsewhere.
+  tqdm is optional (the ``notebook`` extra) and imported only when a bar is drawn.
 
 A sweep reports runs done of runs planned, with the count of violations::
 
@@ -39,11 +44,22 @@ from __future__ import annotations
 import math
 import sys
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import TextIO
+from typing import Any, TextIO
 
-__all__ = ["Reporter", "Status", "TerminalLine", "Tracker", "terminal_reporter"]
+__all__ = [
+    "Bar",
+    "Progress",
+    "Reporter",
+    "Status",
+    "TerminalLine",
+    "Tracker",
+    "in_notebook",
+    "reporter",
+    "terminal_reporter",
+]
 
 
 @dataclass(frozen=True)
@@ -113,6 +129,9 @@ class Status:
 Reporter = Callable[[Status], object]
 """Anything that receives statuses: :class:`TerminalLine`, a list's ``append``, a callback."""
 
+Progress = Reporter | bool | None
+"""What a campaign's ``progress=`` takes: a reporter, True or False (see :func:`reporter`)."""
+
 
 class Tracker:
     """Turns frequent ``update`` calls into at most one report per ``interval`` seconds."""
@@ -134,6 +153,8 @@ class Tracker:
         self.started = clock()
         self.next_report = self.started + interval
         self.last = Status(task, start, total, unit, 0.0, (), start)
+        if report is not None and getattr(report, "wants_start", False):
+            report(self.last)  # a bar is drawn at once, at 0 of its total
 
     def update(self, done: float, **counters: float) -> None:
         """Record progress; report it if ``interval`` has passed since the last report."""
@@ -147,12 +168,20 @@ class Tracker:
         if self.report is not None:
             self.report(self.last)
 
-    def finish(self, done: float | None = None, **counters: float) -> Status:
-        """Report the final status (always) and return it."""
+    def finish(
+        self, done: float | None = None, *, total: float | None = None, **counters: float
+    ) -> Status:
+        """Report the final status (always) and return it.
+
+        ``total``: the work that was to be done after all, when it ended early by
+        design (a falsification that found its counterexample); an interrupted
+        task keeps its total, and its final ``done`` falls short of it.
+        """
         now = self.clock()
         status = replace(
             self.last,
             done=self.last.done if done is None else done,
+            total=self.last.total if total is None else total,
             elapsed=now - self.started,
             counters=tuple(counters.items()) if counters else self.last.counters,
             final=True,
@@ -210,6 +239,101 @@ class TerminalLine:
             self.stream.write("\r" + " " * self.drawn + "\r")
             self.stream.flush()
         self.drawn = 0
+
+
+class Bar:
+    """Draws statuses as a tqdm progress bar: ``done`` of ``total`` ``unit``, counters after.
+
+    The bar is made at the first status, which a :class:`Tracker` sends when it
+    starts (``factory(total=, desc=, unit=, **options)``; tqdm's class from
+    ``tqdm.auto`` by default), and closed at the final one, which sets its count
+    to the work done.
+
+    Examples
+    --------
+    >>> import io
+    >>> from tqdm import tqdm
+    >>> out = io.StringIO()
+    >>> bar = Bar(tqdm, file=out, ascii=True)
+    >>> bar(Status("sweep", 2, 4, "runs", 1.0))
+    >>> bar(Status("sweep", 4, 4, "runs", 2.0, (("violations", 1),), final=True))
+    >>> out.getvalue().rsplit("\\r", 1)[-1].split(" [")[0]
+    'sweep: 100%|##########| 4/4'
+    """
+
+    wants_start = True
+    """A :class:`Tracker` reports its start to a bar (drawn at 0 before any work)."""
+
+    def __init__(self, factory: Callable[..., Any] | None = None, **options: Any) -> None:
+        self.factory = factory
+        self.options = options
+        self.bar: Any = None
+
+    def __call__(self, status: Status) -> None:
+        if self.bar is None:
+            factory = self.factory if self.factory is not None else _tqdm()
+            if factory is None:
+                return
+            total = None if status.total is None else _count(status.total)
+            self.bar = factory(
+                total=total, desc=status.task, unit=status.unit or "it", **self.options
+            )
+        if status.total is not None and self.bar.total != _count(status.total):
+            self.bar.total = _count(status.total)
+        self.bar.set_postfix(dict(status.counters), refresh=False)
+        self.bar.update(_count(status.done) - self.bar.n)
+        if status.final:
+            self.bar.close()
+            self.bar = None
+
+
+def reporter(progress: Progress) -> Reporter | None:
+    """The reporter a campaign's ``progress=`` asks for.
+
+    ``None`` (the default): a :class:`Bar` when this is a Jupyter kernel
+    (:func:`in_notebook`) and tqdm is installed, else nothing; ``True``: a bar
+    wherever tqdm is installed, else the :class:`TerminalLine` on stderr when it
+    is a terminal; ``False``: nothing; a callable: itself.
+
+    Examples
+    --------
+    >>> reporter(False) is None, reporter(print) is print
+    (True, True)
+    """
+    if progress is None:
+        return Bar() if in_notebook() and _tqdm() is not None else None
+    if progress is True:
+        return Bar() if _tqdm() is not None else terminal_reporter()
+    if progress is False:
+        return None
+    return progress
+
+
+def in_notebook() -> bool:
+    """Whether this runs in a Jupyter kernel (IPython's, as tqdm.auto tells it).
+
+    IPython is not imported here: a kernel has imported it already.
+    """
+    ipython = sys.modules.get("IPython")
+    get_ipython = getattr(ipython, "get_ipython", None)
+    shell = get_ipython() if callable(get_ipython) else None
+    return shell is not None and "IPKernelApp" in getattr(shell, "config", {})
+
+
+def _tqdm() -> Callable[..., Any] | None:
+    """tqdm's bar class from ``tqdm.auto``, or None without tqdm."""
+    try:
+        with warnings.catch_warnings():  # without ipywidgets tqdm.auto says so: a text bar
+            warnings.simplefilter("ignore")
+            from tqdm.auto import tqdm
+    except ImportError:
+        return None
+    return tqdm  # type: ignore[no-any-return]
+
+
+def _count(value: float) -> float:
+    """A whole number as an int (tqdm prints ``4/4``, not ``4.0/4.0``)."""
+    return int(value) if float(value).is_integer() else value
 
 
 def terminal_reporter(quiet: bool = False, stream: TextIO | None = None) -> TerminalLine | None:

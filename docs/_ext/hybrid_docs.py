@@ -263,8 +263,9 @@ def notebook_markdown(srcdir: Path, docname: str, name: str) -> str:
         parts.append(_fence("python", source))
         for k, output in enumerate(cell.get("outputs", [])):
             data = output.get("data", {})
-            if output["output_type"] == "stream":
-                parts.append(_fence("text", _text(output["text"])))
+            if output["output_type"] == "stream":  # a line redrawn after "\r": its last drawing
+                lines = _text(output["text"]).split("\n")
+                parts.append(_fence("text", "\n".join(ln.rsplit("\r", 1)[-1] for ln in lines)))
             elif "image/png" in data:
                 stem = f"{path.stem}-{i}-{k}.png"
                 (out_dir / stem).write_bytes(base64.b64decode(_text(data["image/png"])))

@@ -43,7 +43,7 @@ from hybrid.campaigns.targets import Constant, check_names, free_inputs, split
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
-from hybrid.progress import Reporter, Tracker
+from hybrid.progress import Progress, Tracker, reporter
 from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
@@ -122,7 +122,7 @@ def falsify(
     workers: int | None = None,
     scheduler: Any = None,
     run_timeout: float | None = None,
-    progress: Reporter | None = None,
+    progress: Progress = None,
     handle_sigint: bool = True,
     backend: str = "scipy",
     **solver: Any,
@@ -258,8 +258,8 @@ class _Search:
             for a, u in zip(self.axes, unit, strict=True)
         }
 
-    def run(self, executor: Executor, stop: Any, progress: Reporter | None) -> None:
-        tracker = Tracker("falsify", total=self.budget, unit="runs", report=progress)
+    def run(self, executor: Executor, stop: Any, progress: Progress) -> None:
+        tracker = Tracker("falsify", total=self.budget, unit="runs", report=reporter(progress))
         units = unit_samples(len(self.axes), self.n_global, self.seed, self.sampler)
         points = [self.values_of(u) for u in units]
         rows: dict[int, dict[str, Any]] = {}
@@ -292,7 +292,8 @@ class _Search:
         left = self.budget - len(self.history)
         if self.found is None and self.complete and left > 0:
             self._local(executor, stop, left, tracker)
-        tracker.finish(len(self.history), violations=self.violations())
+        done = len(self.history)  # a counterexample found early: the runs made were the work
+        tracker.finish(done, total=done if self.found is not None else None, violations=self.violations())
 
     def _local(self, executor: Executor, stop: Any, left: int, tracker: Tracker) -> None:
         ranked = sorted(range(len(self.history)), key=lambda i: (self.history[i]["robustness"], i))

@@ -312,9 +312,11 @@ def _ensemble_rows(
     if any(len(column) != len(batch) for column in columns.values()):
         raise UsageError("the points of a batch vary different names")
     options = {k: v for k, v in plan.solver.items() if k != "method"}
-    runs = simulate_many(
-        model, plan.t_end, parameters=columns or None, handle_sigint=False, **options
-    )
+    with warnings.catch_warnings():  # rows of a table, as simulate_quietly
+        warnings.simplefilter("ignore", BoundsWarning)
+        runs = simulate_many(
+            model, plan.t_end, parameters=columns or None, handle_sigint=False, **options
+        )
     return [_row_of({"run": index, **point}, runs[k], plan) for k, (index, point) in enumerate(batch)]
 
 

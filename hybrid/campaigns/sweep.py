@@ -42,7 +42,7 @@ from hybrid.campaigns.targets import INPUT, check_names, free_inputs
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
-from hybrid.progress import Reporter, Tracker
+from hybrid.progress import Progress, Tracker, reporter
 from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.margins import watched_requirements
 from hybrid.simulation.settings import Settings
@@ -81,7 +81,7 @@ def sweep(
     run_timeout: float | None = None,
     out: str | Path | None = None,
     resume: bool = False,
-    progress: Reporter | None = None,
+    progress: Progress = None,
     handle_sigint: bool = True,
     backend: str = "scipy",
     batch: int | None = None,
@@ -135,8 +135,9 @@ def sweep(
         in ``<out>.parts/`` meanwhile, so an interrupted campaign can resume.
     resume : bool
         Finish the campaign whose rows are in ``<out>.parts/``: run only the rest.
-    progress : callable, optional
-        Receives a :class:`hybrid.progress.Status` (runs done, violations, failed).
+    progress : callable or bool, optional
+        A :class:`hybrid.progress.Status` receiver (runs done, violations, failed), or
+        True/False: a tqdm bar or none (default: a bar in Jupyter; docs/campaigns.md).
     handle_sigint : bool
         Turn Ctrl-C into a clean stop (rows kept, ``table.complete`` False).
     backend : str
@@ -207,7 +208,7 @@ def _finish(
     executor: Executor,
     out: str | Path | None,
     resume: bool,
-    progress: Reporter | None,
+    progress: Progress,
     handle_sigint: bool,
 ) -> SweepTable:
     """Check the run settings, then run the campaign of ``points``."""
@@ -236,7 +237,7 @@ def run_campaign(
     executor: Executor,
     out: str | Path | None,
     resume: bool,
-    progress: Reporter | None,
+    progress: Progress,
     handle_sigint: bool,
 ) -> SweepTable:
     """Run ``points`` on ``executor``; the table (written to ``out`` when complete)."""
@@ -260,7 +261,7 @@ def run_campaign(
     rows: dict[int, dict[str, Any]] = dict(store.done) if store is not None else {}
     resumed = len(rows)
     jobs = [(i, "run", p) for i, p in enumerate(points) if i not in rows]
-    tracker = Tracker("sweep", total=len(points), unit="runs", report=progress)
+    tracker = Tracker("sweep", total=len(points), unit="runs", report=reporter(progress))
     counts = {"violations": 0, "failed": 0}
     for row in rows.values():
         _count(row, requirements, counts)

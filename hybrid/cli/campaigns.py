@@ -164,7 +164,7 @@ def run_sweep(args: argparse.Namespace) -> int:
             run_timeout=args.run_timeout,
             out=args.out,
             resume=args.resume,
-            progress=line,
+            progress=line if line is not None else False,
             backend=args.backend,
             **_solver(args),
         )
@@ -240,7 +240,7 @@ def run_falsify(args: argparse.Namespace) -> int:
             workers=args.workers,
             scheduler=args.scheduler,
             run_timeout=args.run_timeout,
-            progress=line,
+            progress=line if line is not None else False,
             backend=args.backend,
             **_solver(args),
         )

@@ -8,6 +8,10 @@ stored point beyond its bounds by more than the solver's tolerance
 with its time ``t`` and hybrid time ``j`` (:class:`BoundsWarning`). The run keeps
 them as ``run.out_of_bounds`` and the events JSON as ``"out_of_bounds"``.
 
+An ensemble (:func:`hybrid.simulate_many`) of thousands of runs warns once per
+variable too, not once per run: :func:`warn_ensemble` counts the runs that left
+that variable's bounds and names the first of them, with its ``t`` and ``j``.
+
 Examples
 --------
 >>> import numpy as np
@@ -24,7 +28,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,7 +37,13 @@ from numpy.typing import NDArray
 
 from hybrid.model import StateVar
 
-__all__ = ["BoundExcursion", "BoundsWarning", "bound_excursions", "warn_excursions"]
+__all__ = [
+    "BoundExcursion",
+    "BoundsWarning",
+    "bound_excursions",
+    "warn_ensemble",
+    "warn_excursions",
+]
 
 
 class BoundsWarning(UserWarning):
@@ -106,3 +116,36 @@ def warn_excursions(found: Sequence[BoundExcursion], stacklevel: int = 3) -> Non
     """One :class:`BoundsWarning` per excursion (one per variable)."""
     for excursion in found:
         warnings.warn(excursion.message, BoundsWarning, stacklevel=stacklevel)
+
+
+def warn_ensemble(
+    found: Mapping[int, Sequence[BoundExcursion]], runs: int, stacklevel: int = 3
+) -> None:
+    """One :class:`BoundsWarning` per variable over many runs (``found``: by run number).
+
+    The message counts the runs that left the variable's bounds and gives the
+    first of them (the lowest run number) with its ``t``, ``j`` and value.
+
+    Examples
+    --------
+    >>> h = BoundExcursion("h", 3.1, 1, 3.05, 0.0, 3.0)
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     warn_ensemble({7: [h], 2: [h]}, runs=10)
+    >>> print(caught[0].message)
+    h left its declared bounds [0, 3] in 2 of 10 runs; the first, run 2, at t=3.1 j=1 (h = 3.05)
+    """
+    counts: dict[str, int] = {}
+    first: dict[str, tuple[int, BoundExcursion]] = {}
+    for run in sorted(found):
+        for excursion in found[run]:
+            counts[excursion.variable] = counts.get(excursion.variable, 0) + 1
+            first.setdefault(excursion.variable, (run, excursion))
+    for variable, (run, e) in first.items():
+        warnings.warn(
+            f"{variable} left its declared bounds [{e.lower:g}, {e.upper:g}] in "
+            f"{counts[variable]} of {runs} runs; the first, run {run}, at t={e.t:.9g} j={e.j} "
+            f"({variable} = {e.value:.9g})",
+            BoundsWarning,
+            stacklevel=stacklevel,
+        )

@@ -46,3 +46,22 @@ def test_readme_python_example_runs() -> None:
     exec(compile(python.group(1), "README.md", "exec"), namespace)  # our own README
     run = namespace["run"]
     assert run.termination.cause in ("t_end", "zeno")  # type: ignore[attr-defined]
+
+
+def _relative_targets(text: str) -> list[str]:
+    """Link and image targets of Markdown or HTML that name no scheme and no host."""
+    targets = [m.group(1) for m in re.finditer(r"\]\(\s*<?([^)\s>]+)", text)]  # [x](t), ![x](t)
+    targets += re.findall(r"^\s{0,3}\[[^\]]+\]:\s*<?(\S+?)>?(?:\s|$)", text, re.M)  # [x]: t
+    targets += re.findall(r"""\b(?:href|src)\s*=\s*["']([^"']+)""", text, re.I)  # <a href=...>
+    return [t for t in targets if not re.match(r"[a-z][a-z0-9+.-]*:", t, re.I)]
+
+
+def test_readme_links_work_from_the_package_index_page() -> None:
+    # The README is the distribution's long description (pyproject's `readme`): on the
+    # index's page a link relative to the repository leads nowhere.
+    assert re.search(r'^readme = "README.md"$', (ROOT / "pyproject.toml").read_text(), re.M)
+    assert _relative_targets(README) == []
+    broken = "[a](docs/a.md) ![b](img/b.png) <a href='c.html'>\n[d]: docs/d.md\n"
+    assert _relative_targets(broken) == ["docs/a.md", "img/b.png", "docs/d.md", "c.html"]
+    fine = "[a](https://example.org/a) <a href=\"mailto:x@example.org\">\n"
+    assert _relative_targets(fine) == []

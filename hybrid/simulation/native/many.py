@@ -7,7 +7,10 @@ numba's threads in chunks (:func:`hybrid.simulation.native.ensemble.run_many`);
 a run whose trajectory outgrows its row is run again alone, with room. The
 result, an :class:`Ensemble`, has a summary per run as arrays (cause, end
 time, jumps) and builds each run's :class:`~hybrid.simulation.result.Run` on
-access.
+access. Declared ``bounds:`` are watched as :func:`hybrid.simulate` watches
+them, over every run's stored points: ``ensemble.out_of_bounds`` lists the runs
+that left them, and one :class:`~hybrid.simulation.bounds.BoundsWarning` per
+variable counts them and names the first (:func:`~hybrid.simulation.bounds.warn_ensemble`).
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ from numpy.typing import NDArray
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
+from hybrid.simulation.bounds import BoundExcursion, bound_excursions, warn_ensemble
 from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import run_from
@@ -83,7 +87,10 @@ class Ensemble(Sequence[Run]):
 
     ``ensemble[i]`` is run ``i`` as a :class:`~hybrid.simulation.result.Run`
     (built on access); ``causes``, ``t``, ``j`` and ``n_jumps`` summarise every
-    run as arrays; ``parameters`` and ``initial`` are the table's columns.
+    run as arrays; ``parameters`` and ``initial`` are the table's columns;
+    ``out_of_bounds`` maps the number of each run that left its declared
+    ``bounds:`` to where it did (its ``run.out_of_bounds``), and is empty when
+    every run stayed within them.
     """
 
     def __init__(self, model: Automaton | System, compiled: CompiledNative, settings: Settings,
@@ -95,6 +102,7 @@ class Ensemble(Sequence[Run]):
         self._chunks: list[b.RunArrays] = []
         self._where: list[tuple[int, int]] = []
         self._alone: dict[int, Run] = {}
+        self.out_of_bounds: dict[int, tuple[BoundExcursion, ...]] = {}
 
     def _add(self, chunk: b.RunArrays, rows: int) -> None:
         index = len(self._chunks)
@@ -158,7 +166,9 @@ class Ensemble(Sequence[Run]):
         if int(arrays.oi[b.I_DETAIL]) in (b.D_EVAL, b.D_FLOW):
             model = self.model_of(i)
         compiled = self.compiled
-        return run_from(compiled.native, compiled.layout, model, self.settings, arrays)
+        run = run_from(compiled.native, compiled.layout, model, self.settings, arrays)
+        run.out_of_bounds = self.out_of_bounds.get(i, ())
+        return run
 
     def __iter__(self) -> Iterator[Run]:
         return (self[k] for k in range(len(self)))
@@ -213,6 +223,10 @@ def simulate_many(
     Ensemble
         One :class:`~hybrid.simulation.result.Run` per row (``ensemble[i]``),
         and per-run summaries (``causes``, ``t``, ``j``, ``n_jumps``).
+        ``out_of_bounds`` maps each run that left its declared ``bounds:`` to
+        where it did; each variable left in any run gives one
+        :class:`~hybrid.simulation.bounds.BoundsWarning` with the number of such
+        runs and the first one's ``t`` and ``j``.
 
     Examples
     --------
@@ -278,12 +292,55 @@ def simulate_many(
         ensemble._add(arrays, hi - lo)
         overflowed = np.flatnonzero(arrays.oi[:, b.I_OVERFLOW])
         for r in overflowed.tolist():
-            ensemble._alone[lo + r] = _alone(model, ensemble, settings, lo + r, x0s[lo + r])
+            one = _alone(model, ensemble, settings, lo + r, x0s[lo + r])
+            ensemble._alone[lo + r] = one
+            one.out_of_bounds = _run_excursions(model, settings, one.state_names, one.t,
+                                                one.j, one.states)  # fmt: skip
+        _chunk_excursions(ensemble, arrays, lo)
         if overflowed.size:  # give later chunks the room the longest run needed
             longest = max(len(ensemble._alone[lo + r]) for r in overflowed.tolist())
             most = max(len(ensemble._alone[lo + r].jumps) for r in overflowed.tolist())
             points, jumps = max(points, 2 * longest), max(jumps, 2 * most + 4)
+    alone = {i: run.out_of_bounds for i, run in ensemble._alone.items() if run.out_of_bounds}
+    ensemble.out_of_bounds = dict(sorted({**ensemble.out_of_bounds, **alone}.items()))
+    warn_ensemble(ensemble.out_of_bounds, n)
     return ensemble
+
+
+def _run_excursions(model: Automaton | System, settings: Settings, names: Sequence[str],
+                    t: NDArray[np.float64], j: NDArray[np.int64],
+                    states: NDArray[np.float64]) -> tuple[BoundExcursion, ...]:  # fmt: skip
+    """Where one run's stored points leave the declared bounds (as :func:`hybrid.simulate`)."""
+    return bound_excursions(model.states, names, t, j, states, rtol=settings.rtol,
+                            atol=settings.atol)  # fmt: skip
+
+
+def _chunk_excursions(ensemble: Ensemble, arrays: b.RunArrays, lo: int) -> None:
+    """Record the runs of a chunk (from run ``lo``) whose stored points leave the bounds.
+
+    The chunk is screened at once (every run's valid points, every bounded
+    variable); only the runs found beyond are read one by one.
+    """
+    settings, names = ensemble.settings, ensemble.compiled.layout.state_names
+    valid = np.arange(arrays.pts.shape[1]) < arrays.oi[:, b.I_POINTS][:, None]
+    valid &= ~arrays.oi[:, b.I_OVERFLOW].astype(bool)[:, None]  # run alone, checked there
+    beyond = np.zeros(valid.shape[0], dtype=bool)
+    for var in ensemble.model.states:
+        if (math.isinf(var.lower) and math.isinf(var.upper)) or var.name not in names:
+            continue
+        x = arrays.pts[:, :, b.P_X + names.index(var.name)]
+        with np.errstate(invalid="ignore"):  # the unused tail of a row holds anything
+            out = (x < var.lower - (settings.atol + settings.rtol * abs(var.lower))) | (
+                x > var.upper + (settings.atol + settings.rtol * abs(var.upper))
+            )
+        beyond |= np.any(out & valid, axis=1)
+    d = len(names)
+    for r in np.flatnonzero(beyond).tolist():
+        pts = arrays.pts[r, : int(arrays.oi[r, b.I_POINTS])]
+        found = _run_excursions(ensemble.model, settings, names, pts[:, b.P_T],
+                                pts[:, b.P_J].astype(np.int64), pts[:, b.P_X : b.P_X + d])  # fmt: skip
+        if found:
+            ensemble.out_of_bounds[lo + r] = found
 
 
 def _alone(model: Automaton | System, ensemble: Ensemble, settings: Settings, i: int,
