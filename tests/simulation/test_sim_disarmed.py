@@ -17,7 +17,6 @@ rule until the second wave's review: the ball at rest fell through its floor).
 
 from __future__ import annotations
 
-import importlib.util
 import math
 
 import numpy as np
@@ -30,18 +29,12 @@ T1 = math.sqrt(2 * H0 / G)
 T_ZENO = T1 * (1 + E) / (1 - E)
 
 
-BACKENDS = [
-    "scipy",
-    pytest.param("compiled", marks=pytest.mark.skipif(
-        importlib.util.find_spec("numba") is None, reason="the fast extra (numba)")),
-]  # fmt: skip
 
 
 def band(*x: float) -> float:
     return 1e-10 * (1.0 + max(abs(v) for v in x))
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 def test_the_ball_at_rest_on_its_floor_keeps_bouncing_and_never_passes_it(
     ball: hybrid.Automaton, backend: str
 ) -> None:
@@ -64,7 +57,6 @@ locations:
 """
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize(("inv", "level"), [("x <= 5", 5.0), ("x == 5", 5.0)])
 def test_an_invariant_sitting_on_its_boundary_is_left_at_second_order(
     inv: str, level: float, backend: str
@@ -80,7 +72,6 @@ def test_an_invariant_sitting_on_its_boundary_is_left_at_second_order(
     assert float(run["x"][-1]) - level == pytest.approx(b0, rel=1e-3)
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 def test_a_strict_guard_sitting_on_its_boundary_fires_when_entered_at_second_order(
     backend: str,
 ) -> None:
@@ -101,7 +92,6 @@ edges:
     assert jump.before["x"] - 5.0 == pytest.approx(b0, rel=1e-3)
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 def test_an_equality_guard_whose_level_the_flow_keeps_fires_when_the_rest_holds(
     backend: str,
 ) -> None:
@@ -122,7 +112,6 @@ edges:
     assert run.termination.cause == "t_end"
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 def test_a_level_the_state_starts_on_and_leaves_fires_where_the_state_returns(
     backend: str,
 ) -> None:
@@ -147,7 +136,6 @@ edges:
     assert run.termination.cause == "t_end" and run.termination.location == "B"
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("x0", [-1e-13, 0.0, 1e-13])
 def test_a_short_hop_off_a_level_fires_where_it_returns_whatever_the_rounding_side(
     backend: str, x0: float

@@ -10,7 +10,6 @@ compose and simulate as the closed forms say.
 
 from __future__ import annotations
 
-import importlib.util
 import math
 from pathlib import Path
 
@@ -123,14 +122,8 @@ edges:
 """
 
 
-BACKENDS = [
-    "scipy",
-    pytest.param("compiled", marks=pytest.mark.skipif(
-        importlib.util.find_spec("numba") is None, reason="the fast extra (numba)")),
-]  # fmt: skip
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 def test_an_urgent_location_is_left_at_once(backend: str) -> None:
     run = hybrid.simulate(hybrid.load_text(URGENT.replace("LEVEL", "0")), t_end=5.0,
                           backend=backend, **TOL)  # fmt: skip
@@ -141,7 +134,6 @@ def test_an_urgent_location_is_left_at_once(backend: str) -> None:
     assert run.termination.cause == "t_end"
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 def test_an_urgent_location_with_no_edge_enabled_blocks_at_once(backend: str) -> None:
     run = hybrid.simulate(hybrid.load_text(URGENT.replace("LEVEL", "1")), t_end=5.0,
                           backend=backend, **TOL)  # fmt: skip

@@ -17,7 +17,6 @@ The truth is the bouncing ball's closed form (``h0 = 10, g = 9.81, e = 0.8``):
 
 from __future__ import annotations
 
-import importlib.util
 import math
 from pathlib import Path
 
@@ -30,11 +29,6 @@ ROOT = Path(__file__).resolve().parents[2]
 H0, G, E = 10.0, 9.81, 0.8
 T1 = math.sqrt(2 * H0 / G)
 TOL = {"rtol": 1e-10, "atol": 1e-12}
-BACKENDS = [
-    "scipy",
-    pytest.param("compiled", marks=pytest.mark.skipif(
-        importlib.util.find_spec("numba") is None, reason="the fast extra (numba)")),
-]  # fmt: skip
 
 SPELLINGS = [
     "h <= 0 and v < 0 and 0 >= 0",  # a constant true conjunct
@@ -54,7 +48,6 @@ def impact_time(k: np.ndarray) -> np.ndarray:
     return T1 * (1 + 2 * E * (1 - E ** (k - 1)) / (1 - E))
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("guard", SPELLINGS)
 def test_a_true_conjunct_changes_nothing(guard: str, backend: str) -> None:
     plain = hybrid.simulate(ball_with("h <= 0 and v < 0"), t_end=20.0, backend=backend, **TOL)
@@ -68,7 +61,6 @@ def test_a_true_conjunct_changes_nothing(guard: str, backend: str) -> None:
     assert max(abs(j.before["h"]) for j in run.jumps) < 1e-9
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("guard", SPELLINGS)
 def test_a_true_conjunct_changes_nothing_with_default_tolerances(guard: str, backend: str) -> None:
     plain = hybrid.simulate(ball_with("h <= 0 and v < 0"), t_end=20.0, backend=backend)
@@ -89,7 +81,6 @@ edges:
 """
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("guard", ["x < x and x < x*y", "x - x > 0 and x < x*y"])
 def test_an_always_false_guard_never_fires(guard: str, backend: str) -> None:
     # x = 2 sinh t - cosh t, y = 2 cosh t - sinh t: x (1 - y) turns negative where x
@@ -104,7 +95,6 @@ def test_an_always_false_guard_never_fires(guard: str, backend: str) -> None:
     assert run.termination.t == pytest.approx(math.atanh(0.5), abs=1e-6)
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("invariant", ["x >= 0", "x >= 0 and 0 >= 0", "x >= 0 and x <= x"])
 def test_an_invariant_with_a_true_conjunct_is_left_where_it_is_left(invariant: str, backend: str) -> None:
     # x = 1 - t leaves x >= 0 at t = 1; a constant conjunct used to make rho max(-x, 0),

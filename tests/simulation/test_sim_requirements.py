@@ -12,7 +12,6 @@ compiled backend's runs are shown to the same monitor step by step
 
 from __future__ import annotations
 
-import importlib.util
 import math
 from pathlib import Path
 
@@ -24,20 +23,6 @@ from hybrid.simulation.apart import independent_groups
 from hybrid.simulation.monitor_apart import join_groups
 
 TIGHT = {"rtol": 1e-10, "atol": 1e-12, "handle_sigint": False}
-BACKENDS = [
-    "scipy",
-    pytest.param(
-        "compiled",
-        marks=pytest.mark.skipif(
-            importlib.util.find_spec("numba") is None, reason="the compiled backend needs numba"
-        ),
-    ),
-]
-
-
-@pytest.fixture(params=BACKENDS)
-def backend(request: pytest.FixtureRequest) -> str:
-    return str(request.param)
 
 
 HEATER = """
@@ -61,9 +46,9 @@ def x_of(t: float) -> float:
     return 20.0 * math.exp(-t / 10.0)
 
 
-@pytest.fixture(scope="module", params=BACKENDS)
-def heater_run(request: pytest.FixtureRequest) -> hybrid.Run:
-    return hybrid.simulate(hybrid.load_text(HEATER), t_end=5.0, backend=request.param, **TIGHT)
+@pytest.fixture(scope="module")
+def heater_run(backend: str) -> hybrid.Run:
+    return hybrid.simulate(hybrid.load_text(HEATER), t_end=5.0, backend=backend, **TIGHT)
 
 
 def test_always_robustness_and_crossing_of_the_heater(heater_run: hybrid.Run) -> None:

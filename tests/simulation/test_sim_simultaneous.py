@@ -21,7 +21,6 @@ Three defects of composed systems, each pinned by a hand computation, on both ba
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import pytest
@@ -29,12 +28,6 @@ from support import assert_no_traceback, read_json, run_cli
 
 import hybrid
 from hybrid.simulation.apart import independent_groups
-
-BACKENDS = [
-    "scipy",
-    pytest.param("compiled", marks=pytest.mark.skipif(
-        importlib.util.find_spec("numba") is None, reason="the fast extra (numba)")),
-]  # fmt: skip
 
 TIMER = """
 automaton: timer
@@ -86,7 +79,6 @@ def expected_timers(c_first: bool) -> list[tuple[float, str, tuple[str, ...], st
     return rows
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("coupled", [True, False], ids=["one-group", "apart"])
 @pytest.mark.parametrize("c_first", [False, True], ids=["file-order", "priority"])
 def test_timers_reaching_their_levels_at_one_instant_all_wrap_there(
@@ -108,7 +100,6 @@ def test_timers_reaching_their_levels_at_one_instant_all_wrap_there(
         assert abs(run[name][-1] - 10.0) <= 1e-9
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 def test_the_events_file_lists_every_components_enabled_edges(
     tmp_path: Path, backend: str
 ) -> None:
@@ -204,7 +195,6 @@ def expected_ring(trt1: float, trt2: float, t_end: float) -> list[tuple[float, s
     return [(t, edge) for t, _, edge in sorted(rows)]
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize(
     ("initial", "starts"),
     [({}, (0.0, 20.0)), ({"trt1": 5.0, "trt2": 15.0}, (5.0, 15.0))],
@@ -248,7 +238,6 @@ edges:
 """
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("stuck_first", [True, False], ids=["stuck-first", "stuck-second"])
 @pytest.mark.parametrize(("max_jumps", "cause", "count"), [
     (10_000, "zeno", 1000),    # the cap of 1000 jumps at one instant
@@ -301,7 +290,6 @@ edges:
 """
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
 def test_a_level_is_used_by_the_jump_that_reads_it_in_its_component_only(
     tmp_path: Path, backend: str
 ) -> None:
