@@ -10,6 +10,7 @@ each other.
 from __future__ import annotations
 
 import ast
+import warnings
 from pathlib import Path
 
 import networkx as nx
@@ -33,7 +34,10 @@ LAYERS: tuple[frozenset[str], ...] = (
 )
 """Units of ``hybrid/`` (top-level modules and packages), lowest layer first."""
 
-MAX_LINES = 400
+SOFT_MAX_LINES = 800
+"""Modules are cut by topic, not by size; one above this is worth a look (a warning)."""
+MAX_LINES = 1500
+"""Above this a module is more than one topic, whatever it says (a failure)."""
 
 
 def _module_name(path: Path, root: Path = REPO) -> str:
@@ -151,13 +155,12 @@ def test_the_rules_catch_a_circle_and_an_upward_import(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     "path", sorted(PACKAGE.rglob("*.py")), ids=lambda p: str(p.relative_to(REPO))
 )
-def test_modules_are_small_or_one_table(path: Path) -> None:
+def test_a_long_module_is_worth_a_look(path: Path) -> None:
     text = path.read_text(encoding="utf-8")
     lines = text.count("\n")
-    if lines <= MAX_LINES:
-        return
+    assert lines <= MAX_LINES, f"{path.relative_to(REPO)} has {lines} lines: split it by topic"
     docstring = ast.get_docstring(ast.parse(text)) or ""
-    assert "one cohesive table" in docstring, (
-        f"{path.relative_to(REPO)} has {lines} lines: split it by topic, or say in its "
-        "docstring why it is one cohesive table"
-    )
+    if lines > SOFT_MAX_LINES and "one cohesive table" not in docstring:
+        warnings.warn(
+            f"{path.relative_to(REPO)} has {lines} lines: is it still one topic?", stacklevel=1
+        )

@@ -34,8 +34,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybrid.analysis.exploration import Exploration
-from hybrid.analysis.explore import DEFAULT_MAX_BYTES, DEFAULT_MAX_STATES, Progress, explore
+from hybrid.analysis.explore import (
+    DEFAULT_MAX_BYTES,
+    DEFAULT_MAX_STATES,
+    Exploration,
+    Progress,
+    explore,
+)
 from hybrid.analysis.findings import WitnessStep
 from hybrid.analysis.product import ProductTables
 from hybrid.compose import System

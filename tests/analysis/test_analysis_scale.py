@@ -10,8 +10,7 @@ import pytest
 
 import hybrid
 from hybrid.analysis import analyse, check
-from hybrid.analysis.exploration import explore_reference
-from hybrid.analysis.explore import explore
+from hybrid.analysis.explore import explore, explore_reference
 from hybrid.analysis.product import ProductTables
 from hybrid.analysis.reach import groups
 
