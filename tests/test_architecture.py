@@ -96,13 +96,37 @@ def _imports(path: Path, package: Path = PACKAGE) -> list[tuple[str, bool]]:
     return found
 
 
+def _spliced(path: Path) -> list[str]:
+    """Modules whose text ``path`` copies into generated code (its textual dependencies).
+
+    The generated kernel and model modules are made of the code below the
+    ``# --- kernel ---`` line of other modules (``kernel_text.kernel_source``): a
+    tuple of their names given to ``kernel_source(...)``, or ``KERNEL_MODULES``.
+    """
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    names: list[str] = []
+    for node in ast.walk(tree):
+        value: ast.AST | None = None
+        if isinstance(node, ast.Call) and getattr(node.func, "id", "") == "kernel_source":
+            value = node.args[0] if node.args else None
+        elif isinstance(node, ast.Assign) and any(
+            getattr(t, "id", "") == "KERNEL_MODULES" for t in node.targets
+        ):
+            value = node.value
+        if isinstance(value, ast.Tuple):
+            names += [e.value for e in value.elts if isinstance(e, ast.Constant)]
+    package = _module_name(path.parent / "__init__.py", PACKAGE.parent)
+    return [f"{package}.{name}" for name in names]
+
+
 def _graph(package: Path = PACKAGE) -> tuple[nx.DiGraph, list[tuple[str, str, bool]]]:
     graph = nx.DiGraph()
     edges: list[tuple[str, str, bool]] = []
     for path in sorted(package.rglob("*.py")):
         source = _module_name(path, package.parent)
         graph.add_node(source)
-        for target, runtime in _imports(path, package):
+        textual = [(m, True) for m in _spliced(path)] if package == PACKAGE else []
+        for target, runtime in _imports(path, package) + textual:
             edges.append((source, target, runtime))
             if runtime and target != source:
                 graph.add_edge(source, target)
@@ -164,3 +188,22 @@ def test_a_long_module_is_worth_a_look(path: Path) -> None:
         warnings.warn(
             f"{path.relative_to(REPO)} has {lines} lines: is it still one topic?", stacklevel=1
         )
+
+
+def test_the_kernels_textual_dependencies_are_seen_and_import_nothing() -> None:
+    from hybrid.simulation.native.kernel_text import KERNEL_MODULES, MARKER
+
+    native = PACKAGE / "simulation" / "native"
+    assert _spliced(native / "kernel_text.py") == [
+        f"hybrid.simulation.native.{m}" for m in KERNEL_MODULES
+    ]
+    assert "hybrid.simulation.native.mathlib" in _spliced(native / "source.py")
+    graph = _graph()[0]
+    assert graph.has_edge("hybrid.simulation.native.source", "hybrid.simulation.native.mathlib")
+    spliced = {m for path in native.glob("*.py") for m in _spliced(path)}
+    for module in sorted(spliced):
+        text = (PACKAGE.parent / Path(*module.split("."))).with_suffix(".py").read_text()
+        assert MARKER in text, f"{module} is spliced but has no {MARKER!r} line"
+        below = ast.parse(text.split(MARKER, 1)[1])
+        imports = [n for n in ast.walk(below) if isinstance(n, ast.Import | ast.ImportFrom)]
+        assert not imports, f"{module}: the code below its marker is copied; it may import nothing"

@@ -8,6 +8,14 @@ It does not depend on any model: it receives the model as five C function
 pointers and a table of integers, so it is compiled once per machine. Each
 model's module is :mod:`~hybrid.simulation.native.source`'s.
 
+**Textual dependencies.** The modules named in :data:`KERNEL_MODULES`, and
+those a ``kernel_source((...))`` call names (``mathlib`` in ``source``), are
+dependencies by text, not by import: their code below the marker is copied
+here, so it may import nothing (the generated module's header imports what it
+needs). ``tests/test_architecture.py`` reads both forms as imports, so the
+layer and circle rules hold for them, and checks that copied code imports
+nothing.
+
 Examples
 --------
 >>> code, names = kernel_source(("integrator",))
