@@ -61,9 +61,9 @@ PARTS_FROM = 8
 _ERRORS = (ArithmeticError, ValueError, TypeError)
 
 FLOW = "rhs_parts"
-"""The name a mode's right-hand side records its failures under."""
+"""A mode's right-hand side records its failures as ``rhs_parts_K`` (the K-th mode built)."""
 SIGNALS = "out_parts"
-"""The name a mode's signal outputs record their failures under."""
+"""A mode's signal outputs record their failures as ``out_parts_K``."""
 
 
 def uses_parts(system: System) -> bool:
@@ -102,6 +102,7 @@ class Parts:
         self._conditions: dict[tuple[object, ...], tuple[ir.Expr, Fn]] = {}
         self._parts: dict[tuple[int, tuple[str, ...]], Part] = {}
         self._count = 0
+        self._keys: list[Mode] = []  # the modes built, in order (their failures' names)
         # what a part's function computes: its role (said with the mode it fails in), its
         # expressions and context, and the mode it was first compiled for
         self._what: dict[str, tuple[str, tuple[ir.Expr, ...], CodeContext, Mode]] = {}
@@ -140,11 +141,13 @@ class Parts:
         flows = [p.flow for p in parts]
         outs = [p.signals for p in parts]
         n, m = len(self.compiled.state_names), len(self.compiled.columns)
+        k = len(self._keys)
+        self._keys.append(key)
         return CompiledMode(
             key,
             self._mode_name(key),
-            _joined(flows, False, self.compiled.flow_failure, FLOW, n),
-            _joined(outs, True, self.compiled.failure, SIGNALS, m),
+            _joined(flows, False, self.compiled.flow_failure, f"{FLOW}_{k}", n),
+            _joined(outs, True, self.compiled.failure, f"{SIGNALS}_{k}", m),
             [c for p in parts for c in p.invariants],
             [tr for p in parts for tr in p.transitions],
             tuple(p.urgent for p in parts if p.urgent is not None),
@@ -162,15 +165,18 @@ class Parts:
         """
 
         compiled = self.compiled
-        if where not in (FLOW, SIGNALS) and where not in self._what:
+        kind, _, number = where.rpartition("_")
+        whole = kind in (FLOW, SIGNALS) and number.isdigit() and int(number) < len(self._keys)
+        if not whole and where not in self._what:
             return None
         described = self._what.get(where)
-        if mode is None:
-            if described is None:
-                return None
+        if mode is None and whole:
+            mode = self._keys[int(number)]
+        elif mode is None:
+            assert described is not None
             mode = described[3]
         name = self._mode_name(mode)
-        if where in (FLOW, SIGNALS):
+        if whole:
             view = mode_of(self.system, mode, binder=self._bind)
             ctx = CodeContext(
                 states=compiled.state_names,
@@ -179,7 +185,7 @@ class Parts:
                 functions=self.system.functions,
                 failure=compiled.failure,
             )
-            if where == FLOW:
+            if kind == FLOW:
                 flows = tuple(view.flow.get(s, _ZERO) for s in compiled.state_names)
                 return Source(f"the flow of {name}", flows, ctx)
             return Source(f"the signals of {name}", tuple(signal_outputs(self.system)), ctx)

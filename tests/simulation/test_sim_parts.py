@@ -94,3 +94,23 @@ def test_a_ring_builds_a_few_parts_per_component_whatever_its_size(n: int) -> No
     # each component in each of its 2 locations, its neighbour in either of 2: at most 4
     # parts a component, however many modes the run met
     assert len(compiled.parts._parts) <= 4 * n
+
+
+def test_a_failure_worded_without_its_mode_names_the_mode_it_was_built_for(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # the compiled backend words a failure of the reference engine's mode without a mode
+    from hybrid.simulation.failures import describe_failure
+
+    words, n = [], parts.PARTS_FROM
+    for threshold in (n, 10**9):
+        monkeypatch.setattr(parts, "PARTS_FROM", threshold)
+        compiled = CompiledModel(ring(n, broken=3))
+        mode = compiled.mode(compiled.initial_key)
+        x = np.array(compiled.system.initial_vector())
+        x[compiled.state_names.index("c3")] = 13.0  # sqrt(12 - 13)
+        assert all(np.isnan(mode.rhs(0.0, x)))
+        words.append(describe_failure(compiled, compiled.flow_failure))
+    assert words[0] == words[1]
+    assert words[0].startswith("the flow of th0.off|th1.off|")
+    assert words[0].endswith("failed: sqrt(-1): math domain error")
