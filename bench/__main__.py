@@ -54,6 +54,11 @@ def main(argv: list[str] | None = None) -> int:
     components = scaling_components.run(3 if quick else 7)
     print("many components", json.dumps(components))
     report["components"] = components
+    from bench import scaling_ring
+
+    ring = scaling_ring.run(2 if quick else 3)
+    print("coupled ring", json.dumps(ring))
+    report["coupled_ring"] = ring
     from bench import sweep_throughput
 
     campaigns = sweep_throughput.run(2 if quick else 3)

@@ -7,6 +7,7 @@ hand. So the numbers in the docs are always those of one ``make bench`` run.
 
 from __future__ import annotations
 
+import itertools
 import json
 from pathlib import Path
 from typing import Any
@@ -93,6 +94,7 @@ def render(report: dict[str, Any]) -> str:
                 "",
             ]
     lines += _components(report.get("components"))
+    lines += _ring(report.get("coupled_ring"))
     lines += _campaigns(report.get("campaigns"))
     lines += ["Peers:", ""]
     for name, info in report["peers"].items():
@@ -155,6 +157,35 @@ def _components(c: dict[str, Any] | None) -> list[str]:
             f"| {case['case']} | {case['s']:.2f} s | {case['peak_rss_mb']:.0f} MB | "
             f"{', '.join(rules) or 'none'} |"
         )
+    return [*lines, ""]
+
+
+def _ring(c: dict[str, Any] | None) -> list[str]:
+    """The coupled ring (bench/scaling_ring.py), when the run has it."""
+    if not c:
+        return []
+    lines = [
+        f"Coupled ring of n thermostats to t = {c['t_end']:g} (medians of {c['repeats']} fresh "
+        "processes; CPU time; memory allocated during the call):",
+        "",
+        "| n | jumps | first `simulate` | second | peak memory, first | second | resident |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in c["rows"]:
+        lines.append(
+            f"| {r['n']} | {r['jumps']} | {r['first_cpu_s']:.3f} s | {r['second_cpu_s']:.3f} s "
+            f"| {r['first_peak_mb']:.1f} MB | {r['second_peak_mb']:.1f} MB "
+            f"| {r['peak_rss_mb']:.0f} MB |"
+        )
+    sizes = [r["n"] for r in c["rows"]]
+    steps = ", ".join(f"{a}->{b}" for a, b in itertools.pairwise(sizes))
+    lines += [
+        "",
+        f"Growth exponents between consecutive sizes ({steps}; target <= {c['target']}):",
+        "",
+    ]
+    for key, values in c["exponents"].items():
+        lines.append(f"- {key.replace('_', ' ')}: {', '.join(f'{v:.2f}' for v in values)}")
     return [*lines, ""]
 
 

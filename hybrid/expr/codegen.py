@@ -105,6 +105,7 @@ def compile_function(
     *,
     shape: str = "list",
     reset_of: Sequence[ir.Expr | None] | None = None,
+    part: bool = False,
 ) -> Callable[..., Any]:
     """Compile ``outputs`` into one function ``f(t, x)`` of a time and a 1-D numpy array.
 
@@ -113,6 +114,11 @@ def compile_function(
     unchanged. On a math error the function records it in ``ctx.failure`` and
     returns NaN values (or ``False`` for conditions), so the solver stops and
     the simulator can say what failed and where.
+
+    ``part=True`` compiles one component's share of a larger function: ``x``
+    is then the state as a list of floats (``x.tolist()``, converted once by
+    the caller), only the state variables read are taken from it, and a math
+    error propagates to the caller, which records it for the whole.
     """
     exprs = list(outputs)
     if reset_of is not None:
@@ -137,7 +143,12 @@ def compile_function(
     definitions = [ctx.signals[s] for s in order]
     uses = _state_uses(exprs, definitions, ctx.states)
     tiny = all(n <= 1 for n in uses.values()) and sum(uses.values()) <= 3
-    if reset_of is None and tiny and _float_safe([*exprs, *definitions]):
+    if part:
+        # the caller converted the state once: take the variables read, as floats
+        # (an input bound to another component's state variable reads it too)
+        read = set().union(*(ir.names_in(e) for e in (*exprs, *definitions)))
+        body.extend(f"{names[s]} = x[{i}]" for i, s in enumerate(ctx.states) if s in read)
+    elif reset_of is None and tiny and _float_safe([*exprs, *definitions]):
         # a tiny function: index the array directly (faster than converting it)
         for i, s in enumerate(ctx.states):
             names[s] = f"x[{i}]"
@@ -166,13 +177,16 @@ def compile_function(
         body.append(f"return {open_}{', '.join(items)}{close}")
         failed = f"[_nan] * {len(items)}" if shape == "list" else f"({'_nan, ' * len(items)})"
 
-    lines = [f"def {name}(t, x):", "    try:"]
-    lines += [f"        {line}" for line in body]
-    lines += [
-        "    except _ERRORS as _e:",
-        f"        _failure.record(_e, t, {name!r})",
-        f"        return {failed}",
-    ]
+    if part:
+        lines = [f"def {name}(t, x):", *(f"    {line}" for line in body)]
+    else:
+        lines = [f"def {name}(t, x):", "    try:"]
+        lines += [f"        {line}" for line in body]
+        lines += [
+            "    except _ERRORS as _e:",
+            f"        _failure.record(_e, t, {name!r})",
+            f"        return {failed}",
+        ]
     source = "\n".join(lines) + "\n"
 
     scope: dict[str, Any] = {

@@ -80,8 +80,13 @@ def holds_now(
     x: np.ndarray,
     armed: bool,
     width: float,
+    looked: list[tuple[float, float, np.ndarray]] | None = None,
 ) -> tuple[bool, bool]:
-    """``(enabled now, armed)`` for a guard given by its ``rho`` and boolean ``holds``."""
+    """``(enabled now, armed)`` for a guard given by its ``rho`` and boolean ``holds``.
+
+    ``looked`` keeps :func:`ahead`'s point for the next guard decided at the
+    same ``(mode, t, x)``: it is the same for every guard there.
+    """
     value = rho(t, x)
     if value < -width:
         return True, True
@@ -89,7 +94,12 @@ def holds_now(
         return False, True
     if not armed:
         return False, False
-    h, t1, x1 = ahead(mode, t, x)
+    if looked is None:
+        h, t1, x1 = ahead(mode, t, x)
+    else:
+        if not looked:
+            looked.append(ahead(mode, t, x))
+        h, t1, x1 = looked[0]
     further = rho(t1, x1)
     if further == 0.0 and value != 0.0:
         # rho comes down to exactly 0 (a flat zero: `max(h, v, 0)`, `x - x > 0 and ...`):
@@ -127,8 +137,12 @@ def enabled_at_entry(
     armed: list[bool] = []
     width = band(x)
     width_then = 0.0 if reached is None else band(reached)
+    looked: list[tuple[float, float, np.ndarray]] = []
     for tr in mode.transitions:
-        now, is_armed = holds_now(tr.rho, tr.holds, mode, t, x, True, width)
+        if tr.rho(t, x) > width and (reached is None or not tr.levels):
+            armed.append(True)  # strictly false: holds_now's first answer, without its call
+            continue
+        now, is_armed = holds_now(tr.rho, tr.holds, mode, t, x, True, width, looked)
         if not now and tr.levels and reached is not None:
             then = [abs(d(t, reached)) <= width_then for d in tr.levels]
             at_level = tuple(
@@ -137,7 +151,7 @@ def enabled_at_entry(
             )
             if any(at_level):
                 rho, holds = tr.snapped(at_level)
-                now = holds_now(rho, holds, mode, t, x, True, width)[0]
+                now = holds_now(rho, holds, mode, t, x, True, width, looked)[0]
         armed.append(is_armed)
         if now:
             enabled.append(tr)
@@ -155,6 +169,7 @@ def enabled_at_event(
     """
     width = band(x)
     enabled: list[CompiledTransition] = []
+    looked: list[tuple[float, float, np.ndarray]] = []
     for i, tr in enumerate(mode.transitions):
         if armed(i):
             at_level = tuple(abs(d(t, x)) <= width for d in tr.levels)
@@ -163,7 +178,7 @@ def enabled_at_event(
             rho, holds = tr.rho, tr.holds
         else:
             continue
-        if holds_now(rho, holds, mode, t, x, True, width)[0]:
+        if holds_now(rho, holds, mode, t, x, True, width, looked)[0]:
             enabled.append(tr)
     return enabled
 

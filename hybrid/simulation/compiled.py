@@ -1,28 +1,27 @@
 """The compiled model: per mode, the Python functions the simulator calls.
 
-For a mode (one location per component) this compiles, once and lazily:
-the right-hand side ``rhs(t, x) -> list`` (signals computed in dependency
-order, then the derivative of every state variable), the output function
-giving every signal column, and per transition and invariant a ``rho``
-function (``<= 0`` iff it holds), a boolean ``holds`` function and a reset.
+For a mode (one location per component) this compiles, once and lazily: the
+right-hand side ``rhs(t, x) -> list`` (signals in dependency order, then every
+derivative), the output function giving every signal column, and per
+transition and invariant a ``rho`` (``<= 0`` iff it holds), a boolean ``holds``
+and a reset.
 A guard with equality atoms (docs/semantics.md, "Equality guards") also gets
 the difference ``a - b`` of each atom (``levels``) and, compiled on first use,
 its *oriented* rho (the atoms read one-sided) and its *snapped* forms (the
 atoms replaced by constants).
 
-A product of many components meets the same expressions in many modes: each
-function is compiled once, keyed by its expressions and by the definitions of
-the signals and inputs it reads, and reused in every mode where those are the
-same. What a function computes is kept per mode (:meth:`CompiledModel.source`),
-so a failure is described with the mode where it happened.
+A product meets the same expressions in many modes: each function is compiled
+once, keyed by its expressions and the definitions of the signals and inputs it
+reads (a system of many components: :mod:`~hybrid.simulation.parts`). What a
+function computes is kept per mode (:meth:`CompiledModel.source`), so a
+failure is described with the mode where it happened.
 
 Evaluation errors (a math domain error, an overflow, a division by zero) never
-raise: the compiled function records them and returns NaN. The right-hand side
-records into :attr:`CompiledModel.flow_failure`, everything else into
-:attr:`CompiledModel.failure`, because the solver also tries the right-hand
-side at trial points it then rejects: a failure there is only fatal if the
-solver gives up. :func:`hybrid.simulation.failures.describe_failure` turns a
-recorded failure into the message a user reads.
+raise: the function records them and returns NaN; the right-hand side into
+:attr:`CompiledModel.flow_failure` (the solver tries it at trial points it may
+reject: only fatal if the solver gives up), the rest into
+:attr:`CompiledModel.failure`; :func:`~hybrid.simulation.failures.describe_failure`
+words them.
 
 Examples
 --------
@@ -40,16 +39,18 @@ True
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from typing import Any
 
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
-from hybrid.expr.rho import guard_to_rho, level_key, levels, oriented_rho, snapped
+from hybrid.expr.rho import guard_to_rho, level_key, levels
 from hybrid.model import Automaton
 from hybrid.modes import Binder, Mode, ModeView, TransitionView, mode_of
+from hybrid.simulation.forms import CompiledCondition, CompiledMode, CompiledTransition, Fn, Source
+from hybrid.simulation.parts import Parts, signal_outputs, uses_parts
 
 __all__ = [
     "CompiledCondition",
@@ -59,84 +60,6 @@ __all__ = [
     "LatestFailure",
     "Source",
 ]
-
-Fn = Callable[[float, Any], Any]
-
-
-@dataclass
-class CompiledCondition:
-    """A guard or invariant: ``rho(t, x) <= 0`` iff ``holds(t, x)`` (off the boundary)."""
-
-    name: str
-    rho: Fn
-    holds: Fn
-
-
-@dataclass
-class CompiledTransition(CompiledCondition):
-    """A transition; a guard with equality atoms has ``levels`` and compiles variants on demand."""
-
-    view: TransitionView
-    reset: Fn
-    levels: tuple[Fn, ...] = ()
-    level_keys: tuple[str, ...] = ()
-    """Each level's :func:`~hybrid.expr.rho.level_key`: one level read by several guards."""
-    variant: Callable[[str, ir.Expr, str], Fn] | None = None
-    _oriented: dict[tuple[int, ...], Fn] = field(default_factory=dict)
-    _snapped: dict[tuple[bool, ...], tuple[Fn, Fn]] = field(default_factory=dict)
-
-    def oriented(self, signs: tuple[int, ...]) -> Fn:
-        """Rho with level atom ``i`` read as ``signs[i] * (a - b) <= 0`` (``a == b`` for a 0).
-
-        The plain rho for a guard without levels.
-        """
-        if not self.levels:
-            return self.rho
-        fn = self._oriented.get(signs)
-        if fn is None:
-            assert self.variant is not None
-            tag = "".join("p" if s > 0 else "n" if s < 0 else "z" for s in signs)
-            fn = self.variant(tag, oriented_rho(self.view.guard, signs), "rho")
-            self._oriented[signs] = fn
-        return fn
-
-    def snapped(self, at_level: tuple[bool, ...]) -> tuple[Fn, Fn]:
-        """``(rho, holds)`` of the guard with level atom ``i`` replaced by ``at_level[i]``."""
-        if not self.levels:
-            return self.rho, self.holds
-        pair = self._snapped.get(at_level)
-        if pair is None:
-            assert self.variant is not None
-            tag = "".join("y" if a else "n" for a in at_level)
-            guard = snapped(self.view.guard, at_level)
-            pair = (
-                self.variant(tag, guard_to_rho(guard), "rho"),
-                self.variant(tag, guard, "holds"),
-            )
-            self._snapped[at_level] = pair
-        return pair
-
-
-@dataclass
-class CompiledMode:
-    key: Mode
-    name: str
-    rhs: Fn
-    outputs: Fn
-    invariants: list[CompiledCondition]
-    transitions: list[CompiledTransition]
-    urgent: tuple[str, ...] = ()
-    """Urgent locations of the mode: no time may pass while in one."""
-
-
-@dataclass(frozen=True)
-class Source:
-    """What a generated function computes, for messages: its role and its expressions."""
-
-    what: str
-    exprs: tuple[ir.Expr, ...]
-    context: CodeContext
-
 
 class LatestFailure(EvalFailure):
     """An :class:`EvalFailure` that keeps the latest failure, not the first.
@@ -183,20 +106,17 @@ class CompiledModel:
         self.state_names = self.system.state_names
         self.columns = self.system.signal_columns
         self.initial_key = self.system.initial_mode
-        # what each compiled function computes: by the name it records failures under
-        # (that of the mode it was first compiled for), and per mode it is used in
+        # what each function computes: by the name it records failures under, and per mode
         self.sources: dict[str, Source] = {}
         self._mode_sources: dict[tuple[Mode, str], Source] = {}
         self._modes: dict[Mode, CompiledMode] = {}
-        # a product of many components meets the same guard, invariant and reset in many
-        # modes: bind and compile each once (keyed by the expressions and the definitions
-        # of the signals they read), not once per mode
+        # a guard, invariant or reset met in many modes is bound and compiled once
         self._binder = Binder(self.system)
-        # key -> ((what keeps the key's ids valid, the name it was compiled as), function)
         self._functions: dict[tuple[object, ...], tuple[tuple[object, str], Fn]] = {}
         self._rhos: dict[int, tuple[ir.Expr, ir.Expr]] = {}
         self._reads: dict[int, tuple[ir.Expr, frozenset[str]]] = {}
         self._zero = ir.Num(0.0)  # the flow of a state variable a location leaves alone
+        self.parts = Parts(self, self._binder) if uses_parts(self.system) else None
 
     def _external_inputs(self) -> list[str]:
         return list(self.system.free_inputs)
@@ -205,9 +125,19 @@ class CompiledModel:
         """The compiled mode ``key`` (compiled on first use, then cached)."""
         compiled = self._modes.get(key)
         if compiled is None:
-            compiled = self._compile(mode_of(self.system, key, binder=self._binder))
+            if self.parts is not None:
+                compiled = self.parts.mode(key)
+            else:
+                compiled = self._compile(mode_of(self.system, key, binder=self._binder))
             self._modes[key] = compiled
         return compiled
+
+    def target(self, mode: CompiledMode, tr: CompiledTransition) -> CompiledMode:
+        """The compiled mode ``tr`` leads to from ``mode``."""
+        if tr.move is None:
+            return self.mode(tr.view.target)
+        i, location = tr.move
+        return self.mode((*mode.key[:i], location, *mode.key[i + 1 :]))
 
     def _rho(self, cond: ir.Expr) -> ir.Expr:
         """``guard_to_rho(cond)``, the same object each time ``cond`` is met again."""
@@ -220,10 +150,11 @@ class CompiledModel:
     def source(self, where: str, mode: Mode | None = None) -> Source | None:
         """What the function that recorded a failure as ``where`` computes, in ``mode``.
 
-        A function reused across modes records failures under the name it was
-        first compiled with; ``mode`` (the mode where the failure happened) picks
-        the description of that mode.
+        A function reused across modes records failures under the name it was first
+        compiled with; ``mode`` (where the failure happened) picks that mode's words.
         """
+        if self.parts is not None and (found := self.parts.source(where, mode)) is not None:
+            return found
         found = self._mode_sources.get((mode, where)) if mode is not None else None
         return found if found is not None else self.sources.get(where)
 
@@ -326,14 +257,7 @@ class CompiledModel:
             key,
             shape="list",
         )
-        outputs_ir: list[ir.Expr] = []
-        for c in self.system.components:
-            sizes = c.automaton.vector_sizes
-            for name in c.automaton.signal_names:
-                if name in sizes:
-                    outputs_ir.extend(ir.Index(name, k) for k in range(sizes[name]))
-                else:
-                    outputs_ir.append(ir.Var(name, ir.SIGNAL))
+        outputs_ir = signal_outputs(self.system)
         outputs = self._function(
             f"out_{tag}", "signals", f"the signals of {view.name}", outputs_ir, ctx, key, shape="tuple"
         )

@@ -253,7 +253,7 @@ class EventLoop:
         j: int,
     ) -> tuple[CompiledMode, np.ndarray]:
         x_new = np.array(chosen.reset(t, x), dtype=float)
-        target = self.compiled.mode(chosen.view.target)
+        target = self.compiled.target(mode, chosen)
         how = boundary.chosen_by(chosen, enabled)
         self.recorder.jump(mode, target, chosen, enabled, how, t, j, x, x_new)
         return target, x_new

@@ -1,0 +1,383 @@
+"""A product's modes assembled from its components' parts, each compiled once.
+
+A run of many components visits many modes, each one location away from the
+last. Compiling every mode whole (:meth:`CompiledModel._compile`) costs time
+and memory in proportion to the number of components for every mode met, so N
+components that switch in turn cost N² before the run has stepped at all.
+Here a component in one location, together with the locations of the
+components whose signals it reads (directly or through their signals), is a
+*part*: its flows, signals, invariant and outgoing edges are compiled once.
+A mode is its parts side by side: its right-hand side converts the state to
+floats once and calls each part's flow (the same expressions in the same
+order as the whole mode's function, so the same numbers); a new mode costs a
+look-up per component.
+
+Only for systems of :data:`PARTS_FROM` components or more that share no label
+(a synchronised edge belongs to several components at once). A smaller
+system's few modes are compiled whole: one function per mode evaluates faster
+than a call per component.
+
+Examples
+--------
+>>> import hybrid, numpy as np
+>>> from hybrid.simulation.compiled import CompiledModel
+>>> text = "automaton: a{i}\\nstate: {{x{i}: {{initial: 1}}}}\\nlocations: {{l: {{flow: {{x{i}: -x{i}}}}}}}\\n"
+>>> system = hybrid.compose(*[hybrid.load_text(text.format(i=i)) for i in range(8)])
+>>> compiled = CompiledModel(system)
+>>> compiled.parts is not None
+True
+>>> [float(v) for v in compiled.mode(compiled.initial_key).rhs(0.0, np.arange(8.0))][:3]
+[-0.0, -1.0, -2.0]
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
+
+from hybrid.compose import System
+from hybrid.expr import ir
+from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
+from hybrid.expr.rho import guard_to_rho, level_key, levels
+from hybrid.modes import Binder, Mode, _single, mode_of
+from hybrid.simulation.forms import (
+    CompiledCondition,
+    CompiledMode,
+    CompiledTransition,
+    Fn,
+    Source,
+)
+
+if TYPE_CHECKING:
+    from hybrid.simulation.compiled import CompiledModel
+
+__all__ = ["PARTS_FROM", "Part", "Parts", "signal_outputs", "uses_parts"]
+
+PARTS_FROM = 8
+"""Systems of this many components or more are compiled part by part."""
+
+_ERRORS = (ArithmeticError, ValueError, TypeError)
+
+FLOW = "rhs_parts"
+"""A mode's right-hand side records its failures as ``rhs_parts_K`` (the K-th mode built)."""
+SIGNALS = "out_parts"
+"""A mode's signal outputs record their failures as ``out_parts_K``."""
+
+
+def uses_parts(system: System) -> bool:
+    """True if ``system``'s modes are assembled from parts."""
+    return len(system.components) >= PARTS_FROM and not system.shared_labels
+
+
+@dataclass
+class Part:
+    """One component in one location, the locations it reads fixed: compiled once."""
+
+    flow: Fn
+    signals: Fn
+    invariants: list[CompiledCondition]
+    transitions: list[CompiledTransition]
+    urgent: str | None
+
+
+class Parts:
+    """The parts of a compiled model's system and the modes assembled from them."""
+
+    def __init__(self, compiled: CompiledModel, binder: Binder) -> None:
+        self.compiled = compiled
+        self.system = compiled.system
+        self._bind = binder
+        comps = self.system.components
+        owner = {n: i for i, c in enumerate(comps) for n in c.automaton.signal_names}
+        self.readers = [self._providers(i, owner) for i in range(len(comps))]
+        # each component's locations as a system names them (``comp.loc``)
+        self._named = [
+            {loc: self.system.qualified(i, loc) for loc in c.automaton.locations}
+            for i, c in enumerate(comps)
+        ]
+        # conditions by their expression and the definitions of the signals they read:
+        # a component's guard reads the same in most of its parts
+        self._conditions: dict[tuple[object, ...], tuple[ir.Expr, Fn]] = {}
+        self._parts: dict[tuple[int, tuple[str, ...]], Part] = {}
+        self._count = 0
+        self._keys: list[Mode] = []  # the modes built, in order (their failures' names)
+        # what a part's function computes: its role (said with the mode it fails in), its
+        # expressions and context, and the mode it was first compiled for
+        self._what: dict[str, tuple[str, tuple[ir.Expr, ...], CodeContext, Mode]] = {}
+
+    # --- which components a part depends on --------------------------------------------
+
+    def _providers(self, i: int, owner: Mapping[str, int]) -> tuple[int, ...]:
+        """``i`` and the components whose signals ``i`` reads, directly or through signals."""
+        a = self.system.components[i].automaton
+        exprs: list[ir.Expr] = [*a.signals.values()]
+        for loc in a.locations.values():
+            exprs += [*loc.flow.values(), *loc.signals.values(), loc.invariant]
+        for edge in a.edges:
+            exprs += [edge.guard, *edge.reset.values()]
+        found = {i}
+        todo = [owner[n] for e in exprs for n in _reads(e) if n in owner]
+        while todo:
+            p = todo.pop()
+            if p in found:
+                continue
+            found.add(p)
+            b = self.system.components[p].automaton
+            defs = [*b.signals.values()]
+            defs += [d for loc in b.locations.values() for d in loc.signals.values()]
+            todo += [owner[n] for e in defs for n in _reads(e) if n in owner]
+        return tuple(sorted(found))
+
+    # --- modes --------------------------------------------------------------------------
+
+    def mode(self, key: Mode) -> CompiledMode:
+        """Mode ``key``: its components' parts side by side."""
+
+        parts = [
+            self._part(i, key, tuple(key[p] for p in reads)) for i, reads in enumerate(self.readers)
+        ]
+        flows = [p.flow for p in parts]
+        outs = [p.signals for p in parts]
+        n, m = len(self.compiled.state_names), len(self.compiled.columns)
+        k = len(self._keys)
+        self._keys.append(key)
+        return CompiledMode(
+            key,
+            self._mode_name(key),
+            _joined(flows, False, self.compiled.flow_failure, f"{FLOW}_{k}", n),
+            _joined(outs, True, self.compiled.failure, f"{SIGNALS}_{k}", m),
+            [c for p in parts for c in p.invariants],
+            [tr for p in parts for tr in p.transitions],
+            tuple(p.urgent for p in parts if p.urgent is not None),
+        )
+
+    def _mode_name(self, key: Mode) -> str:
+        """``system.mode_name(key)``, from names made once."""
+        return "|".join([named[loc] for named, loc in zip(self._named, key, strict=True)])
+
+    def source(self, where: str, mode: Mode | None) -> Source | None:
+        """What the function that recorded a failure as ``where`` computes, in ``mode``.
+
+        Built only when a failure is described: a mode keeps no description.
+        Without ``mode``, in the mode the function was first compiled for.
+        """
+
+        compiled = self.compiled
+        kind, _, number = where.rpartition("_")
+        whole = kind in (FLOW, SIGNALS) and number.isdigit() and int(number) < len(self._keys)
+        if not whole and where not in self._what:
+            return None
+        described = self._what.get(where)
+        if mode is None and whole:
+            mode = self._keys[int(number)]
+        elif mode is None:
+            assert described is not None
+            mode = described[3]
+        name = self._mode_name(mode)
+        if whole:
+            view = mode_of(self.system, mode, binder=self._bind)
+            ctx = CodeContext(
+                states=compiled.state_names,
+                signals=view.signals,
+                inputs=compiled.inputs,
+                functions=self.system.functions,
+                failure=compiled.failure,
+            )
+            if kind == FLOW:
+                flows = tuple(view.flow.get(s, _ZERO) for s in compiled.state_names)
+                return Source(f"the flow of {name}", flows, ctx)
+            return Source(f"the signals of {name}", tuple(signal_outputs(self.system)), ctx)
+        assert described is not None
+        what, exprs, ctx, _ = described
+        return Source(f"{what} in {name}", exprs, ctx)
+
+    def _part(self, i: int, key: Mode, at: tuple[str, ...]) -> Part:
+        found = self._parts.get((i, at))
+        if found is None:
+            found = self._parts[(i, at)] = self._compile(i, key)
+        return found
+
+    def _name(self, prefix: str) -> str:
+        self._count += 1
+        return f"{prefix}_part{self._count}"
+
+    def _compile(self, i: int, key: Mode) -> Part:
+
+        system, compiled, bind = self.system, self.compiled, self._bind
+        c = system.components[i]
+        a = c.automaton
+        loc_name = key[i]
+        loc = a.locations[loc_name]
+        signals: dict[str, ir.Expr] = {}
+        for p in self.readers[i]:
+            b = system.components[p].automaton
+            here = b.locations[key[p]]
+            for name in b.signal_names:
+                signals[name] = bind(p, here.signals.get(name, b.signals[name]))
+        ctx = CodeContext(
+            states=compiled.state_names,
+            signals=signals,
+            inputs=compiled.inputs,
+            functions=system.functions,
+            failure=compiled.failure,
+        )
+        flows = [bind(i, loc.flow[s.name]) if s.name in loc.flow else _ZERO for s in a.states]
+        flow_ctx = CodeContext(**{**vars(ctx), "failure": compiled.flow_failure})
+        flow = compile_function(self._name("rhs"), flows, flow_ctx, shape="list", part=True)
+        outputs: list[ir.Expr] = []
+        sizes = a.vector_sizes
+        for name in a.signal_names:
+            if name in sizes:
+                outputs.extend(ir.Index(name, k) for k in range(sizes[name]))
+            else:
+                outputs.append(ir.Var(name, ir.SIGNAL))
+        out = compile_function(self._name("out"), outputs, ctx, shape="list", part=True)
+        invariants: list[CompiledCondition] = []
+        if not (isinstance(loc.invariant, ir.BoolConst) and loc.invariant.value):
+            where = system.qualified(i, loc_name)
+            expr = bind(i, loc.invariant)
+            what = f"the invariant of {where}"
+            invariants.append(
+                CompiledCondition(
+                    where,
+                    self._scalar("inv", what, expr, ctx, key),
+                    self._scalar("invb", what, expr, ctx, key),
+                )
+            )
+        transitions: list[CompiledTransition] = []
+        for edge in sorted(a.outgoing(loc_name), key=lambda e: e.index):
+            # its target depends on the mode: CompiledModel.target, from ``move``
+            view = replace(_single(system, key, i, edge, True, bind), target=())
+            what = f"the guard of {view.name}"
+            differences = levels(view.guard)
+
+            def variant(suffix: str, expr: ir.Expr, kind: str, what: str = what) -> Fn:
+                return self._scalar(f"g{kind}", what, expr, ctx, key, as_is=True)
+
+            transitions.append(
+                CompiledTransition(
+                    name=view.name,
+                    rho=self._scalar("g", what, view.guard, ctx, key),
+                    holds=self._scalar("gb", what, view.guard, ctx, key),
+                    view=view,
+                    reset=self._reset(view.name, view.reset, ctx, key),
+                    levels=tuple(
+                        self._scalar("lvl", what, d, ctx, key, as_is=True) for d in differences
+                    ),
+                    level_keys=tuple(level_key(d, [i]) for d in differences),
+                    variant=variant if differences else None,
+                    move=(i, edge.target),
+                )
+            )
+        urgent = system.qualified(i, loc_name) if loc.urgent else None
+        return Part(flow, out, invariants, transitions, urgent)
+
+    def _scalar(
+        self,
+        prefix: str,
+        what: str,
+        expr: ir.Expr,
+        ctx: CodeContext,
+        key: Mode,
+        as_is: bool = False,
+    ) -> Fn:
+        """A condition ``expr`` compiled: its rho for the prefixes ``inv`` and ``g``, else
+        itself (or with ``as_is``); reused wherever it reads the same signal definitions."""
+        reads = _signals_read(expr, ctx.signals)
+        cache = (prefix, what, id(expr), tuple((s, id(ctx.signals[s])) for s in reads))
+        found = self._conditions.get(cache)
+        if found is None or found[0] is not expr:
+            name = self._name(prefix)
+            value = guard_to_rho(expr) if prefix in ("inv", "g") and not as_is else expr
+            self._what[name] = (what, (value,), ctx, key)
+            found = (expr, compile_function(name, [value], ctx, shape="scalar"))
+            self._conditions[cache] = found
+        return found[1]
+
+    def _reset(self, tr: str, reset: Mapping[str, ir.Expr], ctx: CodeContext, key: Mode) -> Fn:
+        """The reset, compiled when it first fires (most transitions never do).
+
+        Only the variables it sets are computed; the others are copied, as the
+        whole mode's reset copies them.
+        """
+        name = self._name("r")
+        exprs = list(reset.values())
+        states = self.compiled.state_names
+        self._what[name] = (f"the reset of {tr}", tuple(exprs), ctx, key)
+        index = {s: k for k, s in enumerate(states)}
+        where = [index[s] for s in reset if s in index]
+        assigned = [e for s, e in reset.items() if s in index]
+        failure, n, nan = ctx.failure, len(states), math.nan
+        compiled: list[Fn] = []
+
+        def fire(t: float, x: Any) -> Any:
+            if not compiled:
+                compiled.append(compile_function(name, assigned, ctx, shape="list", part=True))
+            xs = x.tolist()
+            try:
+                values = compiled[0](t, xs)
+            except _ERRORS as e:
+                failure.record(e, t, name)
+                return [nan] * n
+            for k, v in zip(where, values, strict=True):
+                xs[k] = v
+            return xs
+
+        return fire
+
+
+_ZERO = ir.Num(0.0)
+
+
+def signal_outputs(system: System) -> list[ir.Expr]:
+    """Every signal column of ``system`` as an expression, in column order."""
+    found: list[ir.Expr] = []
+    for c in system.components:
+        sizes = c.automaton.vector_sizes
+        for name in c.automaton.signal_names:
+            if name in sizes:
+                found.extend(ir.Index(name, k) for k in range(sizes[name]))
+            else:
+                found.append(ir.Var(name, ir.SIGNAL))
+    return found
+
+
+def _signals_read(expr: ir.Expr, signals: Mapping[str, ir.Expr]) -> list[str]:
+    """The signals ``expr`` reads, directly or through other signals, sorted."""
+    seen: set[str] = set()
+    todo = list(_reads(expr))
+    while todo:
+        name = todo.pop()
+        if name in seen or name not in signals:
+            continue
+        seen.add(name)
+        todo.extend(_reads(signals[name]))
+    return sorted(seen)
+
+
+def _reads(expr: ir.Expr) -> set[str]:
+    return ir.names_in(expr, ir.SIGNAL) | ir.names_in(expr, ir.INPUT)
+
+
+def _joined(parts: list[Fn], as_tuple: bool, failure: EvalFailure, where: str, n: int) -> Fn:
+    """One function of ``(t, x)``: the parts' values in order, the state converted once.
+
+    A list, or a tuple with ``as_tuple``; on the first failure (recorded as
+    ``where``) ``n`` NaNs, as the whole mode's function gives.
+    """
+    nan = math.nan
+
+    def joined(t: float, x: Any) -> Any:
+        xs = x.tolist()
+        out: list[Any] = []
+        try:
+            for part in parts:
+                out += part(t, xs)
+        except _ERRORS as e:  # the first failure ends the whole, as in one function
+            failure.record(e, t, where)
+            return (nan,) * n if as_tuple else [nan] * n
+        return tuple(out) if as_tuple else out
+
+    return joined
