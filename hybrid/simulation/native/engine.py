@@ -19,6 +19,7 @@ import math
 import threading
 import warnings
 from collections.abc import Callable, Mapping
+from functools import partial
 from types import ModuleType
 from typing import Any
 
@@ -333,7 +334,9 @@ def run_arrays(
     With ``reuse``, a run in this thread (not in a worker) may fill the
     thread's :meth:`CompiledNative.scratch` arrays: the caller copies out what
     it keeps before the next run. A worker's arrays are always its own (after a
-    second Ctrl-C an abandoned worker may still be writing). ``cfg``: ``config(settings)``.
+    second Ctrl-C an abandoned worker may still be writing). With
+    ``handle_sigint`` the loop runs in this thread, Ctrl-C setting its flag
+    (:func:`~hybrid.simulation.native.worker.run_in_worker`). ``cfg``: ``config(settings)``.
     ``progress(t, jumps, points)`` is called in the calling thread while the
     loop runs on another (:func:`~hybrid.simulation.native.worker.run_in_worker`),
     with the time reached (never going back, also when a run is repeated with
@@ -342,8 +345,8 @@ def run_arrays(
     cfg = config(settings) if cfg is None else cfg
     points, jumps = 256, 64
     steps = 256 if settings.dense else 1
-    main = threading.current_thread() is threading.main_thread()
-    in_worker = (handle_sigint and main) or progress is not None
+    in_worker = progress is not None
+    watched = handle_sigint and threading.current_thread() is threading.main_thread()
     reached: list[float] = [settings.t_start, 0, 0]  # time, jumps, points: see _ticker
     while True:
         if reuse and not in_worker:
@@ -356,6 +359,8 @@ def run_arrays(
                 compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, flag)
 
             run_in_worker(call, handle_sigint, tick=_ticker(arrays, reached, progress))
+        elif watched:
+            run_in_worker(partial(compiled.run_one, p, x0, settings.t_start, m0, cfg, arrays), True)
         else:  # what run_in_worker does then, without its closure and thread check
             compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, np.zeros(1, dtype=np.int64))
         if not arrays.oi[b.I_OVERFLOW]:
