@@ -157,7 +157,6 @@ def rss():
 thermo = hybrid.load({spec!r})
 kw = dict(rtol=1e-6, atol=1e-9, backend="compiled", handle_sigint=False)
 hybrid.simulate(thermo, t_end=100.0, max_jumps=10, **kw)  # compiled code loaded
-hybrid.simulate(thermo, t_end=1e8, max_jumps={jumps}, **kw)  # the arrays' room grown once
 before = rss()
 run = hybrid.simulate(thermo, t_end=1e8, max_jumps={jumps}, **kw)
 len(run.jumps)
@@ -165,7 +164,7 @@ after = rss()
 n = len(run.jumps)
 d = len(run.state_names)
 arrays = run.t.nbytes + run.j.nbytes + run.states.nbytes + run.signals.nbytes + \\
-    n * 8 * (2 + 2 * d) + run.location.size * 8
+    n * 8 * (2 + 2 * d) + run.location.nbytes
 print(json.dumps({{"jumps": n, "points": int(run.t.size), "growth_bytes": after - before,
                   "result_array_bytes": arrays}}))
 """
@@ -174,9 +173,12 @@ print(json.dumps({{"jumps": n, "points": int(run.t.size), "growth_bytes": after 
 def memory(jumps: int = 100_000) -> dict[str, Any]:
     """Resident growth of a held compiled run of ``jumps`` thermostat jumps (a fresh process).
 
-    ``result_array_bytes``: its points (``t``, ``j``, states, signals, one
-    8-byte location reference each) and its jumps as arrays (time, index,
-    state before and after: ``8 (2 + 2 d)`` bytes each).
+    ``growth_bytes``: resident memory after the run (held) less before it, in
+    a process that has run the model once briefly (its compiled code loaded):
+    what the run and the room its loop was given cost the process.
+    ``result_array_bytes``: its points (``t``, ``j``, states, signals,
+    locations) and its jumps as arrays (time, index, state before and after:
+    ``8 (2 + 2 d)`` bytes each).
     """
     code = _MEMORY.format(spec=str(ROOT / "specs" / "thermostat.yaml"), jumps=jumps)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
