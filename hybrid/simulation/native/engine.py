@@ -332,8 +332,10 @@ def run_arrays(
     """One run's arrays, run again with four times the room until they hold it all.
 
     With ``reuse``, a run in this thread (not in a worker) may fill the
-    thread's :meth:`CompiledNative.scratch` arrays: the caller copies out what
-    it keeps before the next run. A worker's arrays are always its own (after a
+    thread's :meth:`CompiledNative.scratch` arrays (of the first, smallest
+    sizes: a run that needs more room is given arrays of its own, which go
+    when its values are copied out, so a process does not keep the room of its
+    longest run): the caller copies out what it keeps before the next run. A worker's arrays are always its own (after a
     second Ctrl-C an abandoned worker may still be writing). With
     ``handle_sigint`` the loop runs in this thread, Ctrl-C setting its flag
     (:func:`~hybrid.simulation.native.worker.run_in_worker`). ``cfg``: ``config(settings)``.
@@ -348,8 +350,9 @@ def run_arrays(
     in_worker = progress is not None
     watched = handle_sigint and threading.current_thread() is threading.main_thread()
     reached: list[float] = [settings.t_start, 0, 0]  # time, jumps, points: see _ticker
+    first = True
     while True:
-        if reuse and not in_worker:
+        if reuse and not in_worker and first:  # a longer run's room is its own, freed with it
             arrays = compiled.scratch(points, jumps, steps)
         else:
             arrays = compiled.buffers(points, jumps, steps)
@@ -365,7 +368,7 @@ def run_arrays(
             compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, np.zeros(1, dtype=np.int64))
         if not arrays.oi[b.I_OVERFLOW]:
             return arrays
-        points, jumps = points * 4, jumps * 4
+        points, jumps, first = points * 4, jumps * 4, False
         steps = steps * 4 if settings.dense else 1
 
 
