@@ -1,0 +1,77 @@
+"""``backend="auto"`` for campaigns: compiled when cached or when the runs pay for the compile."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import pytest
+from support import SPECS, read_csv, run_cli
+
+import hybrid
+from hybrid.campaigns.choosing import BackendNote
+from hybrid.simulation.native import choice
+from hybrid.simulation.native.choice import KERNEL_COMPILE_S, LOAD_S, cached, choose
+
+pytest.importorskip("numba")
+THERMO = hybrid.load(SPECS / "thermostat.yaml")
+
+
+def test_the_choice_weighs_the_runs_against_what_compiling_costs(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(choice, "cached", lambda model: (False, True, 1.0))  # the kernel cached
+    # 1000 runs of 10 ms save 1000 * 0.01 * (1 - 1/50) = 9.8 s > 0.45 + 1.0 s
+    chosen = choose(THERMO, 1000, run_s=lambda: 0.01)
+    assert chosen.backend == "compiled" and "1000 runs save about 10 s" in chosen.reason
+    # 100 save 0.98 s < 1.45 s
+    assert choose(THERMO, 100, run_s=lambda: 0.01).backend == "scipy"
+    monkeypatch.setattr(choice, "cached", lambda model: (False, False, 1.0))  # nothing cached
+    cost = LOAD_S + KERNEL_COMPILE_S + 1.0
+    runs = int(cost / (0.01 * (1 - 1 / 50))) + 1
+    assert choose(THERMO, runs, run_s=lambda: 0.01).backend == "compiled"
+    assert choose(THERMO, runs - 2, run_s=lambda: 0.01).backend == "scipy"
+    monkeypatch.setattr(choice, "cached", lambda model: (True, True, 1.0))
+    timed: list[int] = []
+    cached_choice = choose(THERMO, 1, run_s=lambda: timed.append(1) or 0.0)
+    assert cached_choice.backend == "compiled" and not timed  # the cache decides: nothing timed
+
+
+def test_the_cache_is_read_from_the_manifests(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from hybrid.simulation.native import cache
+
+    monkeypatch.setenv(cache.CACHE_ENV, str(tmp_path))
+    monkeypatch.setattr(cache, "_LOADED", {})
+    assert cached(THERMO)[:2] == (False, False)
+    from importlib.metadata import version
+
+    from hybrid.simulation.native.kernel_text import kernel_module
+
+    kernel = tmp_path / cache.cache_key(kernel_module(), version("numba"))
+    kernel.mkdir()
+    (kernel / cache.MANIFEST).write_text("{}")
+    assert cached(THERMO)[:2] == (False, True)
+
+
+def test_a_short_sweep_with_an_empty_cache_runs_on_scipy_and_says_so(tmp_path: Path) -> None:
+    with warnings.catch_warnings(record=True) as notes:
+        warnings.simplefilter("always")
+        with pytest.MonkeyPatch.context() as m:
+            m.setenv("HYBRID_NATIVE_CACHE", str(tmp_path / "empty"))
+            auto = hybrid.sweep(THERMO, 50.0, grid={"T_high": [21.0, 22.0]}, workers=0,
+                                summaries=("jump_t:1",), backend="auto", handle_sigint=False)  # fmt: skip
+    said = [str(n.message) for n in notes if issubclass(n.category, BackendNote)]
+    assert len(said) == 1 and said[0].startswith("backend auto: scipy (2 runs would save")
+    scipy = hybrid.sweep(THERMO, 50.0, grid={"T_high": [21.0, 22.0]}, workers=0,
+                         summaries=("jump_t:1",), handle_sigint=False)  # fmt: skip
+    assert auto.rows == scipy.rows
+
+
+def test_the_command_line_takes_auto_and_prints_its_choice(tmp_path: Path) -> None:
+    out = tmp_path / "sweep.csv"
+    done = run_cli("sweep", SPECS / "thermostat.yaml", "--t-end", "20", "--grid", "T_high=21:22:2",
+                   "--backend", "auto", "--method", "LSODA", "--out", out)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "hybrid: note: backend auto: scipy (method 'LSODA' is the scipy backend's)" in done.stderr
+    _, rows = read_csv(out)
+    assert len(rows) == 2
