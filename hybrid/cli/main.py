@@ -136,8 +136,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--backend",
         default=BACKENDS[0],
-        choices=BACKENDS,
-        help="scipy (reference) or compiled (numba, the 'fast' extra; docs/backends.md)",
+        choices=(*BACKENDS, "auto"),
+        help="scipy (reference), compiled (numba, the 'fast' extra) or auto (compiled when "
+        "the model is in the compiled cache, else scipy; docs/backends.md)",
     )
     p.add_argument(
         "--param",

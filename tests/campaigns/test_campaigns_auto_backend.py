@@ -17,24 +17,28 @@ pytest.importorskip("numba")
 THERMO = hybrid.load(SPECS / "thermostat.yaml")
 
 
-def test_the_choice_weighs_the_runs_against_what_compiling_costs(
+def test_the_choice_weighs_the_runs_against_loading_and_compiling(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    monkeypatch.setattr(choice, "cached", lambda model: (False, True, 1.0))  # the kernel cached
-    # 1000 runs of 10 ms save 1000 * 0.01 * (1 - 1/50) = 9.8 s > 0.45 + 1.0 s
-    chosen = choose(THERMO, 1000, run_s=lambda: 0.01)
-    assert chosen.backend == "compiled" and "1000 runs save about 10 s" in chosen.reason
-    # 100 save 0.98 s < 1.45 s
-    assert choose(THERMO, 100, run_s=lambda: 0.01).backend == "scipy"
-    monkeypatch.setattr(choice, "cached", lambda model: (False, False, 1.0))  # nothing cached
-    cost = LOAD_S + KERNEL_COMPILE_S + 1.0
-    runs = int(cost / (0.01 * (1 - 1 / 50))) + 1
-    assert choose(THERMO, runs, run_s=lambda: 0.01).backend == "compiled"
-    assert choose(THERMO, runs - 2, run_s=lambda: 0.01).backend == "scipy"
-    monkeypatch.setattr(choice, "cached", lambda model: (True, True, 1.0))
+    ten_ms = lambda: 0.01  # noqa: E731 (one scipy run's CPU seconds)
+    monkeypatch.setattr(choice, "cached", lambda model: ("missing", "cached", 1.0))
+    # 1000 runs of 10 ms save 1000 * 0.01 * (1 - 1/50) = 9.8 s > LOAD_S + 1.0 s
+    chosen = choose(THERMO, 1000, run_s=ten_ms)
+    assert chosen.backend == "compiled" and chosen.reason.startswith("1000 runs would save about 9.8 s")
+    assert choose(THERMO, 100, run_s=ten_ms).backend == "scipy"  # 0.98 s < LOAD_S + 1.0 s
+    monkeypatch.setattr(choice, "cached", lambda model: ("missing", "missing", 1.0))
+    runs = int((LOAD_S + KERNEL_COMPILE_S + 1.0) / (0.01 * (1 - 1 / 50))) + 1
+    assert choose(THERMO, runs, run_s=ten_ms).backend == "compiled"
+    assert choose(THERMO, runs - 2, run_s=ten_ms).backend == "scipy"
+    monkeypatch.setattr(choice, "cached", lambda model: ("cached", "cached", 1.0))
+    assert choose(THERMO, 1).backend == "scipy"  # one run of unknown length: loading costs more
+    enough = int(LOAD_S / (0.01 * (1 - 1 / 50))) + 1
+    assert choose(THERMO, enough, run_s=ten_ms).backend == "compiled"
+    assert choose(THERMO, enough - 2, run_s=ten_ms).backend == "scipy"
+    monkeypatch.setattr(choice, "cached", lambda model: ("loaded", "loaded", 1.0))
     timed: list[int] = []
-    cached_choice = choose(THERMO, 1, run_s=lambda: timed.append(1) or 0.0)
-    assert cached_choice.backend == "compiled" and not timed  # the cache decides: nothing timed
+    loaded = choose(THERMO, 1, run_s=lambda: timed.append(1) or 0.0)
+    assert loaded.backend == "compiled" and not timed  # nothing to load: nothing timed
 
 
 def test_the_cache_is_read_from_the_manifests(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -42,7 +46,7 @@ def test_the_cache_is_read_from_the_manifests(tmp_path: Path, monkeypatch: pytes
 
     monkeypatch.setenv(cache.CACHE_ENV, str(tmp_path))
     monkeypatch.setattr(cache, "_LOADED", {})
-    assert cached(THERMO)[:2] == (False, False)
+    assert cached(THERMO)[:2] == ("missing", "missing")
     from importlib.metadata import version
 
     from hybrid.simulation.native.kernel_text import kernel_module
@@ -50,7 +54,7 @@ def test_the_cache_is_read_from_the_manifests(tmp_path: Path, monkeypatch: pytes
     kernel = tmp_path / cache.cache_key(kernel_module(), version("numba"))
     kernel.mkdir()
     (kernel / cache.MANIFEST).write_text("{}")
-    assert cached(THERMO)[:2] == (False, True)
+    assert cached(THERMO)[:2] == ("missing", "cached")
 
 
 def test_a_short_sweep_with_an_empty_cache_runs_on_scipy_and_says_so(tmp_path: Path) -> None:
@@ -75,3 +79,16 @@ def test_the_command_line_takes_auto_and_prints_its_choice(tmp_path: Path) -> No
     assert "hybrid: note: backend auto: scipy (method 'LSODA' is the scipy backend's)" in done.stderr
     _, rows = read_csv(out)
     assert len(rows) == 2
+
+
+def test_simulate_auto_runs_one_run_on_scipy_unless_loaded(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("HYBRID_NATIVE_CACHE", str(tmp_path / "cache"))
+    args = ("simulate", SPECS / "thermostat.yaml", "--t-end", "30")
+    auto = run_cli(*args, "--backend", "auto", "--events", tmp_path / "auto.json")
+    assert auto.returncode == 0, auto.stderr
+    assert "note: backend auto: scipy (one run: loading compiled code" in auto.stderr
+    assert run_cli(*args, "--events", tmp_path / "scipy.json").returncode == 0
+    assert (tmp_path / "auto.json").read_text() == (tmp_path / "scipy.json").read_text()
+    assert not (tmp_path / "cache").exists()  # nothing compiled
