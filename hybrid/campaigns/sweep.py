@@ -18,7 +18,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from hybrid.campaigns.choosing import resolve_backend
+from hybrid.campaigns.choosing import settle
 from hybrid.campaigns.executors import Executor, InProcess, LocalPool, default_workers
 from hybrid.campaigns.payload import pack
 from hybrid.campaigns.runs import (
@@ -218,14 +218,14 @@ def _finish(
     _check_inputs(model, names, inputs or {})
     if run_timeout is not None and not (run_timeout > 0):
         raise UsageError(f"run_timeout must be > 0 seconds, got {run_timeout}")
-    plan = resolve_backend(model, points, RunPlan(  # auto: the backend chosen here
+    plan, executor = settle(model, points, RunPlan(  # auto resolved; compiled: in process
         t_end=float(t_end),
         solver={k: v for k, v in solver.items() if v is not None},
         summaries=tuple(wanted),
         inputs=tuple(sorted((inputs or {}).items())),
         timeout=run_timeout,
         backend=backend,
-    ))
+    ), executor)
     return run_campaign(model, points, names, plan, executor, out, resume, progress, handle_sigint)
 
 

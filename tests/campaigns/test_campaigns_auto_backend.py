@@ -92,3 +92,24 @@ def test_simulate_auto_runs_one_run_on_scipy_unless_loaded(
     assert run_cli(*args, "--events", tmp_path / "scipy.json").returncode == 0
     assert (tmp_path / "auto.json").read_text() == (tmp_path / "scipy.json").read_text()
     assert not (tmp_path / "cache").exists()  # nothing compiled
+
+
+def test_a_compiled_campaign_on_local_workers_runs_in_this_process() -> None:
+    from hybrid.campaigns.choosing import settle
+    from hybrid.campaigns.executors import InProcess, LocalPool
+    from hybrid.campaigns.runs import RunPlan
+
+    pool = LocalPool(2)
+    plan, executor = settle(THERMO, [{"T_high": 22.0}], RunPlan(t_end=1.0, backend="compiled"), pool)
+    assert plan.backend == "compiled" and isinstance(executor, InProcess)
+    plan, executor = settle(THERMO, [{"T_high": 22.0}], RunPlan(t_end=1.0), pool)
+    assert plan.backend == "scipy" and executor is pool  # scipy runs keep their processes
+    # the same rows either way (each point one ensemble row in this process)
+    grid = {"T_high": [21.0, 22.0, 23.0]}
+    tables = [hybrid.sweep(THERMO, 60.0, grid=grid, summaries=("jump_t:2",), workers=w,
+                           backend="compiled", handle_sigint=False) for w in (0, 2)]  # fmt: skip
+    assert tables[0].rows == tables[1].rows
+    # T_high = 22: cooling 20 -> 18 in 10 ln(10/8), heating 18 -> 22 in 10 ln(12/8)
+    import math
+
+    assert abs(tables[0].rows[1]["jump_t:2"] - 10 * (math.log(10 / 8) + math.log(12 / 8))) < 1e-5
