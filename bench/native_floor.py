@@ -12,6 +12,8 @@ threads of the process), medians over the repeats:
   jump-time difference to the floor are extras;
 - an ensemble of 10,000 thermostat runs (20 switches each, initial temperatures
   spread), ``hybrid.simulate_many`` against :func:`bench.floor.ensemble`, per run;
+- ``hybrid.sweep(..., backend="compiled")`` of 1,000 thermostat points against
+  ``simulate_many`` of the same points, with ``workers=0`` and ``workers=2``;
 - memory: a compiled run of 100,000 thermostat jumps in a fresh process, its
   resident growth (held ``Run``) against the bytes of its result arrays.
 
@@ -35,7 +37,7 @@ import hybrid
 from bench import floor
 from bench.harness import Comparison
 
-__all__ = ["ensemble", "memory", "run", "single_runs"]
+__all__ = ["ensemble", "memory", "run", "single_runs", "sweep"]
 
 ROOT = Path(__file__).resolve().parent.parent
 RTOL, ATOL = 1e-10, 1e-12
@@ -145,6 +147,39 @@ def ensemble(n: int = 10_000, repeats: int = 5) -> Comparison:
     return c
 
 
+def sweep(n: int = 1_000, repeats: int = 5) -> list[Comparison]:
+    """``hybrid.sweep`` of ``n`` thermostat points, compiled, / ``simulate_many`` of the same.
+
+    With ``workers=0`` and ``workers=2`` (both run in this process now); CPU
+    time of this process, after a warm-up of each.
+    """
+    thermo = hybrid.load(ROOT / "specs" / "thermostat.yaml")
+    highs = np.linspace(21.0, 23.0, n // 4)
+    grid = {"T_high": list(highs), "init.T": [16.0, 17.0, 19.0, 20.0]}
+    points = {"T_high": np.repeat(highs, 4), "init.T": np.tile(grid["init.T"], n // 4)}
+    tol: dict[str, Any] = {"rtol": RTOL, "atol": ATOL, "handle_sigint": False}
+
+    def many() -> Any:
+        return hybrid.simulate_many(thermo, t_end=200.0, parameters=points, **tol)
+
+    results = []
+    for workers in (0, 2):
+
+        def table(w: int = workers) -> Any:
+            return hybrid.sweep(thermo, 200.0, grid=grid, summaries=("jump_t:5",), workers=w,
+                                backend="compiled", **tol)  # fmt: skip
+
+        c = _compare(f"compiled sweep / simulate_many: {n:,} thermostat points, workers={workers}",
+                     ("hybrid.sweep(backend='compiled')", table), ("simulate_many", many),
+                     repeats)  # fmt: skip
+        rows, runs = table().rows, many()
+        c.extra = {"max_jump_t5_difference_s": float(max(
+            abs(row["jump_t:5"] - runs[k].jump_times[4]) for k, row in enumerate(rows)
+        ))}  # fmt: skip
+        results.append(c)
+    return results
+
+
 _MEMORY = """
 import json, resource
 import numpy as np
@@ -192,6 +227,7 @@ def memory(jumps: int = 100_000) -> dict[str, Any]:
 def run(repeats: int = 9, ensemble_size: int = 10_000) -> list[Comparison]:
     results = single_runs(repeats)
     results.append(ensemble(ensemble_size, max(3, repeats // 3)))
+    results += sweep(1_000, max(3, repeats // 3))
     return results
 
 
