@@ -61,7 +61,10 @@ def test_a_short_sweep_with_an_empty_cache_runs_on_scipy_and_says_so(tmp_path: P
     with warnings.catch_warnings(record=True) as notes:
         warnings.simplefilter("always")
         with pytest.MonkeyPatch.context() as m:
+            from hybrid.simulation.native import cache
+
             m.setenv("HYBRID_NATIVE_CACHE", str(tmp_path / "empty"))
+            m.setattr(cache, "_LOADED", {})  # as in a process that has loaded nothing compiled
             auto = hybrid.sweep(THERMO, 50.0, grid={"T_high": [21.0, 22.0]}, workers=0,
                                 summaries=("jump_t:1",), backend="auto", handle_sigint=False)  # fmt: skip
     said = [str(n.message) for n in notes if issubclass(n.category, BackendNote)]
