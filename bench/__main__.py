@@ -15,6 +15,7 @@ from bench import (
     engine_overhead,
     import_time,
     native_backend,
+    native_floor,
     peers,
     rhs_call,
     spec_scaling,
@@ -39,6 +40,7 @@ def main(argv: list[str] | None = None) -> int:
         (rhs_call, {"repeats": repeats}),
         (uvms_realtime, {"repeats": max(3, repeats // 2)}),
         (native_backend, {"repeats": repeats, "ensemble_size": 1_000 if quick else 10_000}),
+        (native_floor, {"repeats": repeats, "ensemble_size": 1_000 if quick else 10_000}),
     ):
         for result in module.run(**kwargs):
             print(result.line(), json.dumps(result.extra))
@@ -68,6 +70,8 @@ def main(argv: list[str] | None = None) -> int:
     for row in scaling["rows"]:
         print(scaling["name"], row)
     report["scaling"] = scaling
+    report["native_memory"] = native_floor.memory(10_000 if quick else 100_000)
+    print("compiled backend, memory of a long run", report["native_memory"])
     report["native_compile"] = native_backend.compile_times()
     print("compiled backend, compile times", report["native_compile"])
     report["peers"] = peers.run()

@@ -27,6 +27,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from hybrid.campaigns.choosing import settle
 from hybrid.campaigns.executors import Executor
 from hybrid.campaigns.payload import pack
 from hybrid.campaigns.runs import (
@@ -223,8 +224,10 @@ def falsify(
     )
     executor = executor_for(workers, scheduler)
     search = _Search(model, requirement, axes, plan, budget, seed, sampler, global_share, starts)
+    middle = search.values_of([0.5] * len(axes))  # what auto times one scipy run of
+    search.plan, executor = settle(model, [middle], plan, executor, runs=budget)
     with sigint_watch(handle_sigint) as interrupts, executor:
-        executor.start(pack(model), plan)
+        executor.start(pack(model), search.plan)
         search.run(executor, lambda: interrupts.requested, progress)
     return search.result()
 

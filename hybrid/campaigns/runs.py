@@ -161,6 +161,8 @@ class RunPlan:
     """Free inputs held by an expression of ``t`` in every run (``--input NAME=EXPR``)."""
     timeout: float | None = None
     backend: str = "scipy"
+    requested: str = ""
+    """The backend asked for when it was ``auto`` (:mod:`hybrid.campaigns.choosing`), else empty."""
 
 
 def requirement_columns(model: Automaton | System) -> list[str]:

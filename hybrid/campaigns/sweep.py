@@ -18,6 +18,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from hybrid.campaigns.choosing import settle
 from hybrid.campaigns.executors import Executor, InProcess, LocalPool, default_workers
 from hybrid.campaigns.payload import pack
 from hybrid.campaigns.runs import (
@@ -141,7 +142,7 @@ def sweep(
     handle_sigint : bool
         Turn Ctrl-C into a clean stop (rows kept, ``table.complete`` False).
     backend : str
-        Passed to :func:`hybrid.simulate` (``"scipy"``: the default engine).
+        ``"scipy"`` (default), ``"compiled"`` or ``"auto"`` (:mod:`hybrid.campaigns.choosing`).
     batch : int, optional
         Runs per batch sent to a worker (default: chosen from the counts).
     **solver
@@ -218,14 +219,14 @@ def _finish(
     _check_inputs(model, names, inputs or {})
     if run_timeout is not None and not (run_timeout > 0):
         raise UsageError(f"run_timeout must be > 0 seconds, got {run_timeout}")
-    plan = RunPlan(
+    plan, executor = settle(model, points, RunPlan(  # auto resolved; compiled: in process
         t_end=float(t_end),
         solver={k: v for k, v in solver.items() if v is not None},
         summaries=tuple(wanted),
         inputs=tuple(sorted((inputs or {}).items())),
         timeout=run_timeout,
         backend=backend,
-    )
+    ), executor)
     return run_campaign(model, points, names, plan, executor, out, resume, progress, handle_sigint)
 
 
@@ -392,7 +393,7 @@ def _fingerprint(
             "t_end": plan.t_end,
             "solver": sorted((k, repr(v)) for k, v in plan.solver.items()),
             "inputs": plan.inputs,
-            "backend": plan.backend,
+            "backend": plan.requested or plan.backend,
             "columns": list(columns),
             "points": [[(k, repr(v)) for k, v in p.items()] for p in points],
         }

@@ -59,9 +59,10 @@ def add_campaign_commands(
     _common(p, types)
     from hybrid.simulation.settings import BACKENDS
 
-    p.add_argument("--backend", default=BACKENDS[0], choices=BACKENDS,
-                   help="scipy (reference) or compiled (numba: one ensemble call per batch; "
-                   "docs/backends.md)")  # fmt: skip
+    campaign_backends = (*BACKENDS, "auto")  # auto: hybrid.campaigns.choosing
+    p.add_argument("--backend", default=BACKENDS[0], choices=campaign_backends,
+                   help="scipy (reference), compiled (numba: one ensemble call per batch) or "
+                   "auto (compiled when cached or when it pays; docs/backends.md)")  # fmt: skip
     p.add_argument("--out", required=True, help="results file (.csv or .parquet)")
     p.add_argument("--resume", action="store_true", help="finish an interrupted campaign")
     p.add_argument("--format", choices=REPORT_FORMATS, default="summary",
@@ -78,9 +79,10 @@ def add_campaign_commands(
     p.add_argument("--seed", type=int, default=0, help="seed of the global phase (default 0)")
     p.add_argument("--sampler", choices=SAMPLERS, default="lhs", help="the global design")
     _common(p, types)
-    p.add_argument("--backend", default=BACKENDS[0], choices=BACKENDS,
-                   help="scipy (reference) or compiled (numba; requirements are monitored over "
-                   "its steps; docs/backends.md)")  # fmt: skip
+    p.add_argument("--backend", default=BACKENDS[0], choices=campaign_backends,
+                   help="scipy (reference), compiled (numba; requirements are monitored over "
+                   "its steps) or auto (compiled when cached or when it pays; "
+                   "docs/backends.md)")  # fmt: skip
     p.add_argument("--out", metavar="DIR", help="write the counterexample here")
 
 

@@ -136,8 +136,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--backend",
         default=BACKENDS[0],
-        choices=BACKENDS,
-        help="scipy (reference) or compiled (numba, the 'fast' extra; docs/backends.md)",
+        choices=(*BACKENDS, "auto"),
+        help="scipy (reference), compiled (numba, the 'fast' extra) or auto (compiled when "
+        "the model is in the compiled cache, else scipy; docs/backends.md)",
     )
     p.add_argument(
         "--param",
@@ -193,6 +194,9 @@ def build_parser() -> argparse.ArgumentParser:
     from hybrid.cli.reach import add_reach_command
 
     add_reach_command(sub, types)
+    from hybrid.cli.compile import add_compile_command
+
+    add_compile_command(sub)
     return parser
 
 
@@ -333,6 +337,10 @@ def _run(args: argparse.Namespace) -> int:
             from hybrid.cli.reach import run_reach
 
             return run_reach(args)
+        if args.command == "compile":
+            from hybrid.cli.compile import run_compile
+
+            return run_compile(args.files)
         if args.command in ("import", "export"):
             from hybrid.cli.interchange import run_export, run_import
 

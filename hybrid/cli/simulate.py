@@ -53,6 +53,14 @@ def run_simulate(args: argparse.Namespace) -> int:
         if parameters:
             model = model.with_parameters(parameters)
         inputs = _inputs(args, model)
+        backend = args.backend
+        if backend == "auto":  # one run: compiled only if nothing is to be compiled first
+            from hybrid.simulation.native.choice import choose
+
+            chosen = choose(model, 1, method=args.method, inputs=bool(inputs))
+            print(f"{args.file}: note: backend auto: {chosen.backend} ({chosen.reason})",
+                  file=sys.stderr)  # fmt: skip
+            backend = chosen.backend
         run = simulate(
             model,
             t_end=args.t_end,
@@ -65,7 +73,7 @@ def run_simulate(args: argparse.Namespace) -> int:
             dense=args.plot is not None,
             inputs=inputs or None,
             progress=line,
-            backend=args.backend,
+            backend=backend,
         )
         for note in run.settings.get("start", {}).get("notes", ()):
             print(f"{args.file}: note: {note}", file=sys.stderr)

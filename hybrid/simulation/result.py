@@ -13,7 +13,7 @@ Examples
 from __future__ import annotations
 
 import importlib
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -138,7 +138,8 @@ class Run:
     location: NDArray[np.str_]
     states: NDArray[np.float64]
     signals: NDArray[np.float64]
-    jumps: list[Jump]
+    jumps: Sequence[Jump]
+    """The jumps in order: a list, or (compiled backend) a sequence over arrays equal to one."""
     termination: Termination
     settings: dict[str, Any] = field(default_factory=dict)
     segments: list[tuple[int, float, float, Any]] = field(default_factory=list, repr=False)
@@ -173,6 +174,9 @@ class Run:
 
     @property
     def jump_times(self) -> NDArray[np.float64]:
+        times = getattr(self.jumps, "times", None)  # a compiled run's, an array already
+        if times is not None:
+            return np.asarray(times, dtype=float)
         return np.array([jump.t for jump in self.jumps], dtype=float)
 
     def plot(

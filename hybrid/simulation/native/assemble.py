@@ -18,9 +18,10 @@ from hybrid.compose import System
 from hybrid.model import Automaton
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.ending import Inputs, termination_of
+from hybrid.simulation.native.jumps import jump_records
 from hybrid.simulation.native.layout import Layout
 from hybrid.simulation.native.structure import NativeModel
-from hybrid.simulation.result import Jump, Run
+from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
 
 __all__ = ["DenseSegment", "run_from", "settings_record"]
@@ -44,58 +45,6 @@ class DenseSegment:
         powers = np.stack([s, s * s, s**3, s**4])  # (4, n)
         y: NDArray[np.float64] = self.h[k] * np.einsum("nic,cn->in", self.q[k], powers) + self.y_old[k].T
         return y[:, 0] if times.ndim == 0 else y
-
-
-def _jumps(layout: Layout, buf: b.RunArrays) -> list[Jump]:
-    """The :class:`Jump` records of the run in ``buf``, equal to the reference engine's.
-
-    Costs about as much as the compiled run of a short model, so it is kept
-    lean: the columns become lists at once (one ``tolist``), the states' dicts
-    are built in bulk (:func:`_state_dicts`), each jump's fields are a copy of
-    its key's (:attr:`Layout.choices`: edge, label, modes, enabled transitions,
-    ``chosen_by``, in field order; the key the loop packed in ``J_KEY``) with
-    its time and states set, and are set at once (Jump is a frozen dataclass
-    without slots, and its generated ``__init__`` costs an
-    ``object.__setattr__`` per field).
-    """
-    n = int(buf.oi[b.I_JUMPS])
-    if n == 0:
-        return []
-    names = layout.state_names
-    x, y, z = b.J_X, b.J_X + len(names), b.J_X + 2 * len(names)
-    rows = buf.jps[:n]
-    width = rows.shape[1] - z
-    columns = rows[:, :z].T.tolist()
-    keys = columns[b.J_KEY] if layout.packed else layout.jump_keys(rows[:, b.J_TR], rows[:, z:])
-    befores = _state_dicts(names, columns[x:y], n)
-    afters = _state_dicts(names, columns[y:z], n)
-    seen, fields_of = layout.choices, layout.fields
-    new, set_field = object.__new__, object.__setattr__
-    jumps: list[Jump] = []
-    append = jumps.append
-    for t, j, key, before, after in zip(columns[b.J_T], map(int, columns[b.J_J]), keys,
-                                        befores, afters, strict=True):  # fmt: skip
-        fields = (seen.get(key) or fields_of(key, width)).copy()
-        fields["t"], fields["j"], fields["before"], fields["after"] = t, j, before, after
-        jump = new(Jump)
-        set_field(jump, "__dict__", fields)
-        append(jump)
-    return jumps
-
-
-def _state_dicts(names: tuple[str, ...], columns: list[list[float]],
-                 n: int) -> list[dict[str, float]]:  # fmt: skip
-    """``dict(zip(names, row))`` per row of the ``n`` rows of ``columns`` (one list per name);
-    for one or two names a dict display (a third of the cost)."""
-    if len(names) == 1:
-        (a,) = names
-        return [{a: v} for v in columns[0]]
-    if len(names) == 2:
-        a, c = names
-        return [{a: u, c: v} for u, v in zip(*columns, strict=True)]
-    if not names:
-        return [{} for _ in range(n)]
-    return [dict(zip(names, row)) for row in zip(*columns, strict=True)]  # noqa: B905 (each row holds len(names) values)
 
 
 def settings_record(settings: Settings) -> dict[str, Any]:
@@ -147,7 +96,7 @@ def run_from(
         location=layout.mode_names[pts[:, b.P_M].astype(np.int64)],
         states=pts[:, b.P_X : b.P_X + d].copy(),
         signals=pts[:, b.P_X + d :].copy(),
-        jumps=_jumps(layout, buf),
+        jumps=jump_records(layout, buf),
         termination=termination_of(native, layout, model, settings, buf, inputs),
         settings=settings_record(settings),
         segments=_segments(buf, d),

@@ -5,9 +5,8 @@ model's structure is generated and loaded once per structure
 (:class:`CompiledNative`, cached per process; numba's disk cache across
 processes), the run's parameter vector, initial point and mode are arguments,
 and the arrays the loop fills become a :class:`~hybrid.simulation.result.Run`.
-A run that fills its buffers is run again with four times the room. Ctrl-C:
-the loop runs in a worker thread (numba releases the GIL) while the main
-thread turns the first Ctrl-C into a flag the loop reads at every step
+A run that fills its buffers is run again with four times the room. The
+first Ctrl-C sets a flag the loop reads at every step
 (:mod:`hybrid.simulation.native.worker`). What does not change between runs
 of one model (its structure, the loop's inputs, the run's arrays) is kept
 between calls, never stale: a short compiled run costs little more than its loop.
@@ -19,6 +18,7 @@ import math
 import threading
 import warnings
 from collections.abc import Callable, Mapping
+from functools import partial
 from types import ModuleType
 from typing import Any
 
@@ -330,10 +330,13 @@ def run_arrays(
 ) -> b.RunArrays:
     """One run's arrays, run again with four times the room until they hold it all.
 
-    With ``reuse``, a run in this thread (not in a worker) may fill the
-    thread's :meth:`CompiledNative.scratch` arrays: the caller copies out what
-    it keeps before the next run. A worker's arrays are always its own (after a
-    second Ctrl-C an abandoned worker may still be writing). ``cfg``: ``config(settings)``.
+    With ``reuse``, a run in this thread (not in a worker) may fill the thread's
+    :meth:`CompiledNative.scratch` arrays (the first, smallest sizes only: a
+    process keeps no longer run's room): the caller copies out what it keeps
+    before the next run. A worker's arrays are always its own (after a second
+    Ctrl-C an abandoned worker may still be writing). With ``handle_sigint`` the
+    loop runs here (:func:`~hybrid.simulation.native.worker.run_in_worker`).
+    ``cfg``: ``config(settings)``.
     ``progress(t, jumps, points)`` is called in the calling thread while the
     loop runs on another (:func:`~hybrid.simulation.native.worker.run_in_worker`),
     with the time reached (never going back, also when a run is repeated with
@@ -342,11 +345,11 @@ def run_arrays(
     cfg = config(settings) if cfg is None else cfg
     points, jumps = 256, 64
     steps = 256 if settings.dense else 1
-    main = threading.current_thread() is threading.main_thread()
-    in_worker = (handle_sigint and main) or progress is not None
+    in_worker, first = progress is not None, True  # first: a longer run's room is its own
+    watched = handle_sigint and threading.current_thread() is threading.main_thread()
     reached: list[float] = [settings.t_start, 0, 0]  # time, jumps, points: see _ticker
     while True:
-        if reuse and not in_worker:
+        if reuse and not in_worker and first:
             arrays = compiled.scratch(points, jumps, steps)
         else:
             arrays = compiled.buffers(points, jumps, steps)
@@ -356,11 +359,13 @@ def run_arrays(
                 compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, flag)
 
             run_in_worker(call, handle_sigint, tick=_ticker(arrays, reached, progress))
+        elif watched:
+            run_in_worker(partial(compiled.run_one, p, x0, settings.t_start, m0, cfg, arrays), True)
         else:  # what run_in_worker does then, without its closure and thread check
             compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, np.zeros(1, dtype=np.int64))
         if not arrays.oi[b.I_OVERFLOW]:
             return arrays
-        points, jumps = points * 4, jumps * 4
+        points, jumps, first = points * 4, jumps * 4, False
         steps = steps * 4 if settings.dense else 1
 
 

@@ -1,26 +1,42 @@
-"""Ctrl-C during a compiled run: the loop runs on a worker thread, the main thread watches.
+"""Ctrl-C during a compiled run: the loop stops at the step where the first Ctrl-C came.
 
 Compiled code cannot be interrupted by a Python signal handler (handlers run
-between bytecodes), so with ``handle_sigint`` in the main thread the loop runs
-on the process's one worker thread (numba releases the GIL) while the main
-thread waits, turning the first Ctrl-C into a flag the loop reads at every
-step, as :func:`hybrid.simulation.interrupts.sigint_watch` does for the
-reference engine. The worker is started once per process (again after a fork):
-starting a thread per run cost as much as a short run, numba setting up each
-new thread besides.
+between bytecodes, and the loop returns only when it is done), so with
+``handle_sigint`` in the main thread the loop reads a flag at every step and
+something other than the main thread's Python code must set it:
+
+- A plain run (no ``tick``) runs in the main thread itself, while Python's
+  signal wake-up file descriptor (:func:`signal.set_wakeup_fd`) points to a
+  pipe that the process's watcher thread (:func:`_watcher`) reads: Python's C
+  signal handler writes a byte there on every Ctrl-C, whichever thread holds
+  the GIL, and the watcher sets the flag of the run in progress (numba
+  releases the GIL). The Python-level handler (the command's
+  :class:`~hybrid.simulation.interrupts.Interrupts`) runs as the loop returns,
+  as it would after any blocking call. Handing the loop to another thread and
+  back cost a short run's time again; this costs two system calls. A byte
+  meant for a wake-up descriptor installed before (asyncio's) is passed on.
+- A run that reports progress (``tick``) runs on the process's one worker
+  thread while the main thread waits, turning the first Ctrl-C into the flag
+  and calling ``tick()`` (as :func:`hybrid.simulation.interrupts.sigint_watch`
+  does for the reference engine).
+
+The watcher and the worker are started once per process (again after a fork).
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import queue
+import signal
 import threading
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from hybrid.simulation.interrupts import sigint_watch
+from hybrid.simulation.interrupts import _ACTIVE, note_interrupt, sigint_watch
 
 __all__ = ["TICK", "run_in_worker"]
 
@@ -36,7 +52,9 @@ def run_in_worker(
 ) -> bool:
     """Run ``call(flag)``; with ``handle_sigint`` a first Ctrl-C sets ``flag``. True if it did.
 
-    With ``handle_sigint`` or ``tick`` in the main thread, ``call`` runs on the
+    With ``handle_sigint`` in the main thread and no ``tick``, ``call`` runs
+    here while the watcher thread turns Ctrl-C into the flag (:func:`_run_here`).
+    With ``tick`` in the main thread, ``call`` runs on the
     process's worker thread (:func:`_worker_jobs`) while the main thread waits,
     turning Ctrl-C into the flag (see the module's docstring) and calling
     ``tick()`` every :data:`TICK` seconds (progress read from the run's arrays).
@@ -52,6 +70,8 @@ def run_in_worker(
     if not (handle_sigint or tick is not None) or not main:
         call(flag)
         return False
+    if tick is None:
+        return _run_here(call, flag)
     done: _Done = queue.SimpleQueue()
     with sigint_watch(handle_sigint) as interrupted:
         _worker_jobs().put((call, flag, done))
@@ -74,6 +94,89 @@ def run_in_worker(
     if error is not None:
         raise error
     return bool(flag[0])
+
+
+def _run_here(call: Callable[[NDArray[np.int64]], None], flag: NDArray[np.int64]) -> bool:
+    """``call(flag)`` in the main thread, a Ctrl-C meanwhile setting ``flag`` (the watcher).
+
+    Inside a command's :class:`~hybrid.simulation.interrupts.Interrupts` its
+    handler sees each Ctrl-C as the loop returns; outside one a handler of
+    this run's own counts them (what :func:`~hybrid.simulation.interrupts.sigint_watch`
+    does, without its context managers: they cost more than a short run's signal handling).
+    """
+    active = _ACTIVE[-1] if _ACTIVE else None
+    if active is not None and active.requested:
+        flag[0] = 1
+    write_end = _watcher()
+    presses = [0]
+    previous: Any = None
+    if active is None:
+
+        def count(signum: int, frame: Any) -> None:
+            presses[0] += 1
+            note_interrupt()
+
+        previous = signal.signal(signal.SIGINT, count)
+    try:
+        _WATCHED[0] = flag
+        try:
+            before = signal.set_wakeup_fd(write_end, warn_on_full_buffer=False)
+        except ValueError:  # not the main interpreter: no wake-up descriptor to borrow
+            _WATCHED[0] = None
+            call(flag)
+        else:
+            _FORWARD[0] = before
+            try:
+                call(flag)
+            finally:
+                signal.set_wakeup_fd(before, warn_on_full_buffer=False)
+                _FORWARD[0] = -1
+                _WATCHED[0] = None
+    finally:
+        if active is None:
+            signal.signal(signal.SIGINT, previous)
+    if presses[0] or (active is not None and active.requested):  # its handler has run by now
+        flag[0] = 1
+    return bool(flag[0])
+
+
+_WATCHED: list[NDArray[np.int64] | None] = [None]
+"""The flag of the run in progress in the main thread, which the watcher sets on Ctrl-C."""
+_FORWARD: list[int] = [-1]
+"""The wake-up descriptor installed before the run's (asyncio's, say): bytes passed on to it."""
+_WATCHER: list[tuple[int, int, int]] = []
+"""``(pid, read end, write end)`` of this process's watcher's pipe."""
+
+
+def _watcher() -> int:
+    """The write end of the pipe whose bytes the watcher thread turns into the run's flag."""
+    with _WORKER_LOCK:
+        if _WATCHER and _WATCHER[0][0] == os.getpid():
+            return _WATCHER[0][2]
+        read_end, write_end = os.pipe()
+        os.set_blocking(write_end, False)
+        threading.Thread(target=_watch, args=(read_end,), name="hybrid-sigint", daemon=True).start()
+        _WATCHER[:] = [(os.getpid(), read_end, write_end)]
+        return write_end
+
+
+def _watch(read_end: int) -> None:
+    """The watcher: each byte is a signal; set the flag of the run in progress."""
+    while True:
+        try:
+            data = os.read(read_end, 64)
+        except OSError:
+            return
+        if not data:
+            return
+        if signal.SIGINT in data:
+            flag = _WATCHED[0]
+            if flag is not None:
+                flag[0] = 1
+        forward = _FORWARD[0]
+        if forward >= 0:
+            with contextlib.suppress(OSError):
+                os.write(forward, data)
 
 
 def _run_beside(
@@ -127,6 +230,13 @@ def _reset_after_fork() -> None:
     global _WORKER_LOCK
     _WORKER_LOCK = threading.Lock()
     _WORKER.clear()
+    for _, read_end, write_end in _WATCHER:  # the parent's; the child makes its own
+        for end in (read_end, write_end):
+            with contextlib.suppress(OSError):
+                os.close(end)
+    _WATCHER.clear()
+    _WATCHED[0] = None
+    _FORWARD[0] = -1
 
 
 os.register_at_fork(after_in_child=_reset_after_fork)

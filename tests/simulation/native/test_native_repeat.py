@@ -16,6 +16,7 @@ import pickle
 import subprocess
 import sys
 import threading
+from typing import Any
 
 import numpy as np
 import pytest
@@ -325,3 +326,46 @@ def test_an_abandoned_run_does_not_hold_up_the_next() -> None:
     assert ran == [0]
     assert not finished.is_set()  # the abandoned run still waits; the next one did not
     release.set()
+
+
+def test_a_run_in_the_main_thread_is_stopped_by_ctrl_c_through_the_watcher() -> None:
+    """The loop runs in the main thread; Python's handler cannot run until it returns, so
+    the watcher thread sets its flag (from the signal wake-up pipe); a wake-up descriptor
+    installed before (asyncio's) still receives the signal and is restored."""
+    import os
+    import signal
+    import time
+
+    from hybrid.simulation.native.worker import run_in_worker
+
+    seen: list[float] = []
+
+    def loop(flag: Any) -> None:  # polls its flag as the compiled loop does at every step
+        start = time.monotonic()
+        while not flag[0] and time.monotonic() - start < 20.0:
+            time.sleep(0.01)
+        seen.append(time.monotonic() - start)
+
+    theirs_read, theirs_write = os.pipe()
+    os.set_blocking(theirs_write, False)
+    old = signal.set_wakeup_fd(theirs_write)
+    try:
+        threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT)).start()
+        assert run_in_worker(loop, True) is True
+        assert signal.set_wakeup_fd(theirs_write) == theirs_write  # theirs again after the run
+        assert seen and seen[0] < 10.0
+        passed_on = b""
+        for _ in range(200):  # the watcher passes it on right after setting the flag
+            os.set_blocking(theirs_read, False)
+            try:
+                passed_on += os.read(theirs_read, 64)
+            except BlockingIOError:
+                time.sleep(0.01)
+            if passed_on:
+                break
+        assert signal.SIGINT in passed_on
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.set_wakeup_fd(old)
+        os.close(theirs_read)
+        os.close(theirs_write)

@@ -1,0 +1,80 @@
+"""``backend="auto"`` for a campaign: compiled when it pays for its compile, and a note saying so.
+
+:func:`resolve_backend` turns a plan's ``auto`` into ``scipy`` or ``compiled``
+(:func:`hybrid.simulation.native.choice.choose`: compiled when the model and the
+kernel are in the compiled cache, or when the campaign's runs save more than
+compiling costs, one scipy run of its first point timed to know), and warns a
+:class:`BackendNote` with the choice and its reason (the command line prints
+it as ``hybrid: note: backend auto: ...``). The table's metadata and a resumed
+campaign's fingerprint keep ``auto``: a campaign resumed once the model is
+cached may finish on the other backend.
+
+Examples
+--------
+>>> import hybrid, warnings
+>>> from hybrid.campaigns.runs import RunPlan
+>>> ball = hybrid.load("specs/bouncing_ball.yaml")
+>>> plan = RunPlan(t_end=3.0, solver={"method": "LSODA"}, backend="auto")
+>>> with warnings.catch_warnings(record=True) as notes:
+...     warnings.simplefilter("always")
+...     chosen = resolve_backend(ball, [{"e": 0.5}], plan)
+>>> chosen.backend, chosen.requested, str(notes[0].message)
+('scipy', 'auto', "backend auto: scipy (method 'LSODA' is the scipy backend's)")
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import Any
+
+from hybrid.campaigns.executors import Executor, InProcess, LocalPool
+from hybrid.campaigns.runs import RunPlan, run_point
+from hybrid.campaigns.targets import split
+from hybrid.errors import Note
+
+__all__ = ["BackendNote", "resolve_backend", "settle"]
+
+
+class BackendNote(Note):
+    """Which backend ``auto`` chose for a campaign, and why."""
+
+
+def resolve_backend(model: Any, points: Sequence[dict[str, float]], plan: RunPlan,
+                    runs: int | None = None) -> RunPlan:  # fmt: skip
+    """``plan`` with ``backend="auto"`` resolved (others as they are); ``runs``: how many
+    the campaign makes (default: one per point)."""
+    if plan.backend != "auto":
+        return plan
+    from hybrid.simulation.native.choice import choose
+
+    held = bool(plan.inputs) or any(split(point).inputs for point in points)
+
+    def run_s() -> float:  # one scipy run of the first point (its row is not kept)
+        start = time.process_time()
+        run_point(model, 0, points[0], replace(plan, backend="scipy"))
+        return time.process_time() - start
+
+    choice = choose(model, len(points) if runs is None else runs,
+                    method=str(plan.solver.get("method", "RK45")), inputs=held,
+                    run_s=run_s if points else None)  # fmt: skip
+    warnings.warn(BackendNote(f"backend auto: {choice.backend} ({choice.reason})"), stacklevel=2)
+    return replace(plan, backend=choice.backend, requested="auto")
+
+
+def settle(model: Any, points: Sequence[dict[str, float]], plan: RunPlan, executor: Executor,
+           runs: int | None = None) -> tuple[RunPlan, Executor]:  # fmt: skip
+    """The plan (``auto`` resolved, :func:`resolve_backend`) and the executor that runs it.
+
+    A compiled campaign on local worker processes runs in this process
+    instead: its batches are ensembles (:func:`hybrid.simulate_many`) that use
+    every core already, and each worker process would import numba and load the
+    compiled code first (a sweep of 1,000 thermostat points took 2.9 s on two
+    warm workers, 0.24 s of CPU here). A Dask scheduler is kept as it is.
+    """
+    plan = resolve_backend(model, points, plan, runs)
+    if plan.backend == "compiled" and isinstance(executor, LocalPool):
+        return plan, InProcess()
+    return plan, executor

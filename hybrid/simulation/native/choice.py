@@ -1,0 +1,125 @@
+"""``backend="auto"``: the compiled backend where it pays for its compile, else scipy, and why.
+
+A compiled run costs about 1/80 of a scipy run (docs/performance.md), but the
+first one on a machine compiles the kernel (about 8 s on the benchmark
+machine) and each new model structure (its estimated seconds, from its
+generated source's size), and a process that finds both in the cache still
+spends about 0.9 s of CPU importing numba and loading them: more than a short
+scipy run costs. :func:`choose` runs compiled when:
+
+- the model and the kernel are already loaded in this process;
+- or the campaign's runs are expected to save more than loading (and, what is
+  not in the cache, compiling) costs: ``runs * run_s`` (one scipy run of the
+  model, timed by the caller) above :data:`LOAD_S` plus the compile estimate;
+
+and scipy when the compiled backend cannot run the campaign (numba missing, a
+method other than RK45, inputs given as Python functions or expressions) or
+when it does not pay. The :class:`Choice` says which and why, in words a
+command line prints.
+
+Examples
+--------
+>>> choose(None, 10, method="LSODA")
+Choice(backend='scipy', reason="method 'LSODA' is the scipy backend's")
+>>> choose(None, 10, inputs=True)
+Choice(backend='scipy', reason='inputs are held by expressions (the scipy backend)')
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from hybrid.errors import HybridError
+
+__all__ = ["KERNEL_COMPILE_S", "LOAD_S", "Choice", "cached", "choose"]
+
+KERNEL_COMPILE_S = 8.0
+"""Seconds a first process on a machine spends compiling the kernel (bench: 7.7 s, 2 cores)."""
+LOAD_S = 0.9
+"""CPU seconds a process spends importing numba and loading a cached kernel and model
+(``hybrid simulate`` of the thermostat, whole process: 1.81 s compiled, 0.93 s scipy)."""
+COMPILED_SHARE = 1.0 / 50.0
+"""A compiled run's time as a share of a scipy run's (measured 1/75 to 1/100: rounded up)."""
+
+
+@dataclass(frozen=True)
+class Choice:
+    """The backend chosen and why (one clause)."""
+
+    backend: str
+    reason: str
+
+
+def cached(model: Any) -> tuple[str, str, float]:
+    """``(model, kernel, model compile estimate s)``: each ``"loaded"`` (in this process),
+    ``"cached"`` (sealed in the cache, :mod:`~hybrid.simulation.native.cache`) or ``"missing"``.
+
+    Generates the model's source (no numba import).
+    """
+    from hybrid.simulation.native.cache import _LOADED, cache_key, cache_root
+    from hybrid.simulation.native.kernel_text import kernel_module
+    from hybrid.simulation.native.source import generate
+    from hybrid.simulation.native.structure import NativeModel
+
+    version = _numba_version()
+    generated = generate(NativeModel(model))
+    keys = [cache_key(generated, version), cache_key(kernel_module(), version)]
+    found = [
+        "loaded" if key in _LOADED else "cached" if _sealed(cache_root() / key) else "missing"
+        for key in keys
+    ]
+    return found[0], found[1], generated.compile_estimate
+
+
+def choose(model: Any, runs: int, *, method: str = "RK45", inputs: bool = False,
+           run_s: Callable[[], float] | None = None) -> Choice:  # fmt: skip
+    """The backend for ``runs`` runs of ``model`` (see the module docstring).
+
+    ``inputs``: whether the runs hold inputs (the compiled backend refuses
+    them); ``run_s()``: CPU seconds of one scipy run of the model, called only
+    when nothing is to be loaded or compiled (None: unknown; then compiled
+    only if the compiled code is loaded in this process already).
+    """
+    if method != "RK45":
+        return Choice("scipy", f"method '{method}' is the scipy backend's")
+    if inputs:
+        return Choice("scipy", "inputs are held by expressions (the scipy backend)")
+    if importlib.util.find_spec("numba") is None:
+        return Choice("scipy", "numba is not installed")
+    held = sys.modules.get("hybrid.simulation.native.cache")
+    if run_s is None and (held is None or not held._LOADED):  # nothing compiled is loaded here
+        return Choice("scipy", f"one run: loading compiled code (about {LOAD_S:.1f} s) "
+                               "would cost more than it saves")  # fmt: skip
+    try:
+        model_state, kernel_state, estimate = cached(model)
+    except HybridError as exc:  # a model the compiled backend refuses
+        return Choice("scipy", f"the compiled backend cannot run it: {exc}")
+    if model_state == kernel_state == "loaded":
+        return Choice("compiled", "the compiled model is loaded in this process")
+    compiling = (KERNEL_COMPILE_S if kernel_state == "missing" else 0.0) + (
+        estimate if model_state == "missing" else 0.0
+    )
+    cost = LOAD_S + compiling
+    what = f"compiling and loading (about {cost:.0f} s)" if compiling else (
+        f"loading the cached compiled code (about {cost:.1f} s)"
+    )  # fmt: skip
+    if run_s is None:
+        return Choice("scipy", f"one run: {what} would cost more than it saves")
+    saved = runs * run_s() * (1.0 - COMPILED_SHARE)
+    verdict = "compiled" if saved > cost else "scipy"
+    return Choice(verdict, f"{runs} runs would save about {saved:.1f} s; {what}")
+
+
+def _sealed(directory: Path) -> bool:
+    return (directory / "manifest.json").is_file()
+
+
+def _numba_version() -> str:
+    from importlib.metadata import version
+
+    return version("numba")

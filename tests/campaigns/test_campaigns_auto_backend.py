@@ -1,0 +1,118 @@
+"""``backend="auto"`` for campaigns: compiled when cached or when the runs pay for the compile."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import pytest
+from support import SPECS, read_csv, run_cli
+
+import hybrid
+from hybrid.campaigns.choosing import BackendNote
+from hybrid.simulation.native import choice
+from hybrid.simulation.native.choice import KERNEL_COMPILE_S, LOAD_S, cached, choose
+
+pytest.importorskip("numba")
+THERMO = hybrid.load(SPECS / "thermostat.yaml")
+
+
+def test_the_choice_weighs_the_runs_against_loading_and_compiling(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    ten_ms = lambda: 0.01  # noqa: E731 (one scipy run's CPU seconds)
+    monkeypatch.setattr(choice, "cached", lambda model: ("missing", "cached", 1.0))
+    # 1000 runs of 10 ms save 1000 * 0.01 * (1 - 1/50) = 9.8 s > LOAD_S + 1.0 s
+    chosen = choose(THERMO, 1000, run_s=ten_ms)
+    assert chosen.backend == "compiled" and chosen.reason.startswith("1000 runs would save about 9.8 s")
+    assert choose(THERMO, 100, run_s=ten_ms).backend == "scipy"  # 0.98 s < LOAD_S + 1.0 s
+    monkeypatch.setattr(choice, "cached", lambda model: ("missing", "missing", 1.0))
+    runs = int((LOAD_S + KERNEL_COMPILE_S + 1.0) / (0.01 * (1 - 1 / 50))) + 1
+    assert choose(THERMO, runs, run_s=ten_ms).backend == "compiled"
+    assert choose(THERMO, runs - 2, run_s=ten_ms).backend == "scipy"
+    monkeypatch.setattr(choice, "cached", lambda model: ("cached", "cached", 1.0))
+    assert choose(THERMO, 1).backend == "scipy"  # one run of unknown length: loading costs more
+    enough = int(LOAD_S / (0.01 * (1 - 1 / 50))) + 1
+    assert choose(THERMO, enough, run_s=ten_ms).backend == "compiled"
+    assert choose(THERMO, enough - 2, run_s=ten_ms).backend == "scipy"
+    monkeypatch.setattr(choice, "cached", lambda model: ("loaded", "loaded", 1.0))
+    timed: list[int] = []
+    loaded = choose(THERMO, 1, run_s=lambda: timed.append(1) or 0.0)
+    assert loaded.backend == "compiled" and not timed  # nothing to load: nothing timed
+
+
+def test_the_cache_is_read_from_the_manifests(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from hybrid.simulation.native import cache
+
+    monkeypatch.setenv(cache.CACHE_ENV, str(tmp_path))
+    monkeypatch.setattr(cache, "_LOADED", {})
+    assert cached(THERMO)[:2] == ("missing", "missing")
+    from importlib.metadata import version
+
+    from hybrid.simulation.native.kernel_text import kernel_module
+
+    kernel = tmp_path / cache.cache_key(kernel_module(), version("numba"))
+    kernel.mkdir()
+    (kernel / cache.MANIFEST).write_text("{}")
+    assert cached(THERMO)[:2] == ("missing", "cached")
+
+
+def test_a_short_sweep_with_an_empty_cache_runs_on_scipy_and_says_so(tmp_path: Path) -> None:
+    with warnings.catch_warnings(record=True) as notes:
+        warnings.simplefilter("always")
+        with pytest.MonkeyPatch.context() as m:
+            from hybrid.simulation.native import cache
+
+            m.setenv("HYBRID_NATIVE_CACHE", str(tmp_path / "empty"))
+            m.setattr(cache, "_LOADED", {})  # as in a process that has loaded nothing compiled
+            auto = hybrid.sweep(THERMO, 50.0, grid={"T_high": [21.0, 22.0]}, workers=0,
+                                summaries=("jump_t:1",), backend="auto", handle_sigint=False)  # fmt: skip
+    said = [str(n.message) for n in notes if issubclass(n.category, BackendNote)]
+    assert len(said) == 1 and said[0].startswith("backend auto: scipy (2 runs would save")
+    scipy = hybrid.sweep(THERMO, 50.0, grid={"T_high": [21.0, 22.0]}, workers=0,
+                         summaries=("jump_t:1",), handle_sigint=False)  # fmt: skip
+    assert auto.rows == scipy.rows
+
+
+def test_the_command_line_takes_auto_and_prints_its_choice(tmp_path: Path) -> None:
+    out = tmp_path / "sweep.csv"
+    done = run_cli("sweep", SPECS / "thermostat.yaml", "--t-end", "20", "--grid", "T_high=21:22:2",
+                   "--backend", "auto", "--method", "LSODA", "--out", out)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "hybrid: note: backend auto: scipy (method 'LSODA' is the scipy backend's)" in done.stderr
+    _, rows = read_csv(out)
+    assert len(rows) == 2
+
+
+def test_simulate_auto_runs_one_run_on_scipy_unless_loaded(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("HYBRID_NATIVE_CACHE", str(tmp_path / "cache"))
+    args = ("simulate", SPECS / "thermostat.yaml", "--t-end", "30")
+    auto = run_cli(*args, "--backend", "auto", "--events", tmp_path / "auto.json")
+    assert auto.returncode == 0, auto.stderr
+    assert "note: backend auto: scipy (one run: loading compiled code" in auto.stderr
+    assert run_cli(*args, "--events", tmp_path / "scipy.json").returncode == 0
+    assert (tmp_path / "auto.json").read_text() == (tmp_path / "scipy.json").read_text()
+    assert not (tmp_path / "cache").exists()  # nothing compiled
+
+
+def test_a_compiled_campaign_on_local_workers_runs_in_this_process() -> None:
+    from hybrid.campaigns.choosing import settle
+    from hybrid.campaigns.executors import InProcess, LocalPool
+    from hybrid.campaigns.runs import RunPlan
+
+    pool = LocalPool(2)
+    plan, executor = settle(THERMO, [{"T_high": 22.0}], RunPlan(t_end=1.0, backend="compiled"), pool)
+    assert plan.backend == "compiled" and isinstance(executor, InProcess)
+    plan, executor = settle(THERMO, [{"T_high": 22.0}], RunPlan(t_end=1.0), pool)
+    assert plan.backend == "scipy" and executor is pool  # scipy runs keep their processes
+    # the same rows either way (each point one ensemble row in this process)
+    grid = {"T_high": [21.0, 22.0, 23.0]}
+    tables = [hybrid.sweep(THERMO, 60.0, grid=grid, summaries=("jump_t:2",), workers=w,
+                           backend="compiled", handle_sigint=False) for w in (0, 2)]  # fmt: skip
+    assert tables[0].rows == tables[1].rows
+    # T_high = 22: cooling 20 -> 18 in 10 ln(10/8), heating 18 -> 22 in 10 ln(12/8)
+    import math
+
+    assert abs(tables[0].rows[1]["jump_t:2"] - 10 * (math.log(10 / 8) + math.log(12 / 8))) < 1e-5

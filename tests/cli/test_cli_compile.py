@@ -1,0 +1,37 @@
+"""``hybrid compile FILE...``: the compiled backend's cache filled ahead of the runs."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from support import SPECS, assert_no_traceback, run_cli
+
+import hybrid
+
+pytest.importorskip("numba")
+
+
+def test_compile_leaves_the_model_and_the_kernels_in_the_cache() -> None:
+    from hybrid.simulation.native.choice import cached
+
+    files = [SPECS / "thermostat.yaml", SPECS / "bouncing_ball.yaml"]
+    done = run_cli("compile", *files, timeout=900)  # a cold cache compiles the kernel
+    assert done.returncode == 0, done.stderr
+    lines = done.stderr.splitlines()
+    assert len(lines) == 2
+    for line, path in zip(lines, files, strict=True):
+        assert line.startswith(f"{path}: ") and (" compiled" in line or "found in the cache" in line)
+    for path in files:  # sealed on disk (or loaded already by this test session)
+        assert set(cached(hybrid.load(path))[:2]) <= {"cached", "loaded"}
+    again = run_cli("compile", files[0])
+    assert again.returncode == 0 and "found in the cache" in again.stderr
+
+
+def test_compile_refuses_an_invalid_file_with_its_position(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("automaton: a\nstate: {x: {}}\nlocations: {l: {flow: {x: y +}}}\n")
+    done = run_cli("compile", bad)
+    assert done.returncode == 2
+    assert_no_traceback(done.stderr)
+    assert done.stderr.startswith(f"{bad}:3:")

@@ -1,0 +1,60 @@
+"""The floor the compiled backend is measured against (bench/floor.py) meets the closed forms.
+
+Its loop runs as plain Python here (``NUMBA_DISABLE_JIT=1`` in a fresh
+interpreter): the same code numba compiles for the benchmark, checked in
+milliseconds instead of a compile of many seconds.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[3]
+
+_CODE = """
+import json
+import numpy as np
+from bench import floor
+_, ball = floor.single(floor.BALL, np.array([9.81, 0.95]), np.array([10.0, 0.0]), 1e3, 40)
+p = np.array([0.1, 10.0, 30.0, 18.0, 22.0])
+_, thermo = floor.single(floor.THERMOSTAT, p, np.array([20.0]), 1e4, 20)
+times, counts = floor.ensemble(p, np.array([20.0, 21.0]), 1e4, 3)
+print(json.dumps({"ball": ball.tolist(), "thermo": thermo.tolist(), "many": times.tolist(),
+                  "counts": counts.tolist()}))
+"""
+
+
+def _floor() -> dict[str, list[list[float]]]:
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "PYTHONPATH": str(ROOT)}
+    out = subprocess.run([sys.executable, "-c", _CODE], capture_output=True, text=True, env=env,
+                         cwd=ROOT, check=True, timeout=120)  # fmt: skip
+    result: dict[str, list[list[float]]] = json.loads(out.stdout.splitlines()[-1])
+    return result
+
+
+def test_floor_meets_the_closed_forms() -> None:
+    got = _floor()
+    # the ball: first impact at t1 = sqrt(2 h0 / g), then flights of 2 e^k t1; v := -e v
+    t1, e = math.sqrt(2 * 10.0 / 9.81), 0.95
+    impacts = [t1 * (1 + 2 * sum(e**i for i in range(1, k))) for k in range(1, 41)]
+    ball = got["ball"]
+    assert len(ball) == 40
+    for (t, h, v, h_after, v_after), exact in zip(ball, impacts, strict=True):
+        assert abs(t - exact) < 1e-9
+        assert abs(h) < 1e-9 and h_after == 0.0 and v < 0 and v_after == -e * v
+    # the thermostat: 20 -> 18 cooling, then 18 <-> 22 each in 10 ln(12/8)
+    switches = [10 * math.log(10 / 8) + k * 10 * math.log(12 / 8) for k in range(20)]
+    thermo = got["thermo"]
+    assert len(thermo) == 20
+    for k, ((t, before, _), exact) in enumerate(zip(thermo, switches, strict=True)):
+        assert abs(t - exact) < 1e-6
+        assert abs(before - (18.0 if k % 2 == 0 else 22.0)) < 1e-8
+    # the ensemble: each run as alone; from 21 the first switch is at 10 ln(11/8)
+    assert got["counts"] == [3, 3]
+    assert max(abs(a - b) for a, b in zip(got["many"][0], switches[:3], strict=True)) < 1e-8
+    assert abs(got["many"][1][0] - 10 * math.log(11 / 8)) < 1e-8
