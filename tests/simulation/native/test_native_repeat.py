@@ -303,7 +303,10 @@ def test_ctrl_c_ends_compiled_runs_as_interrupted_and_the_next_run_normally() ->
 
 
 def test_an_abandoned_run_does_not_hold_up_the_next() -> None:
-    """A second Ctrl-C abandons a run still in the worker; the next run does not wait for it."""
+    """A second Ctrl-C abandons a run still in the worker; the next run does not wait for it.
+
+    (A run with progress runs on the worker thread: ``tick`` given; one without runs in
+    the main thread, where nothing is left behind to abandon.)"""
     import _thread
 
     from hybrid.simulation.interrupts import Interrupts
@@ -320,9 +323,9 @@ def test_an_abandoned_run_does_not_hold_up_the_next() -> None:
     with stop.installed(), stop.writing():
         threading.Timer(0.2, _thread.interrupt_main).start()
         with pytest.raises(KeyboardInterrupt):
-            run_in_worker(lambda flag: stuck(), True)  # ignores its flag
+            run_in_worker(lambda flag: stuck(), True, tick=lambda: None)  # ignores its flag
     ran: list[int] = []
-    assert run_in_worker(lambda flag: ran.append(int(flag[0])), True) is False
+    assert run_in_worker(lambda flag: ran.append(int(flag[0])), True, tick=lambda: None) is False
     assert ran == [0]
     assert not finished.is_set()  # the abandoned run still waits; the next one did not
     release.set()
