@@ -57,19 +57,26 @@ def compare(
     repeats: int = 9,
     inner: int = 1,
     warmup: int = 1,
+    timer: Callable[[Callable[[], Any], int], float] | None = None,
+    per: int = 1,
 ) -> Comparison:
-    """Time ``contender`` and ``baseline`` alternately; ratios are contender / baseline."""
+    """Time ``contender`` and ``baseline`` alternately; ratios are contender / baseline.
+
+    ``timer(fn, inner)`` gives the seconds of one call (wall time by default,
+    :func:`time_call`); times are divided by ``per`` (runs a call makes).
+    """
+    timer = timer or time_call
     for _ in range(warmup):
         contender[1]()
         baseline[1]()
     ratios, c_times, b_times = [], [], []
     for r in range(repeats):
         if r % 2 == 0:
-            b = time_call(baseline[1], inner)
-            c = time_call(contender[1], inner)
+            b = timer(baseline[1], inner) / per
+            c = timer(contender[1], inner) / per
         else:
-            c = time_call(contender[1], inner)
-            b = time_call(baseline[1], inner)
+            c = timer(contender[1], inner) / per
+            b = timer(baseline[1], inner) / per
         ratios.append(c / b)
         c_times.append(c)
         b_times.append(b)

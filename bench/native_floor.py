@@ -23,7 +23,6 @@ threads of the process), medians over the repeats:
 from __future__ import annotations
 
 import json
-import statistics
 import subprocess
 import sys
 import time
@@ -35,7 +34,7 @@ import numpy as np
 
 import hybrid
 from bench import floor
-from bench.harness import Comparison
+from bench.harness import Comparison, compare
 
 __all__ = ["ensemble", "memory", "run", "single_runs", "sweep"]
 
@@ -57,30 +56,7 @@ def _compare(name: str, contender: tuple[str, Callable[[], Any]],
              baseline: tuple[str, Callable[[], Any]], repeats: int, inner: int = 1,
              per: int = 1) -> Comparison:  # fmt: skip
     """CPU seconds (per ``per`` runs) of both, interleaved; ratios contender / baseline."""
-    contender[1]()
-    baseline[1]()
-    ratios, c_times, b_times = [], [], []
-    for r in range(repeats):
-        if r % 2 == 0:
-            b = _cpu(baseline[1], inner) / per
-            c = _cpu(contender[1], inner) / per
-        else:
-            c = _cpu(contender[1], inner) / per
-            b = _cpu(baseline[1], inner) / per
-        ratios.append(c / b)
-        c_times.append(c)
-        b_times.append(b)
-    return Comparison(
-        name=name,
-        contender=contender[0],
-        baseline=baseline[0],
-        ratio_median=statistics.median(ratios),
-        ratio_min=min(ratios),
-        ratio_max=max(ratios),
-        contender_median_s=statistics.median(c_times),
-        baseline_median_s=statistics.median(b_times),
-        repeats=repeats,
-    )
+    return compare(name, contender, baseline, repeats=repeats, inner=inner, timer=_cpu, per=per)
 
 
 def single_runs(repeats: int = 9) -> list[Comparison]:
