@@ -30,9 +30,9 @@ from collections.abc import Sequence
 from typing import Any
 
 from hybrid.campaigns.executors import Executor, Failed, OnResult, Stop, _failed, guided_size
+from hybrid.campaigns.jobs import Job, execute
 from hybrid.campaigns.payload import Payload
 from hybrid.campaigns.runs import RunPlan
-from hybrid.campaigns.worker import Job, execute
 from hybrid.errors import UsageError
 from hybrid.version import install_hint
 

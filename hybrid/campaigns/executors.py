@@ -1,6 +1,6 @@
 """Where a campaign's jobs run: in this process, or in local worker processes.
 
-Every executor takes the same jobs (:mod:`~hybrid.campaigns.worker`) and hands
+Every executor takes the same jobs (:mod:`~hybrid.campaigns.jobs`) and hands
 each result to ``on_result(index, result)`` as soon as it exists, in whatever
 order the jobs finish; the campaign sorts by index, so the table does not
 depend on the executor, the number of workers or the order of completion.
@@ -53,9 +53,9 @@ from multiprocessing.connection import Connection, wait
 from types import TracebackType
 from typing import Any
 
+from hybrid.campaigns.jobs import Job, execute, serve
 from hybrid.campaigns.payload import Payload
 from hybrid.campaigns.runs import RunPlan
-from hybrid.campaigns.worker import Job, execute, serve
 
 __all__ = ["Executor", "InProcess", "LocalPool", "default_workers", "guided_size"]
 
@@ -176,7 +176,7 @@ class LocalPool(Executor):
             "forkserver" if "forkserver" in methods else "spawn"
         )
         if "forkserver" in methods:
-            self.context.set_forkserver_preload(["hybrid.campaigns.worker"])
+            self.context.set_forkserver_preload(["hybrid.campaigns.jobs"])
 
     def start(self, payload: Payload, plan: RunPlan) -> None:
         self.payload, self.plan = payload, plan

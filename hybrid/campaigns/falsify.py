@@ -9,7 +9,7 @@ executors as a sweep:
    ``scipy.stats.qmc``), run in rounds of :data:`ROUND` points. After each
    round, the lowest-numbered violating point, if any, ends the search.
 2. **Local.** The rest of the budget is shared by ``starts`` bounded
-   Nelder-Mead searches (:mod:`~hybrid.campaigns.search`) from the lowest
+   Nelder-Mead searches (:mod:`~hybrid.campaigns.local_search`) from the lowest
    robustness points of the global phase, run side by side (one job each); each
    stops at its first violation.
 
@@ -29,6 +29,7 @@ from typing import Any
 
 from hybrid.campaigns.choosing import settle
 from hybrid.campaigns.executors import Executor
+from hybrid.campaigns.local_search import objective
 from hybrid.campaigns.payload import pack
 from hybrid.campaigns.runs import (
     RunPlan,
@@ -37,7 +38,6 @@ from hybrid.campaigns.runs import (
     requirement_columns,
     simulate_quietly,
 )
-from hybrid.campaigns.search import objective
 from hybrid.campaigns.space import SAMPLERS, Axis, ranges_axes, unit_samples
 from hybrid.campaigns.sweep import SOLVER_OPTIONS, executor_for, hard_limit
 from hybrid.campaigns.targets import Constant, check_names, free_inputs, split

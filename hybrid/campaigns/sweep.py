@@ -2,7 +2,7 @@
 
 The points are made here, in run order (:mod:`~hybrid.campaigns.space`), and
 never depend on the executor; each run's row comes back whenever it finishes
-and is kept by run number (:mod:`~hybrid.campaigns.store` writes it to disk in
+and is kept by run number (:mod:`~hybrid.campaigns.resumable` writes it to disk in
 chunks when the campaign has an ``out`` file), so the table is the same with
 one worker, many, or a Dask cluster. Ctrl-C stops the campaign cleanly: the
 rows finished are kept (on disk with ``out``), the table says it is
@@ -21,6 +21,7 @@ from typing import Any
 from hybrid.campaigns.choosing import settle
 from hybrid.campaigns.executors import Executor, InProcess, LocalPool, default_workers
 from hybrid.campaigns.payload import pack
+from hybrid.campaigns.resumable import LOST, ChunkStore
 from hybrid.campaigns.runs import (
     OUTCOME_COLUMNS,
     RunPlan,
@@ -37,7 +38,6 @@ from hybrid.campaigns.space import (
     ranges_axes,
     sample_points,
 )
-from hybrid.campaigns.store import LOST, ChunkStore
 from hybrid.campaigns.table import FAILED, SweepTable
 from hybrid.campaigns.targets import INPUT, check_names, free_inputs
 from hybrid.compose import System, as_system

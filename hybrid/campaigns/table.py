@@ -26,7 +26,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from hybrid.campaigns.store import write_whole
+from hybrid.campaigns.resumable import write_whole
 from hybrid.errors import UsageError
 from hybrid.version import install_hint
 

@@ -134,8 +134,8 @@ def run_sweep(args: argparse.Namespace) -> int:
     """The ``sweep`` command; returns the exit code."""
     from hybrid.analysis.formats import write
     from hybrid.campaigns.findings import sweep_findings, values_text
+    from hybrid.campaigns.resumable import parts_dir
     from hybrid.campaigns.space import parse_grid, parse_range
-    from hybrid.campaigns.store import parts_dir
     from hybrid.campaigns.sweep import sweep
     from hybrid.reader.loader import load
 

@@ -22,7 +22,7 @@ import pytest
 
 import hybrid
 from hybrid.campaigns.executors import Failed, InProcess, OnResult, Stop
-from hybrid.campaigns.store import LOST, ChunkStore
+from hybrid.campaigns.resumable import LOST, ChunkStore
 from hybrid.campaigns.sweep import sweep
 
 WAVE = """

@@ -2,7 +2,7 @@
 
 The counterpart of :meth:`hybrid.simulation.recorder.Recorder.run` (columns,
 jumps, segments); the names come from the model's
-:class:`~hybrid.simulation.native.layout.Layout`, the termination and its words
+:class:`~hybrid.simulation.native.names.Layout`, the termination and its words
 from :mod:`~hybrid.simulation.native.ending`.
 """
 
@@ -19,7 +19,7 @@ from hybrid.model import Automaton
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.ending import Inputs, termination_of
 from hybrid.simulation.native.jumps import jump_records
-from hybrid.simulation.native.layout import Layout
+from hybrid.simulation.native.names import Layout
 from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings

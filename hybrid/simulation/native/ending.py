@@ -19,7 +19,7 @@ import numpy as np
 from hybrid.compose import System
 from hybrid.model import Automaton
 from hybrid.simulation.native import buffers as b
-from hybrid.simulation.native.layout import Layout
+from hybrid.simulation.native.names import Layout
 from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Termination
 from hybrid.simulation.settings import Settings

@@ -7,7 +7,7 @@ processes), the run's parameter vector, initial point and mode are arguments,
 and the arrays the loop fills become a :class:`~hybrid.simulation.result.Run`.
 A run that fills its buffers is run again with four times the room. The
 first Ctrl-C sets a flag the loop reads at every step
-(:mod:`hybrid.simulation.native.worker`). What does not change between runs
+(:mod:`hybrid.simulation.native.interruptible`). What does not change between runs
 of one model (its structure, the loop's inputs, the run's arrays) is kept
 between calls, never stale: a short compiled run costs little more than its loop.
 """
@@ -32,14 +32,14 @@ from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import run_from
 from hybrid.simulation.native.cache import load_generated, require_numba, seal
+from hybrid.simulation.native.interruptible import run_in_worker
 from hybrid.simulation.native.kernel_text import kernel_module
 from hybrid.simulation.native.kernel_types import PIECES
-from hybrid.simulation.native.layout import Layout
 from hybrid.simulation.native.loop import lay_out_work
+from hybrid.simulation.native.names import Layout
 from hybrid.simulation.native.shares import compiling_beside
 from hybrid.simulation.native.source import generate
 from hybrid.simulation.native.structure import NativeModel
-from hybrid.simulation.native.worker import run_in_worker
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
 
@@ -335,10 +335,10 @@ def run_arrays(
     process keeps no longer run's room): the caller copies out what it keeps
     before the next run. A worker's arrays are always its own (after a second
     Ctrl-C an abandoned worker may still be writing). With ``handle_sigint`` the
-    loop runs here (:func:`~hybrid.simulation.native.worker.run_in_worker`).
+    loop runs here (:func:`~hybrid.simulation.native.interruptible.run_in_worker`).
     ``cfg``: ``config(settings)``.
     ``progress(t, jumps, points)`` is called in the calling thread while the
-    loop runs on another (:func:`~hybrid.simulation.native.worker.run_in_worker`),
+    loop runs on another (:func:`~hybrid.simulation.native.interruptible.run_in_worker`),
     with the time reached (never going back, also when a run is repeated with
     more room).
     """

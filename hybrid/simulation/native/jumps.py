@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hybrid.simulation.native import buffers as b
-from hybrid.simulation.native.layout import Layout
+from hybrid.simulation.native.names import Layout
 from hybrid.simulation.result import Jump
 
 __all__ = ["JumpRecords", "jump_records"]

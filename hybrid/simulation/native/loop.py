@@ -114,9 +114,9 @@ from hybrid.simulation.native.kernel_types import (
     at,
     function_at,
 )
-from hybrid.simulation.native.search import HORIZON_SAMPLES
+from hybrid.simulation.native.recording import finish, record_jump, record_point
 from hybrid.simulation.native.stay import STAY_EVENT, end_run, failed
-from hybrid.simulation.native.store import finish, record_jump, record_point
+from hybrid.simulation.native.step_search import HORIZON_SAMPLES
 
 __all__ = [
     "jump",

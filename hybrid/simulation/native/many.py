@@ -37,7 +37,7 @@ from hybrid.simulation.native.engine import (
     simulate_compiled,
 )
 from hybrid.simulation.native.features import refuse_requirements
-from hybrid.simulation.native.worker import run_in_worker
+from hybrid.simulation.native.interruptible import run_in_worker
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import MAX_JUMPS_PER_INSTANT, Settings
 

@@ -12,7 +12,7 @@ for step:
   the run at the last accepted point (``_gave_up``, ``nonfinite`` when the
   flow failed on the way); :data:`STALL_STEPS` steps that do not advance, or a
   crawl (``CRAWL_*``), end it as ``solver_failure``; then the step is searched
-  (:func:`~hybrid.simulation.native.search.first_event`) before it is
+  (:func:`~hybrid.simulation.native.step_search.first_event`) before it is
   recorded: an event ends the stay there (the points of the step before it,
   then the event point), and the transitions are decided
   (:func:`~hybrid.simulation.native.decide.enabled_at_event`; ``blocked`` if
@@ -90,8 +90,8 @@ from hybrid.simulation.native.kernel_types import (
     StepFn,
     at,
 )
-from hybrid.simulation.native.search import EV_FAILED, EV_NONE
-from hybrid.simulation.native.store import finish, record_point, record_step
+from hybrid.simulation.native.recording import finish, record_point, record_step
+from hybrid.simulation.native.step_search import EV_FAILED, EV_NONE
 from hybrid.simulation.native.watch import watch_terms, watch_value
 
 __all__ = [

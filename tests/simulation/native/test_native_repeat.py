@@ -24,7 +24,7 @@ from support import REPO, SPECS
 
 import hybrid
 from hybrid.compose import as_system
-from hybrid.simulation.native.layout import PACKED_WIDTH, Layout
+from hybrid.simulation.native.names import PACKED_WIDTH, Layout
 from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Jump, Run
 from hybrid.simulation.start import describe_start
@@ -310,7 +310,7 @@ def test_an_abandoned_run_does_not_hold_up_the_next() -> None:
     import _thread
 
     from hybrid.simulation.interrupts import Interrupts
-    from hybrid.simulation.native.worker import run_in_worker
+    from hybrid.simulation.native.interruptible import run_in_worker
 
     release, finished = threading.Event(), threading.Event()
 
@@ -339,7 +339,7 @@ def test_a_run_in_the_main_thread_is_stopped_by_ctrl_c_through_the_watcher() -> 
     import signal
     import time
 
-    from hybrid.simulation.native.worker import run_in_worker
+    from hybrid.simulation.native.interruptible import run_in_worker
 
     seen: list[float] = []
 

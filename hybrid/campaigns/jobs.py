@@ -3,7 +3,7 @@
 A **job** is ``(index, task, argument)``: ``task`` names a function of this
 package (``"run"``: one run at a point, :func:`hybrid.campaigns.runs.run_point`;
 ``"search"``: a local search of falsification,
-:func:`hybrid.campaigns.search.local_search`), so a job pickles as a few names
+:func:`hybrid.campaigns.local_search.local_search`), so a job pickles as a few names
 and numbers. :func:`execute` runs a batch of jobs anywhere (this process, a
 local worker process, a Dask worker); :func:`serve` is the loop of a local
 worker process, which ignores Ctrl-C (the campaign's own process decides when
@@ -41,7 +41,7 @@ def _task(name: str) -> Any:
     if name == "run":
         return run_point
     if name == "search":
-        from hybrid.campaigns.search import local_search
+        from hybrid.campaigns.local_search import local_search
 
         return local_search
     raise ValueError(f"unknown task {name!r}")
