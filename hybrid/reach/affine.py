@@ -100,6 +100,7 @@ class Forms:
             for i, comp in enumerate(self.system.components)
             for name in comp.automaton.signal_names
         }
+        self._flows: dict[tuple[str, ...], tuple[Array, Array, Array]] = {}
 
     # --- one expression ---------------------------------------------------------------
 
@@ -172,7 +173,15 @@ class Forms:
     # --- flows, resets, conditions ----------------------------------------------------
 
     def flow(self, mode: tuple[str, ...]) -> tuple[Array, Array, Array]:
-        """``(A, B, c)`` of ``mode`` (a location per component)."""
+        """``(A, B, c)`` of ``mode`` (a location per component), read once (read-only arrays)."""
+        found = self._flows.get(mode)
+        if found is None:
+            found = self._flows[mode] = self._flow(mode)
+            for array in found:
+                array.flags.writeable = False
+        return found
+
+    def _flow(self, mode: tuple[str, ...]) -> tuple[Array, Array, Array]:
         n, m = len(self.variables), len(self.inputs)
         a, b, c = np.zeros((n, n)), np.zeros((n, m)), np.zeros(n)
         c[self.index[TIME]] = 1.0
