@@ -2,7 +2,7 @@
 
 Hylaa (``pip install hylaa swiglpk==5.0.10``; 5.0.12 and 5.0.13 break its LPs)
 needs none of hybrid: this script reads ``A``, ``B``, the input box, the
-initial box and one forbidden half-space ``g x >= r`` from an ``.npz`` file
+initial box and the forbidden set ``G x <= g`` (a conjunction) from an ``.npz`` file
 and prints one JSON line: Hylaa's verdict (a concrete error found or not), the
 CPU seconds of ``Core.run`` and the step. Hylaa's default mode checks the step
 points only (its continuous-time option bounds the error with a matrix norm).
@@ -31,7 +31,7 @@ def main(path: str) -> None:
     a, b = data["a"], data["b"]
     u_lo, u_hi = data["u_lo"], data["u_hi"]
     x_lo, x_hi = data["x_lo"], data["x_hi"]
-    row, rhs = data["row"], float(data["rhs"])
+    mat, rhs = np.atleast_2d(data["mat"]), np.atleast_1d(data["rhs"])
     step, t_end = float(data["step"]), float(data["t_end"])
     n, m = b.shape
     ha = HybridAutomaton()
@@ -42,7 +42,7 @@ def main(path: str) -> None:
     mode.set_inputs(csr_matrix(b), csr_matrix(u_mat), u_rhs, allow_constants=True)
     error = ha.new_mode("error")
     trans = ha.new_transition(mode, error)
-    trans.set_guard(csr_matrix(-row.reshape(1, n)), np.array([-rhs]))  # row . x >= rhs
+    trans.set_guard(csr_matrix(mat.reshape(-1, n)), rhs.astype(float))  # mat . x <= rhs
     init = lputil.from_box(list(zip(x_lo.tolist(), x_hi.tolist(), strict=True)), mode)
     settings = HylaaSettings(step, t_end)
     settings.plot.plot_mode = PlotSettings.PLOT_NONE
