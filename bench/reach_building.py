@@ -4,7 +4,7 @@ Part of ``make bench`` (:func:`run`; Hylaa in the same run when the environment
 variable ``HYBRID_BENCH_HYLAA`` names an interpreter with Hylaa installed), or
 alone::
 
-    OMP_NUM_THREADS=1 python -m bench.reach_building [--hylaa PYTHON] [--step H] [--spec-dir DIR]
+    OMP_NUM_THREADS=1 python -m bench.reach_building [--hylaa PYTHON] [--step H] [--instance BDU01] [--spec-dir DIR]
 
 The instance is imported from ``../shared/external-models/arch/building`` with
 :func:`hybrid.interchange.import_spaceex` (``--spec-dir`` takes a folder holding
@@ -181,9 +181,10 @@ def main() -> None:
     parser.add_argument("--spec-dir", type=Path, default=None)
     parser.add_argument("--step", type=float, action="append", default=None)
     parser.add_argument("--hylaa", metavar="PYTHON", help="an interpreter with hylaa installed")
+    parser.add_argument("--instance", action="append", choices=list(HORIZON), default=None)
     args = parser.parse_args()
     steps = args.step or [0.005, 0.01]
-    for name in HORIZON:
+    for name in args.instance or HORIZON:
         model = load_instance(name, args.spec_dir)
         for step in steps:
             m = measure(model, step, HORIZON[name])

@@ -155,10 +155,13 @@ def reach(
     )
 
 
-def _condition(forms: Forms, entry: Forbidden, mode: tuple[str, ...]) -> Condition:
+def _condition(
+    forms: Forms, entry: Forbidden, mode: tuple[str, ...], for_all: bool = False
+) -> Condition:
     """The entry's condition in ``mode`` over the reach vector (``true`` without ``when``).
 
-    Signals are read as ``mode``'s locations define them (a location may override one).
+    Signals are read as ``mode``'s locations define them (a location may override one);
+    inputs projected out as ``exists u`` (``for_all``: for every value).
     """
     n = len(forms.variables)
     if entry.when is None:
@@ -170,7 +173,7 @@ def _condition(forms: Forms, entry: Forbidden, mode: tuple[str, ...]) -> Conditi
             comp = names.index(name)
             break
     what = f"the forbidden set '{entry.text()}'"
-    return forms.condition(entry.when, comp, mode, entry.position, what)
+    return forms.condition(entry.when, comp, mode, entry.position, what, for_all=for_all)
 
 
 def _matches(forms: Forms, entry: Forbidden, mode: tuple[str, ...]) -> bool:
@@ -268,10 +271,8 @@ def _quick(
     for key, lo, hi in initial_boxes(forms):
         if not _matches(forms, entry, key):
             continue
-        cond = _condition(forms, entry, key)
-        found = refute(
-            forms, mode_of(forms, key), lo, hi, _within(cond, forms, t_end), t_end=t_end, step=step
-        )
+        every = _within(_condition(forms, entry, key, for_all=True), forms, t_end)
+        found = refute(forms, mode_of(forms, key), lo, hi, every, t_end=t_end, step=step)
         if found is None:
             continue
         candidate = found.candidate
@@ -288,7 +289,7 @@ def _quick(
             witness_time=found.at,
             witness_initial=candidate.initial,
             witness_inputs=dict(candidate.inputs),
-            condition=cond,
+            condition=_condition(forms, entry, key),
             replay=replay,
         )
     return None

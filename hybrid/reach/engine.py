@@ -104,6 +104,8 @@ class Mode:
     invariant: Condition
     transitions: tuple[Transition, ...]
     urgent: bool
+    invariant_all: Condition = ()
+    """The invariant where it holds for every input value (a witness's check)."""
 
 
 class _Modes:
@@ -122,17 +124,20 @@ class _Modes:
         forms, system = self.forms, self.forms.system
         a, b, c = forms.flow(key)
         invariant: Condition = (Rows(np.zeros((0, a.shape[0])), np.zeros(0)),)
+        invariant_all = invariant
         for i, comp in enumerate(system.components):
             loc = comp.automaton.locations[key[i]]
             what = f"the invariant of location '{system.qualified(i, loc.name)}'"
-            part = forms.condition(loc.invariant, i, key, loc.invariant_position, what)
+            where = loc.invariant_position
+            part = forms.condition(loc.invariant, i, key, where, what)
             invariant = _and(invariant, part)
+            every = forms.condition(loc.invariant, i, key, where, what, for_all=True)
+            invariant_all = _and(invariant_all, every)
         urgent = any(
             comp.automaton.locations[key[i]].urgent for i, comp in enumerate(system.components)
         )
-        return Mode(
-            key, system.mode_name(key), a, b, c, invariant, tuple(self._transitions(key)), urgent
-        )
+        name, transitions = system.mode_name(key), tuple(self._transitions(key))
+        return Mode(key, name, a, b, c, invariant, transitions, urgent, invariant_all)
 
     def _transitions(self, key: tuple[str, ...]) -> Iterator[Transition]:
         system = self.forms.system

@@ -28,9 +28,12 @@ returns is checked exactly, without a simulation:
   box hull of both, bloated by ``E_Omega |x_i| + 2 E_in |v_i|`` (the flowpipe's
   between-step bounds for one point and one input value,
   :mod:`hybrid.reach.flowpipe`; zero on a coordinate whose flow is a constant,
-  as a clock's). On every such box the location's invariant holds (up to
-  :data:`~hybrid.reach.witness.WITNESS_TOL`, a boundary touched) and every
-  guard of an edge out of it fails: no jump is forced and time may pass. A
+  as a clock's). On every such box the location's invariant holds for every
+  input value (up to :data:`~hybrid.reach.witness.WITNESS_TOL`, a boundary
+  touched) and every guard of an edge out of it fails for every input value: no
+  jump is forced and time may pass. ``cond`` itself must be read ``for all u``
+  (:meth:`hybrid.reach.affine.Forms.condition`): the end point is in it
+  whatever the input's value there. A
   location that is urgent, or a run that may meet a guard, is left to the
   simulated search.
 
@@ -272,7 +275,7 @@ def _legal(mode: Mode, pts: Array, u: Array, h: float) -> bool:
     """Whether the run through ``pts`` keeps ``mode``'s invariant and meets none of its guards."""
     a, b, c = mode.a, mode.b, mode.c
     clock = np.all(a == 0.0, axis=1) & np.all(b == 0.0, axis=1)
-    conditions = [*mode.invariant, *(case for tr in mode.transitions for case in tr.guard)]
+    conditions = [*mode.invariant_all, *(case for tr in mode.transitions for case in tr.guard)]
     lo = np.minimum(pts[:-1], pts[1:])
     hi = np.maximum(pts[:-1], pts[1:])
     if any(bool(np.any(rows.mat[:, ~clock] != 0.0)) for rows in conditions):
@@ -288,7 +291,7 @@ def _legal(mode: Mode, pts: Array, u: Array, h: float) -> bool:
         lo, hi = lo - err, hi + err
     pad = FP_MARGIN * np.maximum(np.abs(lo), np.abs(hi))
     lo, hi = lo - pad, hi + pad
-    if not any(bool(np.all(_top(r, lo, hi) <= _bound(r, lo, hi))) for r in mode.invariant):
+    if not any(bool(np.all(_top(r, lo, hi) <= _bound(r, lo, hi))) for r in mode.invariant_all):
         return False  # the invariant may fail on some segment
     for tr in mode.transitions:
         for rows in tr.guard:

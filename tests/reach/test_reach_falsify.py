@@ -9,6 +9,9 @@
   without an edge out at ``x >= 1.2``): the maximiser would leave the invariant
   or meet the guard, so it is not a run of the model; by hand no run of the
   location exceeds 1.2, and the flowpipe proves ``x >= 1.5`` unreachable.
+- An invariant that reads an input holds along the maximiser only if it holds for
+  the maximiser's input: the run that climbs fastest is blocked, and the witness
+  found instead replays into the set.
 """
 
 from __future__ import annotations
@@ -73,3 +76,30 @@ def test_a_maximiser_that_is_not_a_run_of_the_model_refutes_nothing(edges: str) 
     assert entry.verdict == "proved" and result.complete
     _, hi = result.hull("up")
     assert 1.2 <= hi[0] < 1.5
+
+
+def test_an_invariant_that_reads_an_input_must_hold_for_the_run_s_input() -> None:
+    # x' = 1 + u from 1, invariant x <= 3.2 - 2 u: the run with u = 1 climbs fastest but
+    # is blocked at x = 1.2 (t = 0.1); with u = 0 it reaches 1.5 at t = 0.5, with the
+    # nominal u = 0.5 at t = 1/3. Read "for some u", the invariant (x <= 3.2) would let
+    # the u = 1 run count as reaching 1.5 at t = 0.25; it must not.
+    model = hybrid.load_text(
+        """
+automaton: pinched
+state: {x: {initial: 1}}
+inputs: {u: {range: [0, 1]}}
+locations: {l: {flow: {x: 1 + u}, invariant: x <= 3.2 - 2 * u}}
+properties: {forbidden: [{when: x >= 1.5}]}
+"""
+    )
+    result = hybrid.reach(model, 1.0, max_jumps=0, step=0.01, refute_first=True)
+    (entry,) = result.properties
+    assert entry.verdict == "refuted" and entry.witness_time is not None
+    replay = hybrid.simulate(
+        model,
+        entry.witness_time,
+        initial=entry.witness_initial,
+        inputs=entry.witness_inputs,
+        handle_sigint=False,
+    )
+    assert replay.termination.cause == "t_end" and replay["x"].max() >= 1.5
