@@ -6,6 +6,7 @@ initial box and the forbidden set ``G x <= g`` (a conjunction) from an ``.npz`` 
 and prints one JSON line: Hylaa's verdict (a concrete error found or not), the
 CPU seconds of ``Core.run`` and the step. Hylaa's default mode checks the step
 points only (its continuous-time option bounds the error with a matrix norm).
+GLPK's wall-clock limit per LP is lifted (:func:`_without_lp_time_limit`).
 
     python bench/hylaa_driver.py INSTANCE.npz
 """
@@ -20,7 +21,26 @@ import numpy as np
 from scipy.sparse import csr_matrix
 
 
+def _without_lp_time_limit() -> None:
+    """Lift GLPK's limit per LP (Hylaa sets 1 s, then 30 s on a retry).
+
+    GLPK measures it in wall-clock time: on a shared, loaded machine Hylaa's later
+    LPs (larger as the steps add input columns) exceed it and the run ends with
+    "glp_simplex returned nonzero status (9)", whatever CPU time they took.
+    """
+    import swiglpk
+
+    simplex = swiglpk.glp_simplex
+
+    def unlimited(lp: object, params: object) -> int:
+        params.tm_lim = 2**31 - 1  # type: ignore[attr-defined]
+        return int(simplex(lp, params))
+
+    swiglpk.glp_simplex = unlimited
+
+
 def main(path: str) -> None:
+    _without_lp_time_limit()
     from hylaa import lputil
     from hylaa.core import Core
     from hylaa.hybrid_automaton import HybridAutomaton
