@@ -1,11 +1,14 @@
 """``make bench``: run every benchmark, print a summary, write bench/results.json.
 
 ``python -m bench [--quick]``: --quick uses fewer repeats (for a smoke run).
+``HYBRID_BENCH_HYLAA=PYTHON``: an interpreter with Hylaa installed, run beside
+reach on the ARCH-COMP Building instances (bench/reach_building.py; not with --quick).
 """
 
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -76,6 +79,13 @@ def main(argv: list[str] | None = None) -> int:
     print("compiled backend, compile times", report["native_compile"])
     report["peers"] = peers.run()
     print("peers", report["peers"])
+    from bench import reach_building
+
+    # Hylaa (its own interpreter, named by HYBRID_BENCH_HYLAA) takes minutes: not in --quick
+    hylaa = None if quick else os.environ.get("HYBRID_BENCH_HYLAA") or None
+    report["reach"] = reach_building.run(hylaa)
+    for row in report["reach"]["rows"]:
+        print("reach", json.dumps(row))
     report["total_s"] = time.perf_counter() - started
     if not quick:
         RESULTS.write_text(json.dumps(report, indent=2) + "\n")

@@ -93,6 +93,7 @@ def render(report: dict[str, Any]) -> str:
                 f"whole process {compile_s['uvms_mission_2_cached_process_total_s']:.2f} s.",
                 "",
             ]
+    lines += _reach(report.get("reach"))
     lines += _components(report.get("components"))
     lines += _ring(report.get("coupled_ring"))
     lines += _campaigns(report.get("campaigns"))
@@ -101,6 +102,39 @@ def render(report: dict[str, Any]) -> str:
         state = "available" if info["available"] else "not available"
         lines.append(f"- **{name}**: {state}. {info['reason']}")
     return "\n".join(lines)
+
+
+def _reach(r: dict[str, Any] | None) -> list[str]:
+    """Reach on ARCH-COMP Building (bench/reach_building.py), with Hylaa when it was given."""
+    if not r:
+        return []
+    lines = [
+        "Reach on ARCH-COMP Building BLDF01 (48 states, horizon 20 s; CPU time after a "
+        "warm-up, best of 3; to the verdict: `refute_first=True`, a proof needs the whole "
+        "flowpipe; see [reach](reach.md)):",
+        "",
+        "| instance | step | verdict | bound on x25 | CPU, sets | CPU, to the verdict | "
+        "CPU, sets and witness | peak memory | Hylaa | Hylaa CPU | Hylaa / reach |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for row in r["rows"]:
+        h = row.get("hylaa")
+        if h is None:
+            hylaa = ["not run", "", ""]
+        elif "error" in h:
+            hylaa = [f"failed: {h['error']}", "", ""]
+        else:
+            verdict = "unsafe" if h["unsafe"] else "safe at the step points"
+            hylaa = [verdict, f"{h['seconds']:.3f} s", f"**{row['hylaa_ratio']:.3g}**"]
+        lines.append(
+            f"| {row['instance']} | {row['step']:g} | {row['verdict']} | "
+            f"<= {row['x25'][1]:.6g} | {row['seconds']:.4f} s | "
+            f"{row['seconds_to_verdict']:.4f} s | {row['seconds_with_witness']:.3f} s | "
+            f"{row['peak_mib']:.1f} MiB | " + " | ".join(hylaa) + " |"
+        )
+    if not r["hylaa"]:
+        lines += ["", "Hylaa: give `HYBRID_BENCH_HYLAA=PYTHON` (an interpreter with hylaa)."]
+    return [*lines, ""]
 
 
 def _campaigns(c: dict[str, Any] | None) -> list[str]:

@@ -6,8 +6,8 @@ The reach vector is the system's state variables in order, then the time ``t``
 disjunction of conjunctions of rows ``G x <= g`` (:class:`Rows`); a strict
 comparison is read as its closure and an equality as two rows, both
 over-approximations. An input in a condition is projected out row by row
-(``exists u in U``), which over-approximates the conjunction too; an input
-without a range makes its rows always satisfiable, so they are dropped.
+(``exists u in U``: over-approximating; an unranged input drops the row), or
+for a witness's checks ``for all u`` (under-approximating).
 
 Anything not affine (``x*y``, ``sin(x)``, a vector signal, a function of a
 library) is a :class:`~hybrid.errors.SpecError` at ``file:line:column`` naming
@@ -66,6 +66,7 @@ class Rows:
 
 Condition = tuple[Rows, ...]
 """A disjunction of conjunctions; ``()`` is false."""
+ModeKey = tuple[str, ...]
 
 
 def _name_of(node: ir.Expr) -> str:
@@ -100,6 +101,7 @@ class Forms:
             for i, comp in enumerate(self.system.components)
             for name in comp.automaton.signal_names
         }
+        self._flows: dict[tuple[str, ...], tuple[Array, Array, Array]] = {}
 
     # --- one expression ---------------------------------------------------------------
 
@@ -172,7 +174,15 @@ class Forms:
     # --- flows, resets, conditions ----------------------------------------------------
 
     def flow(self, mode: tuple[str, ...]) -> tuple[Array, Array, Array]:
-        """``(A, B, c)`` of ``mode`` (a location per component)."""
+        """``(A, B, c)`` of ``mode`` (a location per component), read once (read-only arrays)."""
+        found = self._flows.get(mode)
+        if found is None:
+            found = self._flows[mode] = self._flow(mode)
+            for array in found:
+                array.flags.writeable = False
+        return found
+
+    def _flow(self, mode: tuple[str, ...]) -> tuple[Array, Array, Array]:
         n, m = len(self.variables), len(self.inputs)
         a, b, c = np.zeros((n, n)), np.zeros((n, m)), np.zeros(n)
         c[self.index[TIME]] = 1.0
@@ -224,9 +234,16 @@ class Forms:
         return rmat, smat, rvec
 
     def condition(
-        self, node: ir.Expr, comp: int, mode: tuple[str, ...], position: Position, what: str
+        self,
+        node: ir.Expr,
+        comp: int,
+        mode: tuple[str, ...],
+        position: Position,
+        what: str,
+        *,
+        for_all: bool = False,
     ) -> Condition:
-        """A condition as a disjunction of conjunctions of rows (inputs projected out)."""
+        """A disjunction of conjunctions of rows; inputs as ``exists u`` (``for_all``: every u)."""
         cases = _dnf(node, negate=False)
         if cases is None:
             raise SpecError(f"{what} has more than {DNF_CAP} cases once split", position)
@@ -243,7 +260,7 @@ class Forms:
                         f"{what} is not a linear condition: '{_name_of(cmp)}'",
                         position.shifted(cmp.col),
                     )
-                rows.extend(self._rows(cmp, comp, mode, position, what))
+                rows.extend(self._rows(cmp, comp, mode, position, what, for_all))
             if false:
                 continue
             n = len(self.variables)
@@ -253,24 +270,24 @@ class Forms:
         return tuple(result)
 
     def _rows(
-        self, cmp: ir.Cmp, comp: int, mode: tuple[str, ...], position: Position, what: str
+        self, cmp: ir.Cmp, comp: int, mode: ModeKey, position: Position, what: str, for_all: bool
     ) -> list[tuple[Array, float]]:
         forms = [self.affine(o, comp, mode, position, what) for o in cmp.operands]
         out: list[tuple[Array, float]] = []
         for i, op in enumerate(cmp.ops):
             left, right = forms[i], forms[i + 1]
             if op in ("<", "<="):
-                out.extend(self._project(left - right, equal=False))
+                out.extend(self._project(left - right, False, for_all))
             elif op in (">", ">="):
-                out.extend(self._project(right - left, equal=False))
+                out.extend(self._project(right - left, False, for_all))
             elif op == "==":
-                out.extend(self._project(left - right, equal=True))
+                out.extend(self._project(left - right, True, for_all))
             else:
                 raise SpecError(f"{what}: '!=' is not a convex condition", position)
         return out
 
-    def _project(self, form: Affine, *, equal: bool) -> list[tuple[Array, float]]:
-        """Rows for ``form <= 0`` (``== 0``) with inputs projected out (an over-approximation)."""
+    def _project(self, form: Affine, equal: bool, for_all: bool) -> list[tuple[Array, float]]:
+        """Rows for ``form <= 0`` (``== 0``) for some input value (``for_all``: for every one)."""
         row = np.zeros(len(self.variables))
         low, high = form.const, form.const
         for name, k in form.coeffs.items():
@@ -280,10 +297,11 @@ class Forms:
                 j = self.input_index[name]
                 ends = (k * self.u_lo[j], k * self.u_hi[j])
                 low, high = low + min(ends), high + max(ends)
-            else:
-                return []  # an input with no range: some value satisfies the row
+            else:  # an input with no range: some value satisfies the row, not every one
+                low, high = -math.inf, math.inf
+        low, high = (high, low) if for_all else (low, high)  # for_all: each row's worst value
         if not math.isfinite(low) or not math.isfinite(high):
-            return []
+            return [(np.zeros(len(self.variables)), -1.0)] if for_all else []
         rows = [(row, -low)]
         if equal:
             rows.append((-row, high))

@@ -34,7 +34,8 @@ from hybrid.expr import ir
 from hybrid.model import Automaton, Forbidden
 from hybrid.reach.affine import TIME, Condition, Forms, Rows
 from hybrid.reach.boxes import meets_many
-from hybrid.reach.engine import ReachSet, explore, initial_boxes
+from hybrid.reach.engine import ReachSet, explore, forms_of, initial_boxes, mode_of
+from hybrid.reach.falsify import refute
 from hybrid.reach.result import PropertyResult, ReachResult
 from hybrid.reach.witness import (
     Candidate,
@@ -62,6 +63,7 @@ def reach(
     max_jumps: int = 10,
     step: float | None = None,
     witness: bool = True,
+    refute_first: bool = False,
 ) -> ReachResult:
     """Over-approximate every state ``model`` reaches within ``t_end`` and ``max_jumps`` jumps.
 
@@ -80,6 +82,14 @@ def reach(
         Time step of the flowpipes (default ``t_end / 4000``): smaller is tighter and slower.
     witness : bool
         Search a simulated run into each forbidden entry the sets meet.
+    refute_first : bool
+        Look for a run into each forbidden entry before computing any set
+        (:mod:`hybrid.reach.falsify`: the support's maximisers along the
+        entry's direction, step by step, stopping at the first that enters
+        it). When every entry is refuted so, no flowpipe is computed:
+        ``.sets`` is empty, ``.complete`` false and ``first_contact`` ``None``
+        (a gate's answer, as a falsifier stops at the first concrete error).
+        A proof still needs the whole flowpipe.
 
     Returns
     -------
@@ -109,19 +119,26 @@ def reach(
     if isinstance(max_jumps, bool) or not isinstance(max_jumps, int):
         raise UsageError(f"max_jumps must be an integer >= 0, got {max_jumps!r}")
     started = time.process_time()
-    forms = Forms(model)
+    forms = forms_of(model)
     entries = [
         (e, _condition(forms, e, forms.system.initial_mode)) for e in model.properties.forbidden
     ]
-    sets, complete = explore(model, t_end=t_end, max_jumps=max_jumps, step=step, forms=forms)
+    early: list[PropertyResult | None] = [None] * len(entries)
+    if refute_first and witness:
+        early = [_quick(model, forms, entry, t_end, max_jumps, step, None) for entry, _ in entries]
+    sets: list[ReachSet] = []
+    complete = False
+    if not (early and all(e is not None for e in early)):
+        sets, complete = explore(model, t_end=t_end, max_jumps=max_jumps, step=step, forms=forms)
     grouped: dict[tuple[str, ...], list[ReachSet]] = {}
     for s in sets:  # once: each entry then looks at the modes, not at every set
         grouped.setdefault(s.mode, []).append(s)
     results = [
-        _decide(
+        found
+        or _decide(
             model, forms, entry, cond, sets, grouped, complete, t_end, max_jumps, step, witness
         )
-        for entry, cond in entries
+        for found, (entry, cond) in zip(early, entries, strict=True)
     ]
     return ReachResult(
         model=model.name,
@@ -138,10 +155,13 @@ def reach(
     )
 
 
-def _condition(forms: Forms, entry: Forbidden, mode: tuple[str, ...]) -> Condition:
+def _condition(
+    forms: Forms, entry: Forbidden, mode: tuple[str, ...], for_all: bool = False
+) -> Condition:
     """The entry's condition in ``mode`` over the reach vector (``true`` without ``when``).
 
-    Signals are read as ``mode``'s locations define them (a location may override one).
+    Signals are read as ``mode``'s locations define them (a location may override one);
+    inputs projected out as ``exists u`` (``for_all``: for every value).
     """
     n = len(forms.variables)
     if entry.when is None:
@@ -153,7 +173,7 @@ def _condition(forms: Forms, entry: Forbidden, mode: tuple[str, ...]) -> Conditi
             comp = names.index(name)
             break
     what = f"the forbidden set '{entry.text()}'"
-    return forms.condition(entry.when, comp, mode, entry.position, what)
+    return forms.condition(entry.when, comp, mode, entry.position, what, for_all=for_all)
 
 
 def _matches(forms: Forms, entry: Forbidden, mode: tuple[str, ...]) -> bool:
@@ -205,6 +225,9 @@ def _decide(
     first = min(s.t[0] for s in contacts) if contacts else None
     reads_inputs = entry.when is not None and bool(ir.names_in(entry.when, ir.INPUT))
     if witness and contacts and not reads_inputs:
+        quick = _quick(model, forms, entry, t_end, max_jumps, step, first)
+        if quick is not None:
+            return quick
         conditions = {
             chosen[0].location: _condition(forms, entry, mode) for mode, chosen in by_mode.items()
         }
@@ -217,7 +240,7 @@ def _decide(
                 f"forbidden state '{name}' is reached at t = {at:.9g} "
                 f"by a simulated run ({candidate.how})",
                 first_contact=first,
-                witness=run,
+                simulated=run,
                 witness_time=at,
                 witness_initial=candidate.initial,
                 witness_inputs=dict(candidate.inputs),
@@ -231,6 +254,45 @@ def _decide(
             f"meets it from t = {first:.9g}, and no simulated run was found that reaches it"
         )
     return PropertyResult(entry, "unknown", message, first_contact=first, condition=cond)
+
+
+def _quick(
+    model: Automaton | System,
+    forms: Forms,
+    entry: Forbidden,
+    t_end: float,
+    max_jumps: int,
+    step: float,
+    first: float | None,
+) -> PropertyResult | None:
+    """The entry refuted from an initial mode by :func:`hybrid.reach.falsify.refute`, or ``None``."""
+    if entry.when is not None and ir.names_in(entry.when, ir.INPUT):
+        return None
+    for key, lo, hi in initial_boxes(forms):
+        if not _matches(forms, entry, key):
+            continue
+        every = _within(_condition(forms, entry, key, for_all=True), forms, t_end)
+        found = refute(forms, mode_of(forms, key), lo, hi, every, t_end=t_end, step=step)
+        if found is None:
+            continue
+        candidate = found.candidate
+
+        def replay(candidate: Candidate = candidate) -> Run | None:
+            return simulate_candidate(model, forms, candidate, max_jumps)
+
+        return PropertyResult(
+            entry,
+            "refuted",
+            f"forbidden state '{entry.text()}' is reached at t = {found.at:.9g} "
+            f"by a run of the model ({candidate.how})",
+            first_contact=first,
+            witness_time=found.at,
+            witness_initial=candidate.initial,
+            witness_inputs=dict(candidate.inputs),
+            condition=_condition(forms, entry, key),
+            replay=replay,
+        )
+    return None
 
 
 def _witness(

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import weakref
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
@@ -48,7 +49,17 @@ from hybrid.reach.affine import TIME, Condition, Forms, Rows
 from hybrid.reach.boxes import affine_image, meets, meets_many
 from hybrid.reach.flowpipe import Overflow, flowpipe
 
-__all__ = ["MAX_CLUSTERS", "MAX_FLOWPIPES", "Mode", "ReachSet", "Transition", "explore"]
+__all__ = [
+    "MAX_CLUSTERS",
+    "MAX_FLOWPIPES",
+    "Mode",
+    "ReachSet",
+    "Transition",
+    "explore",
+    "forms_of",
+    "initial_boxes",
+    "mode_of",
+]
 
 Array = NDArray[np.float64]
 MAX_CLUSTERS = 4
@@ -93,6 +104,8 @@ class Mode:
     invariant: Condition
     transitions: tuple[Transition, ...]
     urgent: bool
+    invariant_all: Condition = ()
+    """The invariant where it holds for every input value (a witness's check)."""
 
 
 class _Modes:
@@ -111,17 +124,20 @@ class _Modes:
         forms, system = self.forms, self.forms.system
         a, b, c = forms.flow(key)
         invariant: Condition = (Rows(np.zeros((0, a.shape[0])), np.zeros(0)),)
+        invariant_all = invariant
         for i, comp in enumerate(system.components):
             loc = comp.automaton.locations[key[i]]
             what = f"the invariant of location '{system.qualified(i, loc.name)}'"
-            part = forms.condition(loc.invariant, i, key, loc.invariant_position, what)
+            where = loc.invariant_position
+            part = forms.condition(loc.invariant, i, key, where, what)
             invariant = _and(invariant, part)
+            every = forms.condition(loc.invariant, i, key, where, what, for_all=True)
+            invariant_all = _and(invariant_all, every)
         urgent = any(
             comp.automaton.locations[key[i]].urgent for i, comp in enumerate(system.components)
         )
-        return Mode(
-            key, system.mode_name(key), a, b, c, invariant, tuple(self._transitions(key)), urgent
-        )
+        name, transitions = system.mode_name(key), tuple(self._transitions(key))
+        return Mode(key, name, a, b, c, invariant, transitions, urgent, invariant_all)
 
     def _transitions(self, key: tuple[str, ...]) -> Iterator[Transition]:
         system = self.forms.system
@@ -160,6 +176,51 @@ class _Modes:
                 rmat[row], smat[row], rvec[row] = r[row], s[row], v[row]
             target[i] = edge.target
         return Transition(" + ".join(names), tuple(target), guard, rmat, smat, rvec)
+
+
+_READ: weakref.WeakKeyDictionary[Forms, _Modes] = weakref.WeakKeyDictionary()
+_FORMS: dict[int, tuple[weakref.ref[Automaton | System], Forms]] = {}
+""":func:`forms_of`'s cache: a model's id -> (the model, weakly; its forms)."""
+
+
+def forms_of(model: Automaton | System) -> Forms:
+    """The forms of ``model``, read once per model object (a model is immutable).
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> m = hybrid.load_text('''
+    ... automaton: a
+    ... state: {x: {initial: 1}}
+    ... locations: {l: {flow: {x: -x}}}
+    ... ''')
+    >>> forms_of(m) is forms_of(m)
+    True
+    """
+    key = id(model)
+    found = _FORMS.get(key)
+    if found is not None and found[0]() is model:
+        return found[1]
+    forms = Forms(model)
+    cache = _FORMS  # bound here: at exit the module's globals may be gone first
+
+    def forget(_: object) -> None:
+        cache.pop(key, None)
+
+    _FORMS[key] = (weakref.ref(model, forget), forms)
+    return forms
+
+
+def _modes(forms: Forms) -> _Modes:
+    found = _READ.get(forms)
+    if found is None:
+        found = _READ[forms] = _Modes(forms)
+    return found
+
+
+def mode_of(forms: Forms, key: tuple[str, ...]) -> Mode:
+    """The mode ``key`` (a location per component) as read from ``forms``, once per ``forms``."""
+    return _modes(forms).get(key)
 
 
 def _and(left: Condition, right: Condition) -> Condition:
@@ -201,8 +262,8 @@ def explore(
         raise UsageError(f"the step must be a finite number > 0, got {step}")
     if max_jumps < 0:
         raise UsageError(f"max_jumps must be >= 0, got {max_jumps}")
-    forms = forms or Forms(model)
-    modes = _Modes(forms)
+    forms = forms or forms_of(model)
+    modes = _modes(forms)
     t_index = forms.index[TIME]
     waiting = [(modes.get(m), lo, hi, 0) for m, lo, hi in initial_boxes(forms)]
     sets: list[ReachSet] = []

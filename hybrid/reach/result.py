@@ -20,7 +20,7 @@ True
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -47,19 +47,31 @@ class PropertyResult:
     """The verdict on one ``properties.forbidden`` entry.
 
     ``first_contact`` is the earliest time a set meets the entry (``None``: none
-    does); ``witness`` a simulated run that reaches it (refuted only), entering
-    at ``witness_time``.
+    does, or no sets were computed); ``witness`` a simulated run that reaches it
+    (refuted only), entering at ``witness_time``, from ``witness_initial`` with
+    ``witness_inputs``. A refutation found by exact propagation
+    (:mod:`hybrid.reach.falsify`) holds ``replay`` instead of the run: ``witness``
+    simulates it on first access.
     """
 
     entry: Forbidden
     verdict: str
     message: str
     first_contact: float | None = None
-    witness: Run | None = field(default=None, repr=False)
+    simulated: Run | None = field(default=None, repr=False)
     witness_time: float | None = None
     witness_initial: dict[str, float] = field(default_factory=dict, repr=False)
     witness_inputs: dict[str, Any] = field(default_factory=dict, repr=False)
     condition: Condition = field(default=(), repr=False)
+    replay: Callable[[], Run | None] | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def witness(self) -> Run | None:
+        """The witness run (refuted only), simulated on first access if it was not yet."""
+        if self.simulated is None and self.replay is not None:
+            object.__setattr__(self, "simulated", self.replay())
+            object.__setattr__(self, "replay", None)
+        return self.simulated
 
     @property
     def position(self) -> Position:

@@ -116,6 +116,26 @@ def test_building_bdu01_is_refuted_by_a_replayable_run() -> None:
     assert all(0.8 <= u(t) <= 1.0 for t in np.linspace(0.0, float(entry.witness.t[-1]), 101))
 
 
+def test_building_bdu01_is_refuted_before_any_flowpipe_by_a_replayable_run() -> None:
+    model = _model("BDU01")
+    result = hybrid.reach(model, 20.0, max_jumps=1, step=0.005, refute_first=True)
+    (entry,) = result.properties
+    assert entry.verdict == "refuted" and result.sets == ()
+    assert entry.witness_time is not None and entry.witness_time < 0.0776
+    replay = hybrid.simulate(
+        model,
+        entry.witness_time,
+        initial=entry.witness_initial,
+        inputs=entry.witness_inputs,
+        rtol=1e-9,
+        atol=1e-12,
+        handle_sigint=False,
+    )
+    assert replay.t[-1] == entry.witness_time and _x25(replay)[-1] >= 0.004
+    for name, r in as_system(model).initial_set().items():
+        assert r.lo <= entry.witness_initial[name] <= r.hi
+
+
 def test_building_bdu02_is_refuted_at_the_end_of_the_horizon() -> None:
     model = _model("BDU02")
     result = hybrid.reach(model, 20.0, max_jumps=1, step=0.005)

@@ -1,0 +1,105 @@
+"""The quick refutation (hybrid.reach.falsify): a run found before any flowpipe, checked exactly.
+
+- A ramp ``x' = u`` from ``x in [0, 1]``, ``u in [0, 1]``: the largest ``x`` at
+  time ``t`` is ``1 + t`` (start at 1, input at 1), so ``x >= 1.5`` is first
+  reached at ``t = 0.5``; at step 0.01 the first step point past it by the
+  entry margin is ``0.51``. The run replays into the set with ``hybrid.simulate``
+  and no flowpipe is computed with ``refute_first``.
+- The same ramp where ``x <= 1.2`` holds in the location (an invariant, with or
+  without an edge out at ``x >= 1.2``): the maximiser would leave the invariant
+  or meet the guard, so it is not a run of the model; by hand no run of the
+  location exceeds 1.2, and the flowpipe proves ``x >= 1.5`` unreachable.
+- An invariant that reads an input holds along the maximiser only if it holds for
+  the maximiser's input: the run that climbs fastest is blocked, and the witness
+  found instead replays into the set.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import hybrid
+
+RAMP = """
+automaton: ramp
+state: {{x: {{initial: [0, 1]}}}}
+inputs: {{u: {{range: [0, 1]}}}}
+locations:
+  up: {{flow: {{x: u}}{invariant}}}
+  rest: {{flow: {{x: 0}}}}
+edges: [{edges}]
+properties: {{forbidden: [{{location: up, when: x >= 1.5}}]}}
+"""
+
+
+def test_a_ramp_is_refuted_at_the_first_step_past_its_closed_form_entry() -> None:
+    model = hybrid.load_text(RAMP.format(invariant="", edges=""))
+    result = hybrid.reach(model, 2.0, max_jumps=1, step=0.01, refute_first=True)
+    (entry,) = result.properties
+    assert entry.verdict == "refuted"
+    assert result.sets == () and not result.complete and entry.first_contact is None
+    assert entry.witness_time is not None and math.isclose(entry.witness_time, 0.51)
+    assert entry.witness_initial == {"x": 1.0}
+    u = entry.witness_inputs["u"]
+    assert all(u(t) == 1.0 for t in np.linspace(0.0, 0.51, 52))
+    replay = hybrid.simulate(
+        model,
+        entry.witness_time,
+        initial=entry.witness_initial,
+        inputs=entry.witness_inputs,
+        handle_sigint=False,
+    )
+    assert replay.location[-1] == "up" and replay["x"][-1] == pytest.approx(1.51, rel=1e-9)
+    # the lazily simulated witness is that run
+    assert entry.witness is not None and entry.witness["x"][-1] >= 1.5
+
+
+def test_without_refute_first_the_sets_are_kept_and_the_same_run_refutes() -> None:
+    model = hybrid.load_text(RAMP.format(invariant="", edges=""))
+    result = hybrid.reach(model, 2.0, max_jumps=1, step=0.01)
+    (entry,) = result.properties
+    assert entry.verdict == "refuted" and len(result.sets) > 0 and result.complete
+    assert entry.first_contact is not None and entry.first_contact <= 0.5
+    assert entry.witness_time is not None and math.isclose(entry.witness_time, 0.51)
+
+
+@pytest.mark.parametrize(
+    "edges", ["", "{from: up, to: rest, guard: x >= 1.2}"], ids=["invariant", "guard"]
+)
+def test_a_maximiser_that_is_not_a_run_of_the_model_refutes_nothing(edges: str) -> None:
+    model = hybrid.load_text(RAMP.format(invariant=", invariant: x <= 1.2", edges=edges))
+    result = hybrid.reach(model, 2.0, max_jumps=1, step=0.01, refute_first=True)
+    (entry,) = result.properties
+    assert entry.verdict == "proved" and result.complete
+    _, hi = result.hull("up")
+    assert 1.2 <= hi[0] < 1.5
+
+
+def test_an_invariant_that_reads_an_input_must_hold_for_the_run_s_input() -> None:
+    # x' = 1 + u from 1, invariant x <= 3.2 - 2 u: the run with u = 1 climbs fastest but
+    # is blocked at x = 1.2 (t = 0.1); with u = 0 it reaches 1.5 at t = 0.5, with the
+    # nominal u = 0.5 at t = 1/3. Read "for some u", the invariant (x <= 3.2) would let
+    # the u = 1 run count as reaching 1.5 at t = 0.25; it must not.
+    model = hybrid.load_text(
+        """
+automaton: pinched
+state: {x: {initial: 1}}
+inputs: {u: {range: [0, 1]}}
+locations: {l: {flow: {x: 1 + u}, invariant: x <= 3.2 - 2 * u}}
+properties: {forbidden: [{when: x >= 1.5}]}
+"""
+    )
+    result = hybrid.reach(model, 1.0, max_jumps=0, step=0.01, refute_first=True)
+    (entry,) = result.properties
+    assert entry.verdict == "refuted" and entry.witness_time is not None
+    replay = hybrid.simulate(
+        model,
+        entry.witness_time,
+        initial=entry.witness_initial,
+        inputs=entry.witness_inputs,
+        handle_sigint=False,
+    )
+    assert replay.termination.cause == "t_end" and replay["x"].max() >= 1.5
