@@ -41,10 +41,9 @@ SLOW_TO_COMPILE = {
     "FISCS04-UBD04.cfg",
     "FISCU04-UBD04.cfg",
 }
-FAST = {
+FAST = {  # DISC02-UBS02 (74 s in a make test on an empty compiled cache) is in the whole set
     "BLDF01-BDS01.cfg",
     "PLAD01-BND42-spec.cfg",
-    "DISC02-UBS02.cfg",
     "heaterLygeros.cfg",
     "toy_unsafe.cfg",
 }

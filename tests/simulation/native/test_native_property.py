@@ -206,12 +206,14 @@ SYSTEMS = {
     for coupling in COUPLINGS
 }
 SYSTEM_EXAMPLES = 500 if os.environ.get("HYBRID_FUZZ") else 12
+"""In make test, the synchronised structure alone (each structure is a compile of its own);
+all three under make fuzz."""
 
 
 @pytest.mark.fuzz
 @settings(max_examples=SYSTEM_EXAMPLES, deadline=None,
           suppress_health_check=[HealthCheck.too_slow])
-@given(coupling=st.sampled_from(COUPLINGS),
+@given(coupling=st.sampled_from(COUPLINGS if os.environ.get("HYBRID_FUZZ") else COUPLINGS[2:]),
        levels=st.lists(st.tuples(LEVELS, LEVELS, LEVELS), min_size=3, max_size=3),
        starts=st.lists(st.sampled_from([0.0, 0.5, 1.0]), min_size=3, max_size=3),
        stuck_at=st.sampled_from([0.0, 2.0, 3.0, 100.0]),
