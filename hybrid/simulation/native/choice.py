@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from hybrid.errors import HybridError
+from hybrid.simulation.native.features import METHOD
 
 __all__ = ["KERNEL_COMPILE_S", "LOAD_S", "Choice", "cached", "choose"]
 
@@ -85,7 +86,7 @@ def choose(model: Any, runs: int, *, method: str = "RK45", inputs: bool = False,
     when nothing is to be loaded or compiled (None: unknown; then compiled
     only if the compiled code is loaded in this process already).
     """
-    if method != "RK45":
+    if method != METHOD:
         return Choice("scipy", f"method '{method}' is the scipy backend's")
     if inputs:
         return Choice("scipy", "inputs are held by expressions (the scipy backend)")

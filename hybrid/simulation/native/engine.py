@@ -32,6 +32,7 @@ from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import run_from
 from hybrid.simulation.native.cache import load_generated, require_numba, seal
+from hybrid.simulation.native.features import METHOD
 from hybrid.simulation.native.interruptible import run_in_worker
 from hybrid.simulation.native.kernel_text import kernel_module
 from hybrid.simulation.native.kernel_types import PIECES
@@ -254,7 +255,7 @@ def config(settings: Settings) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
 def check_supported(settings: Settings, inputs: Mapping[str, Any] | None) -> None:
     """Refuse what the compiled backend does not do, naming it (never run otherwise)."""
     require_numba()
-    if settings.method != "RK45":
+    if settings.method != METHOD:
         raise UsageError(
             f"the compiled backend integrates with RK45 (Dormand–Prince 5(4)); method "
             f"'{settings.method}' needs backend='scipy'"

@@ -34,7 +34,16 @@ from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.simulation.margins import watched_requirements
 
-__all__ = ["refusal", "refuse_requirements", "refuse_unsupported"]
+__all__ = ["METHOD", "refusal", "refuse_requirements", "refuse_unsupported", "unheld_inputs"]
+
+METHOD = "RK45"
+"""The one integration method of the compiled backend (Dormand–Prince 5(4))."""
+
+
+def unheld_inputs(system: System) -> list[str]:
+    """The free inputs of ``system`` without a ``range``: only a Python function can give them."""
+    ranges = system.input_ranges()
+    return [n for n in system.free_inputs if n not in ranges]
 
 
 def refusal(model: Automaton | System, **settings: Any) -> str | None:
@@ -51,14 +60,12 @@ def refusal(model: Automaton | System, **settings: Any) -> str | None:
     >>> refusal(ball) is None, refusal(ball, method="Radau")
     (True, "method 'Radau' (it integrates with RK45)")
     """
-    method = settings.get("method", "RK45")
-    if method != "RK45":
-        return f"method '{method}' (it integrates with RK45)"
+    method = settings.get("method", METHOD)
+    if method != METHOD:
+        return f"method '{method}' (it integrates with {METHOD})"
     if settings.get("inputs"):
         return "inputs given as Python functions"
-    system = as_system(model)
-    ranges = system.input_ranges()
-    unheld = [n for n in system.free_inputs if n not in ranges]
+    unheld = unheld_inputs(as_system(model))
     if unheld:
         return f"input '{unheld[0]}' has no range, so it needs a Python function"
     return None
@@ -67,8 +74,7 @@ def refusal(model: Automaton | System, **settings: Any) -> str | None:
 def refuse_unsupported(system: System) -> None:
     """Raise :class:`UsageError` if ``system`` uses a construct the compiled backend lacks."""
     name = system.name
-    ranges = system.input_ranges()
-    unheld = [n for n in system.free_inputs if n not in ranges]
+    unheld = unheld_inputs(system)
     if unheld:
         raise UsageError(
             f"input '{unheld[0]}' of {name} needs a value, and the compiled backend cannot take "
