@@ -15,6 +15,22 @@ from typing import Any
 REPO = Path(__file__).resolve().parents[1]
 SPECS = REPO / "specs"
 DOCS = REPO / "docs"
+LEAKY_SPEC = """\
+automaton: leaky
+state:
+  h: {initial: 1.5, bounds: [0, 3], unit: m}
+  v: {initial: 0.0, bounds: [-1, 1]}
+  c: {initial: 0.0}
+locations:
+  a:
+    flow: {h: 0.5, v: -0.25, c: 1}
+  b:
+    flow: {h: 0.5, v: -0.25, c: 1}
+edges:
+  - {from: a, to: b, guard: c >= 2}
+"""
+"""Climbs at known rates with declared bounds (the bounds tests of simulate and simulate_many)."""
+
 Simulate = Callable[..., Any]
 """The ``simulate`` fixture of tests/simulation: ``hybrid.simulate`` on the test's backend."""
 

@@ -14,24 +14,9 @@ import warnings
 from pathlib import Path
 
 import pytest
-from support import REPO, assert_no_traceback, run_cli
+from support import LEAKY_SPEC, REPO, assert_no_traceback, run_cli
 
 import hybrid
-
-SPEC = """\
-automaton: leaky
-state:
-  h: {initial: 1.5, bounds: [0, 3], unit: m}
-  v: {initial: 0.0, bounds: [-1, 1]}
-  c: {initial: 0.0}
-locations:
-  a:
-    flow: {h: 0.5, v: -0.25, c: 1}
-  b:
-    flow: {h: 0.5, v: -0.25, c: 1}
-edges:
-  - {from: a, to: b, guard: c >= 2}
-"""
 
 EXPECTED = [
     ("h", 3.1, 1, 3.05, "h left its declared bounds [0, 3] at t=3.1 j=1 (h = 3.05)"),
@@ -47,7 +32,7 @@ def _simulate(text: str, t_end: float) -> tuple[hybrid.Run, list[warnings.Warnin
 
 
 def test_a_run_that_leaves_its_bounds_warns_once_per_variable() -> None:
-    run, caught = _simulate(SPEC, 10.0)
+    run, caught = _simulate(LEAKY_SPEC, 10.0)
     assert run.termination.cause == "t_end" and [jump.t for jump in run.jumps] == [2.0]
     assert [str(w.message) for w in caught] == [message for *_, message in EXPECTED]
     assert [(e.variable, e.j) for e in run.out_of_bounds] == [(n, j) for n, _, j, _, _ in EXPECTED]
@@ -57,14 +42,14 @@ def test_a_run_that_leaves_its_bounds_warns_once_per_variable() -> None:
 
 
 def test_a_run_within_its_bounds_says_nothing() -> None:
-    run, caught = _simulate(SPEC, 2.9)  # h reaches 2.95, v -0.725
+    run, caught = _simulate(LEAKY_SPEC, 2.9)  # h reaches 2.95, v -0.725
     assert caught == [] and run.out_of_bounds == ()
     tank, caught = _simulate((REPO / "docs" / "examples" / "tank.yaml").read_text(), 12.0)
     assert caught == [] and tank.out_of_bounds == () and len(tank.jumps) == 3
 
 
 def test_a_reset_that_lands_outside_is_caught_at_the_jump() -> None:
-    text = SPEC.replace("guard: c >= 2}", "guard: c >= 2, reset: {h: 4}}")
+    text = LEAKY_SPEC.replace("guard: c >= 2}", "guard: c >= 2, reset: {h: 4}}")
     run, caught = _simulate(text, 2.5)
     (excursion,) = run.out_of_bounds
     assert (excursion.variable, excursion.t, excursion.j, excursion.value) == ("h", 2.0, 1, 4.0)
@@ -73,7 +58,7 @@ def test_a_reset_that_lands_outside_is_caught_at_the_jump() -> None:
 
 def test_the_command_warns_and_the_events_file_records_it(tmp_path: Path) -> None:
     spec = tmp_path / "leaky.yaml"
-    spec.write_text(SPEC)
+    spec.write_text(LEAKY_SPEC)
     events = tmp_path / "leaky.json"
     result = run_cli("simulate", spec, "--t-end", "10", "--dt", "0.1", "--events", events)
     assert result.returncode == 0  # leaving the bounds is a warning, not a failed run

@@ -15,25 +15,12 @@ from __future__ import annotations
 import warnings
 
 import pytest
+from support import LEAKY_SPEC
 
 import hybrid
 
 pytest.importorskip("numba")
 
-SPEC = """\
-automaton: leaky
-state:
-  h: {initial: 1.5, bounds: [0, 3], unit: m}
-  v: {initial: 0.0, bounds: [-1, 1]}
-  c: {initial: 0.0}
-locations:
-  a:
-    flow: {h: 0.5, v: -0.25, c: 1}
-  b:
-    flow: {h: 0.5, v: -0.25, c: 1}
-edges:
-  - {from: a, to: b, guard: c >= 2}
-"""
 
 # run 0 leaves h at 3.1 and v at 4.1; run 1 stays within; run 2 leaves h at 4.1 only
 INITIAL = {"h": [1.5, 0.0, 1.0], "v": [0.0, 1.0, 1.0]}
@@ -52,7 +39,7 @@ def _many(**kwargs: object) -> tuple[hybrid.Ensemble, list[warnings.WarningMessa
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         runs = hybrid.simulate_many(
-            hybrid.load_text(SPEC), dt=0.1, handle_sigint=False, **kwargs  # type: ignore[arg-type]
+            hybrid.load_text(LEAKY_SPEC), dt=0.1, handle_sigint=False, **kwargs  # type: ignore[arg-type]
         )
     return runs, [w for w in caught if issubclass(w.category, hybrid.BoundsWarning)]
 
@@ -78,7 +65,7 @@ def test_an_ensemble_warns_once_per_variable_with_the_count_and_the_first_run() 
 @pytest.mark.parametrize("backend", ["scipy", "compiled"])
 def test_each_run_agrees_with_simulate_on_either_backend(backend: str) -> None:
     runs, _ = _many(t_end=5.0, initial=INITIAL)
-    model = hybrid.load_text(SPEC)
+    model = hybrid.load_text(LEAKY_SPEC)
     for i, run in enumerate(runs):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", hybrid.BoundsWarning)
@@ -131,7 +118,7 @@ edges:
 
 def test_a_compiled_sweep_stays_quiet_as_a_scipy_one() -> None:
     # a campaign's runs are rows of a table: its batches of simulate_many do not warn
-    model = hybrid.load_text(SPEC)
+    model = hybrid.load_text(LEAKY_SPEC)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         table = hybrid.sweep(
