@@ -86,11 +86,13 @@ def orient_by_slope(fns: Fns, tab: Ints, m: int, k: int, t: float, x: Array, wid
     tr = first + k
     signs = wi[W_PE] + tab[T_N_PARAMS]
     armv = wf[wi[W_ARMV] :]
+    h = 0.0  # the slope test's step, and its point in `ahead`, once a level needs them
     for a in range(tab[tab[T_TR_LV] + tr] - lv0, tab[tab[T_TR_LV] + tr + 1] - lv0):
         value = armv[n_tr + a]
         if not abs(value) <= width:
             continue
-        h = step_ahead(fns, m, t, x, wf, wi)
+        if h == 0.0:
+            h = step_ahead(fns, m, t, x, wf, wi)
         ahead = wf[wi[W_AHEAD] : wi[W_AHEAD] + wi[W_D]]
         fns(OP_ARM, m, t + h, at(ahead, 0), at(wf, wi[W_PE]), at(wf, wi[W_ARMV]))
         later = armv[n_tr + a]
