@@ -5,7 +5,8 @@ Severities, and why:
 ================================  ========  ============================================
 rule                              severity  reason
 ================================  ========  ============================================
-``property-violated``             error     the spec promised it; CI must fail
+``property-violated``             error     a run of the model violates a property
+``property-disproved``            error     a location declared reachable proved unreachable
 ``property-unproved``             warning   a property not proved and not refuted either
 ``property-proved``               note      ``hybrid reach`` proved a forbidden entry
 ``sink-location``                 error     a run that gets there ends ``blocked``
@@ -109,9 +110,17 @@ RULES: dict[str, Rule] = {
             "property-violated",
             "error",
             "Declared property does not hold",
-            "A property under `properties:` is refuted: a forbidden state reached by a "
-            "simulated run (`hybrid reach`), or a location declared reachable that no run "
-            "can reach (a proof), or a property naming an unknown location.",
+            "A property under `properties:` is refuted by a run of the model: a forbidden "
+            "state reached by a simulated run (`hybrid reach`), given as a witness that "
+            "`hybrid simulate` replays.",
+        ),
+        Rule(
+            "property-disproved",
+            "error",
+            "Declared reachable location proved unreachable",
+            "A location under `properties: reachable` that no run can reach: the analysis "
+            "over-approximates every run and none enters it, a proof. No run can show an "
+            "absence, so the message names the entries into it that can never fire.",
         ),
         Rule(
             "property-unproved",

@@ -79,11 +79,12 @@ def blocked_entries(analysis: Analysis, component: int, location: str) -> str:
 
 
 def property_violations(analysis: Analysis) -> list[Finding]:
-    """The declared properties refuted (``property-violated``: a location declared
-    reachable that is proved unreachable, an unknown location) or not proved
-    (``property-unproved``, with a candidate path: the over-approximation meets
-    them, no run was simulated); forbidden states:
-    :func:`hybrid.analysis.forbidden.forbidden_states`."""
+    """The declared properties disproved (``property-disproved``: a location declared
+    reachable that is proved unreachable) or not proved (``property-unproved``, with a
+    candidate path: the over-approximation meets them, no run was simulated); forbidden
+    states: :func:`hybrid.analysis.forbidden.forbidden_states`. A property naming an
+    unknown location is ``invalid-spec`` (the reader rejects it in a file; a model built
+    in code may still carry one)."""
     props = analysis.system.properties
     exploration = analysis.exploration
     tables = analysis.tables
@@ -99,7 +100,7 @@ def property_violations(analysis: Analysis) -> list[Finding]:
         if name not in index:
             found.append(
                 Finding.at(
-                    "property-violated",
+                    "invalid-spec",
                     position,
                     f"property names an unknown location '{name}'",
                     where=name,
@@ -113,7 +114,7 @@ def property_violations(analysis: Analysis) -> list[Finding]:
             loc = tables.components[i].locations[k]
             found.append(
                 Finding.at(
-                    "property-violated",
+                    "property-disproved",
                     where.get(f"reachable:{name}", position),
                     f"location '{name}' is declared reachable but is not"
                     f"{blocked_entries(analysis, i, loc)}; {assumptions(analysis.facts[i])}",

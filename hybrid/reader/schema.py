@@ -300,6 +300,7 @@ RuleId = Literal[
     "zero-time-cycle",
     "unused-declaration",
     "property-violated",
+    "property-disproved",
     "property-unproved",
     "analysis-incomplete",
 ]

@@ -35,8 +35,9 @@ RULE_OF = {
     nondeterminism: ("nondeterminism",),
     zero_time_cycles: ("zero-time-cycle",),
     unused_declarations: ("unused-declaration",),
-    # refuted (a proof, or a run) is an error; not proved, with a candidate path, a warning
-    property_violations: ("property-violated", "property-unproved"),
+    # disproved (a proof) is an error; not proved, with a candidate path, a warning; a
+    # violation a run shows (property-violated) comes from reach only
+    property_violations: ("property-disproved", "property-unproved"),
     incomplete_analysis: ("analysis-incomplete",),
 }
 
@@ -75,7 +76,7 @@ properties: {reachable: [off, on], deadlock_free: true, deterministic: true}
             ("unused-declaration", "switch"),
             ("property-violated", "deadlock_free"),
             ("property-violated", "deterministic"),
-            ("property-violated", "reachable: on"),
+            ("property-disproved", "reachable: on"),
             ("property-unproved", "deadlock_free"),
             ("property-unproved", "deterministic"),
             ("nondeterminism", "turn_off"),
@@ -251,14 +252,14 @@ properties:
   deterministic: true
 """,
         must={
-            ("property-violated", "reachable: never"),
+            ("property-disproved", "reachable: never"),
             ("property-unproved", "unreachable: goal"),
             ("property-unproved", "deterministic"),
             ("nondeterminism", "stepb"),
             ("dead-edge", "unreal"),
         },
         must_not={
-            ("property-violated", "reachable: goal"),
+            ("property-disproved", "reachable: goal"),
             ("property-violated", "deadlock_free"),
             ("property-violated", "unreachable: goal"),
             ("property-violated", "deterministic"),

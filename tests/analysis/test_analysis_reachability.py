@@ -44,7 +44,7 @@ def test_narrow_bounds_prune_the_edge_and_the_location_behind_it():
     assert not any(f.rule == "unreachable-location" for f in report.findings)
 
     report = check(load(5, prop="reachable"))
-    (violation,) = report.by_rule("property-violated")
+    (violation,) = report.by_rule("property-disproved")
     assert violation.where == "reachable: open" and violation.severity == "error"
     assert "'opening'" in violation.message
     assert not report.ok
