@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import hybrid
-
 from hybrid.analysis.findings import CAMPAIGN_RULES, RULES
 from hybrid.reader.schema import RULE_IDS
 
