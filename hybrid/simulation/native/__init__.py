@@ -11,8 +11,8 @@ one function with :mod:`~hybrid.simulation.native.mathlib` inlined),
 :mod:`~hybrid.simulation.native.cache` (on disk); the kernel, compiled once
 per machine, whose modules mirror the reference engine function by function
 (:mod:`~hybrid.simulation.native.integrator`,
-:mod:`~hybrid.simulation.native.decide`, :mod:`~hybrid.simulation.native.recording`,
-:mod:`~hybrid.simulation.native.watch`, :mod:`~hybrid.simulation.native.stay`,
+:mod:`~hybrid.simulation.native.boundary`, :mod:`~hybrid.simulation.native.recorder`,
+:mod:`~hybrid.simulation.native.events`, :mod:`~hybrid.simulation.native.stay`,
 :mod:`~hybrid.simulation.native.loop`, :mod:`~hybrid.simulation.native.ensemble`;
 their layouts and types in :mod:`~hybrid.simulation.native.buffers` and
 :mod:`~hybrid.simulation.native.kernel_types`); and on the Python side

@@ -1,8 +1,8 @@
 """Generated source: the kernel module, one per version of hybrid (and the ``Generated`` record).
 
 **The kernel** (:func:`kernel_module`): a copy of the kernel modules
-(everything below their ``# --- kernel ---`` line: integrator, decide,
-recording, watch, step_search, pieces, stay, loop, ensemble), each function
+(everything below their ``# --- kernel ---`` line: integrator, boundary,
+recorder, events, crossing, pieces, stay, loop, ensemble), each function
 compiled by numba with the explicit signature its annotations give (:mod:`~hybrid.simulation.native.kernel_types`).
 It does not depend on any model: it receives the model as five C function
 pointers and a table of integers, so it is compiled once per machine. Each
@@ -39,7 +39,7 @@ from hybrid.simulation.native.shares import function_costs, piece_callees
 __all__ = ["JIT", "KERNEL_MODULES", "Generated", "kernel_module", "kernel_source"]
 
 KERNEL_MODULES = (
-    "integrator", "decide", "recording", "watch", "step_search", "pieces", "stay", "loop",
+    "integrator", "boundary", "recorder", "events", "crossing", "pieces", "stay", "loop",
     "ensemble",
 )  # fmt: skip
 """The kernel modules, in this order (callees first); the last is the parallel ensemble loop."""

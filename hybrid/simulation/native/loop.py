@@ -21,7 +21,7 @@ Function by function:
   the run's parameter vector with the level slots after the parameters among it.
 
 The flow of a stay is :func:`~hybrid.simulation.native.stay.flow_stay`; the
-decisions at a point are :mod:`~hybrid.simulation.native.decide`'s.
+decisions at a point are :mod:`~hybrid.simulation.native.boundary`'s.
 
 Copied into the kernel module (below the ``kernel`` marker).
 """
@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 
+from hybrid.simulation.native.boundary import note_failure
 from hybrid.simulation.native.buffers import (
     ASK_ENTRY,
     ASK_LEFT,
@@ -100,7 +101,7 @@ from hybrid.simulation.native.buffers import (
     WI_HEADER,
     ZENO_SIZE,
 )
-from hybrid.simulation.native.decide import note_failure
+from hybrid.simulation.native.crossing import HORIZON_SAMPLES
 from hybrid.simulation.native.kernel_types import (
     DECIDE_FN_T,
     MODEL_FN_T,
@@ -114,9 +115,8 @@ from hybrid.simulation.native.kernel_types import (
     at,
     function_at,
 )
-from hybrid.simulation.native.recording import finish, record_jump, record_point
+from hybrid.simulation.native.recorder import finish, record_jump, record_point
 from hybrid.simulation.native.stay import STAY_EVENT, end_run, failed
-from hybrid.simulation.native.step_search import HORIZON_SAMPLES
 
 __all__ = [
     "jump",

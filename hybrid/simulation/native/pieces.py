@@ -2,7 +2,7 @@
 
 The stay and the run loop call the decisions through one function pointer
 (see :mod:`~hybrid.simulation.native.kernel_types`, "Pieces"), so their code
-(:mod:`~hybrid.simulation.native.decide` and the watch's start) is compiled
+(:mod:`~hybrid.simulation.native.boundary` and the watch's start) is compiled
 once, apart from the loops that use it.
 
 Copied into the kernel module (below the ``kernel`` marker).
@@ -10,10 +10,10 @@ Copied into the kernel module (below the ``kernel`` marker).
 
 from __future__ import annotations
 
+from hybrid.simulation.native.boundary import enabled_at_entry, enabled_at_event, invariant_left_at
 from hybrid.simulation.native.buffers import ASK_ENTRY, ASK_EVENT, ASK_LEFT
-from hybrid.simulation.native.decide import enabled_at_entry, enabled_at_event, invariant_left_at
+from hybrid.simulation.native.events import watch_start
 from hybrid.simulation.native.kernel_types import Array, Fns, Ints
-from hybrid.simulation.native.watch import watch_start
 
 __all__ = ["decide"]
 

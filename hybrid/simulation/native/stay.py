@@ -3,7 +3,7 @@
 :func:`flow_stay` is ``EventLoop._flow`` around ``StayIntegrator.stay``, step
 for step:
 
-- the watch of the stay (:func:`~hybrid.simulation.native.watch.watch_start`);
+- the watch of the stay (:func:`~hybrid.simulation.native.events.watch_start`);
 - the flow at the start (``_start``): a failing or non-finite derivative ends
   the run as ``nonfinite`` before the first step;
 - the integrator started warm with the last full step of the run
@@ -12,10 +12,10 @@ for step:
   the run at the last accepted point (``_gave_up``, ``nonfinite`` when the
   flow failed on the way); :data:`STALL_STEPS` steps that do not advance, or a
   crawl (``CRAWL_*``), end it as ``solver_failure``; then the step is searched
-  (:func:`~hybrid.simulation.native.step_search.first_event`) before it is
+  (:func:`~hybrid.simulation.native.crossing.first_event`) before it is
   recorded: an event ends the stay there (the points of the step before it,
   then the event point), and the transitions are decided
-  (:func:`~hybrid.simulation.native.decide.enabled_at_event`; ``blocked`` if
+  (:func:`~hybrid.simulation.native.boundary.enabled_at_event`; ``blocked`` if
   none is enabled while an invariant is being left); a failed evaluation
   ends the run at the last good sample; ``t_end`` and Ctrl-C end it at the
   step's end;
@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 
+from hybrid.simulation.native.boundary import note_failure
 from hybrid.simulation.native.buffers import (
     ASK_EVENT,
     ASK_LEFT,
@@ -78,7 +79,8 @@ from hybrid.simulation.native.buffers import (
     W_Y,
     W_YNEW,
 )
-from hybrid.simulation.native.decide import note_failure
+from hybrid.simulation.native.crossing import EV_FAILED, EV_NONE
+from hybrid.simulation.native.events import watch_terms, watch_value
 from hybrid.simulation.native.integrator import dense_eval, initial_step
 from hybrid.simulation.native.kernel_types import (
     Array,
@@ -90,9 +92,7 @@ from hybrid.simulation.native.kernel_types import (
     StepFn,
     at,
 )
-from hybrid.simulation.native.recording import finish, record_point, record_step
-from hybrid.simulation.native.step_search import EV_FAILED, EV_NONE
-from hybrid.simulation.native.watch import watch_terms, watch_value
+from hybrid.simulation.native.recorder import finish, record_point, record_step
 
 __all__ = [
     "CRAWL_DROP",

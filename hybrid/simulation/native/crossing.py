@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 
+from hybrid.simulation.native.boundary import band
 from hybrid.simulation.native.buffers import (
     S_B0,
     S_GEN,
@@ -46,10 +47,7 @@ from hybrid.simulation.native.buffers import (
     W_Y,
     W_YNEW,
 )
-from hybrid.simulation.native.decide import band
-from hybrid.simulation.native.integrator import dense_eval
-from hybrid.simulation.native.kernel_types import Array, Fns, Ints
-from hybrid.simulation.native.watch import (
+from hybrid.simulation.native.events import (
     arm_at,
     pending,
     watch_at,
@@ -57,6 +55,8 @@ from hybrid.simulation.native.watch import (
     watch_terms,
     watch_value,
 )
+from hybrid.simulation.native.integrator import dense_eval
+from hybrid.simulation.native.kernel_types import Array, Fns, Ints
 
 __all__ = [
     "BELOW",

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 
+from hybrid.simulation.native.boundary import band, note_failure, step_ahead, value_checked
 from hybrid.simulation.native.buffers import (
     F_GUARD,
     F_INVARIANT,
@@ -53,7 +54,6 @@ from hybrid.simulation.native.buffers import (
     W_TERMS,
     W_TRARMED,
 )
-from hybrid.simulation.native.decide import band, note_failure, step_ahead, value_checked
 from hybrid.simulation.native.kernel_types import Array, Fns, Ints, at
 
 __all__ = ["arm_at", "orient_by_slope", "orientation", "pending", "watch_at", "watch_min", "watch_start", "watch_terms",
