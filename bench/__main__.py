@@ -77,6 +77,10 @@ def main(argv: list[str] | None = None) -> int:
     print("compiled backend, memory of a long run", report["native_memory"])
     report["native_compile"] = native_backend.compile_times()
     print("compiled backend, compile times", report["native_compile"])
+    from bench import backend_choice
+
+    report["backend_choice"] = backend_choice.run(2 if quick else 3)
+    print("backend choice", json.dumps(report["backend_choice"]))
     report["peers"] = peers.run()
     print("peers", report["peers"])
     from bench import reach_building

@@ -243,7 +243,10 @@ def compile_times() -> dict[str, float]:
     model only; the third finds both cached. ``first_process_kernel_and_model_s``:
     a first process that asks for the model at once (as ``simulate`` does), so
     that it compiles the model while worker processes compile the kernel's
-    pieces (the probes above compile the kernel, waiting for it, then the model).
+    pieces (the probes above compile the kernel, waiting for it, then the model);
+    ``first_process_kernel_and_model_one_process_s``: the same with the compile in one
+    process (``HYBRID_NATIVE_COMPILE_PROCESSES=1``), the measure of what sharing the
+    kernel's compile among processes is worth.
     """
 
     def probe(spec: str, cache: str) -> list[float]:
@@ -253,12 +256,20 @@ def compile_times() -> dict[str, float]:
                              env=env, cwd=ROOT, check=True)  # fmt: skip
         return [float(v) for v in out.stdout.split()]
 
-    with tempfile.TemporaryDirectory() as cache:  # what a user's first compiled run waits for
-        env = {**os.environ, "HYBRID_NATIVE_CACHE": cache}
-        code = _FIRST.format(spec=str(ROOT / "specs" / "thermostat.yaml"))
-        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                             env=env, cwd=ROOT, check=True)  # fmt: skip
-        first_both = float(out.stdout.split()[-1])
+    def first_compile(processes: str | None) -> float:
+        """What a user's first compiled run waits for (``processes``: the compile's)."""
+        with tempfile.TemporaryDirectory() as cache:
+            env = {**os.environ, "HYBRID_NATIVE_CACHE": cache}
+            env.pop("HYBRID_NATIVE_COMPILE_PROCESSES", None)
+            if processes is not None:
+                env["HYBRID_NATIVE_COMPILE_PROCESSES"] = processes
+            code = _FIRST.format(spec=str(ROOT / "specs" / "thermostat.yaml"))
+            out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                 env=env, cwd=ROOT, check=True)  # fmt: skip
+            return float(out.stdout.split()[-1])
+
+    first_both = first_compile(None)  # the kernel's pieces shared among the CPUs
+    first_alone = first_compile("1")  # all in this process: what the shares save
     with tempfile.TemporaryDirectory() as cache:
         first = probe("thermostat.yaml", cache)
         new_model = probe("bouncing_ball.yaml", cache)
@@ -270,6 +281,8 @@ def compile_times() -> dict[str, float]:
         "uvms_mission_2_cached_model_load_s": mission_cached[3],
         "uvms_mission_2_cached_process_total_s": sum(mission_cached),
         "first_process_kernel_and_model_s": first_both,
+        "first_process_kernel_and_model_one_process_s": first_alone,
+        "parallel_compile_saving": 1.0 - first_both / first_alone,
         "first_process_kernel_s": first[2],
         "first_process_model_s": first[3],
         "new_model_compile_s": new_model[3],

@@ -82,7 +82,14 @@ def render(report: dict[str, Any]) -> str:
                 f"A first process that asks for the thermostat at once (as `simulate` does) "
                 f"compiles the kernel and the model in "
                 f"{compile_s['first_process_kernel_and_model_s']:.1f} s (the kernel's pieces in "
-                f"worker processes meanwhile, one per CPU).",
+                f"worker processes meanwhile, one per CPU)"
+                + (
+                    f"; with the whole compile in that one process "
+                    f"(`HYBRID_NATIVE_COMPILE_PROCESSES=1`) it takes "
+                    f"{compile_s['first_process_kernel_and_model_one_process_s']:.1f} s."
+                    if "first_process_kernel_and_model_one_process_s" in compile_s
+                    else "."
+                ),
                 "",
             ]
         if "uvms_mission_2_model_compile_s" in compile_s:
@@ -93,6 +100,7 @@ def render(report: dict[str, Any]) -> str:
                 f"whole process {compile_s['uvms_mission_2_cached_process_total_s']:.2f} s.",
                 "",
             ]
+    lines += _choice(report.get("backend_choice"))
     lines += _reach(report.get("reach"))
     lines += _components(report.get("components"))
     lines += _ring(report.get("coupled_ring"))
@@ -102,6 +110,31 @@ def render(report: dict[str, Any]) -> str:
         state = "available" if info["available"] else "not available"
         lines.append(f"- **{name}**: {state}. {info['reason']}")
     return "\n".join(lines)
+
+
+def _choice(c: dict[str, Any] | None) -> list[str]:
+    """The default backend choice in whole processes (bench/backend_choice.py)."""
+    if not c:
+        return []
+    lines = [
+        f"The default backend choice, whole `hybrid` processes (CPU s of the process and its "
+        f"children, median of {c['repeats']}; cold: an empty compiled cache each run; warm: a "
+        f"filled one):",
+        "",
+        "| cache | simulate: default | auto | scipy | sweep of "
+        f"{c['points']:,} points: default | scipy | compiled | default / faster | "
+        "default / slower |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for state in ("cold", "warm"):
+        cpu, ratio = c["cpu_s"][state], c[state]
+        lines.append(
+            f"| {state} | {cpu['simulate default']:.2f} | {cpu['simulate auto']:.2f} | "
+            f"{cpu['simulate scipy']:.2f} | {cpu['sweep default']:.2f} | "
+            f"{cpu['sweep scipy']:.2f} | {cpu['sweep compiled']:.2f} | "
+            f"{ratio['sweep_default_over_best']:.2f} | {ratio['sweep_default_over_worst']:.2f} |"
+        )
+    return [*lines, ""]
 
 
 def _reach(r: dict[str, Any] | None) -> list[str]:
