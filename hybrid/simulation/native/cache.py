@@ -213,12 +213,15 @@ def seal(module: ModuleType) -> None:
 
 
 def _import(name: str, path: Path) -> ModuleType:
+    """The generated module at ``path``, imported (which does no work), then built (its
+    ``build()`` compiles it or loads it from numba's cache)."""
     spec = importlib.util.spec_from_file_location(name, path)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # numba's cache re-imports the module by name
     try:
         spec.loader.exec_module(module)
+        module.build()
     except BaseException:
         sys.modules.pop(name, None)
         raise

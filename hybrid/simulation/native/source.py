@@ -233,13 +233,16 @@ def generate(model: NativeModel) -> Generated:
     footer = [
         "",
         "# ---- compiled with numba (cached on disk beside this file) ----",
-        f"for _name in {tuple(helpers)!r}:",
-        f"    globals()[_name] = njit({JIT})(globals()[_name])",  # LLVM inlines them
-        f"for _name in {tuple(body)!r}:",
-        f"    globals()[_name] = njit({JIT}{inline})(globals()[_name])",
-        "with warnings.catch_warnings():",
-        "    warnings.simplefilter('ignore', NumbaExperimentalFeatureWarning)",
-        "    model = cfunc(model_signature(), cache=True, error_model='numpy')(model)",
+        "def build():",
+        '    """Compile or load the model: importing this module does no work, this does."""',
+        "    global model",
+        f"    for _name in {tuple(helpers)!r}:",
+        f"        globals()[_name] = njit({JIT})(globals()[_name])",  # LLVM inlines them
+        f"    for _name in {tuple(body)!r}:",
+        f"        globals()[_name] = njit({JIT}{inline})(globals()[_name])",
+        "    with warnings.catch_warnings():",
+        "        warnings.simplefilter('ignore', NumbaExperimentalFeatureWarning)",
+        "        model = cfunc(model_signature(), cache=True, error_model='numpy')(model)",
         "",
     ]
     source = "\n".join([*header, mathlib, "", *functions, *footer])

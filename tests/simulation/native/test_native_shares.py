@@ -42,17 +42,20 @@ MODULE = textwrap.dedent(
     def finish_compiling():
         pass
 
-    try:
-        if not maybe_cached(__file__, __name__, ("first", "second")):
-            raise LookupError
-        for name in ("first", "second"):
-            globals()[name] = _jit(name)
-    except Exception:
-        finish_compiling = compile_kernel(globals(), _jit, _NAMES, {"first": 2.0, "second": 1.0},
-                                          {"first": ("helper",), "second": ("helper",)},
-                                          __file__, __name__)
-    HERE_BEFORE_FINISH = [name for name in ("first", "second") if hasattr(globals()[name], "py_func")]
-    finish_compiling()
+    def build():
+        global finish_compiling, HERE_BEFORE_FINISH
+        try:
+            if not maybe_cached(__file__, __name__, ("first", "second")):
+                raise LookupError
+            for name in ("first", "second"):
+                globals()[name] = _jit(name)
+        except Exception:
+            finish_compiling = compile_kernel(globals(), _jit, _NAMES, {"first": 2.0, "second": 1.0},
+                                              {"first": ("helper",), "second": ("helper",)},
+                                              __file__, __name__)
+        HERE_BEFORE_FINISH = [name for name in ("first", "second")
+                              if hasattr(globals()[name], "py_func")]
+        finish_compiling()
     """
 )
 
@@ -64,6 +67,7 @@ def _load(path: Path, name: str) -> ModuleType:
     sys.modules[name] = module
     try:
         spec.loader.exec_module(module)
+        module.build()
     finally:
         del sys.modules[name]
     return module
@@ -127,6 +131,7 @@ def test_a_worker_compiles_its_share_and_this_process_loads_it(tmp_path: Path) -
         f"spec = importlib.util.spec_from_file_location('hybrid_native_shares_probe', {str(path)!r})\n"
         "m = importlib.util.module_from_spec(spec); sys.modules[spec.name] = m\n"
         "spec.loader.exec_module(m)\n"
+        "m.build()\n"
         "print(m.first(1.0), m.second(1.0), sum(m.first.stats.cache_hits.values()),"
         " sum(m.second.stats.cache_hits.values()), *m.HERE_BEFORE_FINISH)\n"
     )
