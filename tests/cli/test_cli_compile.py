@@ -35,3 +35,31 @@ def test_compile_refuses_an_invalid_file_with_its_position(tmp_path: Path) -> No
     assert done.returncode == 2
     assert_no_traceback(done.stderr)
     assert done.stderr.startswith(f"{bad}:3:")
+
+
+def test_the_compile_notice_names_what_a_first_run_compiles(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from hybrid.simulation.native import cache
+    from hybrid.simulation.native.choice import KERNEL_COMPILE_S, compile_notice
+    from hybrid.simulation.native.kernel_text import Generated, kernel_module
+    from hybrid.simulation.native.source import generate
+    from hybrid.simulation.native.structure import NativeModel
+
+    monkeypatch.setenv(cache.CACHE_ENV, str(tmp_path))  # an empty cache
+    model = hybrid.load(SPECS / "thermostat.yaml")
+    notice = compile_notice(model)
+    assert notice is not None
+    assert f"the compiled loop (once per machine, about {KERNEL_COMPILE_S:.0f} s)" in notice
+    assert "the model (about 1 s)" in notice  # the thermostat's estimate rounds to 1 s
+    import numba
+
+    def seal(source: Generated) -> None:  # what a finished compile leaves
+        folder = tmp_path / cache.cache_key(source, numba.__version__)
+        folder.mkdir()
+        (folder / "manifest.json").write_text("{}")
+
+    seal(kernel_module())
+    assert compile_notice(model) == "compiling the model (about 1 s); later runs load them from the cache"
+    seal(generate(NativeModel(model)))
+    assert compile_notice(model) is None

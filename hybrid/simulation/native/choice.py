@@ -37,7 +37,7 @@ from typing import Any
 from hybrid.errors import HybridError
 from hybrid.simulation.native.features import METHOD
 
-__all__ = ["KERNEL_COMPILE_S", "LOAD_S", "Choice", "cached", "choose"]
+__all__ = ["KERNEL_COMPILE_S", "LOAD_S", "Choice", "cached", "choose", "compile_notice"]
 
 KERNEL_COMPILE_S = 8.0
 """Seconds a first process on a machine spends compiling the kernel (bench: 7.7 s, 2 cores)."""
@@ -114,6 +114,24 @@ def choose(model: Any, runs: int, *, method: str = "RK45", inputs: bool = False,
     saved = runs * run_s() * (1.0 - COMPILED_SHARE)
     verdict = "compiled" if saved > cost else "scipy"
     return Choice(verdict, f"{runs} runs would save about {saved:.1f} s; {what}")
+
+
+def compile_notice(model: Any) -> str | None:
+    """What a first compiled run of ``model`` compiles before it starts, and about how long
+    that takes here; ``None`` when the model and the compiled loop are both cached.
+
+    A command prints it before it compiles, so that a user knows why a first run waits
+    (and that later ones will not).
+    """
+    model_state, kernel_state, estimate = cached(model)
+    parts = []
+    if kernel_state == "missing":
+        parts.append(f"the compiled loop (once per machine, about {KERNEL_COMPILE_S:.0f} s)")
+    if model_state == "missing":
+        parts.append(f"the model (about {max(1.0, estimate):.0f} s)")
+    if not parts:
+        return None
+    return f"compiling {' and '.join(parts)}; later runs load them from the cache"
 
 
 def _sealed(directory: Path) -> bool:
