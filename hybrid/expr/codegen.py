@@ -30,7 +30,7 @@ from hybrid.expr.functions import BUILTINS, Function
 from hybrid.expr.generated import define
 from hybrid.expr.printer import SourcePrinter
 
-__all__ = ["CodeContext", "EvalFailure", "compile_function"]
+__all__ = ["CodeContext", "EvalFailure", "Stash", "compile_function", "reads_library"]
 
 _ERRORS = (ArithmeticError, ValueError, TypeError)
 
@@ -67,6 +67,46 @@ class CodeContext:
     failure: EvalFailure = field(default_factory=EvalFailure)
 
 
+class Stash:
+    """The signals one function computed at its last point, for others to read there.
+
+    A function compiled with ``stash=`` (the flow the solver steps) keeps the
+    values of the signals it computed, with its point ``(t, x)``, in
+    ``slot[0]``; a function compiled with ``share=`` the same stash reads them
+    instead of computing them again when it is called at exactly that point
+    (the same ``t`` and the same bytes of ``x``), and computes only the signals
+    the stash lacks. A Runge-Kutta solver evaluates the flow last at the end of
+    the step it accepts, where the simulator then evaluates its watch and
+    stores a point. The values are the same either way (the same source
+    computes them from the same floats). ``names`` (the signals kept, in
+    order) is set when the stashing function is compiled.
+
+    Examples
+    --------
+    >>> from hybrid.expr.parse import Scope, parse_expression
+    >>> from hybrid.expr.functions import Function
+    >>> calls = []
+    >>> double = Function("double", lambda v: calls.append(v) or 2 * v, 1, 1, builtin=False)
+    >>> scope = Scope({"x": "state", "d": "signal"}, functions={"double": double})
+    >>> ctx = CodeContext(states=("x",), signals={"d": parse_expression("double(x)", scope)},
+    ...                   functions={"double": double})
+    >>> stash = Stash([None])
+    >>> flow = compile_function("flow", [parse_expression("-d", scope)], ctx, stash=stash)
+    >>> signals = compile_function("out", [parse_expression("d + 1", scope)], ctx, share=stash)
+    >>> import numpy as np
+    >>> flow(0.0, np.array([3.0])), signals(0.0, np.array([3.0])), signals(0.5, np.array([3.0]))
+    ([-6.0], [7.0], [7.0])
+    >>> calls                           # the second call read the stash; the third computed
+    [3.0, 3.0]
+    """
+
+    __slots__ = ("names", "slot")
+
+    def __init__(self, slot: list[Any]) -> None:
+        self.slot = slot
+        self.names: tuple[str, ...] = ()
+
+
 _SAFE_CALLS = {"min", "max", "abs"}
 
 
@@ -83,6 +123,24 @@ def _float_safe(exprs: Sequence[ir.Expr]) -> bool:
             if isinstance(node, ir.Call) and node.func not in _SAFE_CALLS:
                 return False
     return True
+
+
+def _calls(definitions: Sequence[ir.Expr], functions: Mapping[str, Function]) -> bool:
+    """True if some definition calls a library function."""
+    return any(
+        isinstance(node, ir.Call) and node.func in functions
+        for root in definitions
+        for node in ir.walk(root)
+    )
+
+
+def reads_library(outputs: Sequence[ir.Expr], ctx: CodeContext) -> bool:
+    """True if the signals ``outputs`` read call a library function (worth a :class:`Stash`)."""
+    used: set[str] = set()
+    for e in outputs:
+        used |= ir.names_in(e)
+    order = evaluation_order(used, ctx.signals)
+    return _calls([ctx.signals[s] for s in order], ctx.functions)
 
 
 def _state_uses(
@@ -106,6 +164,8 @@ def compile_function(
     shape: str = "list",
     reset_of: Sequence[ir.Expr | None] | None = None,
     part: bool = False,
+    stash: Stash | None = None,
+    share: Stash | None = None,
 ) -> Callable[..., Any]:
     """Compile ``outputs`` into one function ``f(t, x)`` of a time and a 1-D numpy array.
 
@@ -119,6 +179,12 @@ def compile_function(
     is then the state as a list of floats (``x.tolist()``, converted once by
     the caller), only the state variables read are taken from it, and a math
     error propagates to the caller, which records it for the whole.
+
+    ``stash`` keeps the signals computed at each call, and ``t`` is taken as
+    a Python float (a solver passes numpy scalars, whose arithmetic is slower
+    and does not raise where floats do); ``share`` reads a stash's signals at
+    the point it was kept (:class:`Stash`). Neither applies to ``part`` or
+    ``reset_of``.
     """
     exprs = list(outputs)
     if reset_of is not None:
@@ -141,6 +207,10 @@ def compile_function(
 
     body: list[str] = []
     definitions = [ctx.signals[s] for s in order]
+    if part or reset_of is not None or not ctx.states:
+        stash = share = None
+    if stash is not None:
+        body.append("t = _float(t)")
     uses = _state_uses(exprs, definitions, ctx.states)
     tiny = all(n <= 1 for n in uses.values()) and sum(uses.values()) <= 3
     if part:
@@ -157,8 +227,28 @@ def compile_function(
         body.append(f"{targets}, = x.tolist()")
     for u in sorted(n for n in all_used if n in ctx.inputs):
         body.append(f"{names[u]} = _in_{u}(t)")
-    for s, definition in zip(order, definitions, strict=True):
-        body.append(f"{names[s]} = {printer.emit(definition)[0]}")
+    kept = share.names if share is not None else ()
+    if kept and set(kept) & set(order) and _calls(definitions, ctx.functions):
+        # at the stash's point its signals are read, the others computed from them
+        body.append("_s = _slot[0]")
+        body.append(
+            "if _s is not None and _s[0] is _share and _s[1] == t and _s[2] == x.tobytes() "
+            "and (t or _copysign(1.0, t) == _copysign(1.0, _s[1])):"
+        )
+        body.append(f"    {', '.join(names[s] for s in kept)}, = _s[3]")
+        lacking = [(s, d) for s, d in zip(order, definitions, strict=True) if s not in kept]
+        body.extend(f"    {names[s]} = {printer.emit(d)[0]}" for s, d in lacking)
+        body.append("else:")
+        body.extend(
+            f"    {names[s]} = {printer.emit(d)[0]}" for s, d in zip(order, definitions, strict=True)
+        )
+    else:
+        share = None
+        for s, definition in zip(order, definitions, strict=True):
+            body.append(f"{names[s]} = {printer.emit(definition)[0]}")
+    if stash is not None and order:
+        stash.names = tuple(order)
+        body.append(f"_slot[0] = (_stash, t, x.tobytes(), ({', '.join(names[s] for s in order)},))")
 
     failed: str
     if reset_of is not None:
@@ -195,7 +285,13 @@ def compile_function(
         "_nan": math.nan,
         "_K": tuple(consts),
         "_pow": math.pow,
+        "_copysign": math.copysign,
+        "_float": float,
     }
+    if stash is not None:
+        scope["_slot"], scope["_stash"] = stash.slot, stash
+    if share is not None:
+        scope["_slot"], scope["_share"] = share.slot, share
     for fname, func in BUILTINS.items():
         scope[f"_{fname}"] = func.fn
     scope["_min"], scope["_max"] = min, max

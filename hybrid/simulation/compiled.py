@@ -4,7 +4,10 @@ For a mode (one location per component) this compiles, once and lazily: the
 right-hand side ``rhs(t, x) -> list`` (signals in dependency order, then every
 derivative), the output function giving every signal column, and per
 transition and invariant a ``rho`` (``<= 0`` iff it holds), a boolean ``holds``
-and a reset.
+and a reset. If the flow reads signals that call library functions, the
+solver steps a second form of it, ``flow``, which keeps them for the invariants,
+guards and outputs evaluated at the same point (the end of each step;
+:class:`~hybrid.expr.codegen.Stash`).
 A guard with equality atoms (docs/semantics.md, "Equality guards") also gets
 the difference ``a - b`` of each atom (``levels``) and, compiled on first use,
 its *oriented* rho (the atoms read one-sided) and its *snapped* forms (the
@@ -45,7 +48,7 @@ from typing import Any
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.expr import ir
-from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
+from hybrid.expr.codegen import CodeContext, EvalFailure, Stash, compile_function, reads_library
 from hybrid.expr.rho import guard_to_rho, level_key, levels
 from hybrid.model import Automaton
 from hybrid.modes import Binder, Mode, ModeView, TransitionView, mode_of
@@ -116,6 +119,9 @@ class CompiledModel:
         self._rhos: dict[int, tuple[ir.Expr, ir.Expr]] = {}
         self._reads: dict[int, tuple[ir.Expr, frozenset[str]]] = {}
         self._zero = ir.Num(0.0)  # the flow of a state variable a location leaves alone
+        self.stash_slot: list[Any] = [None]
+        """Where the stepped flow keeps its signals (read by :mod:`~hybrid.simulation.recorder`)."""
+        self._stashes: dict[int, Stash] = {}
         self.parts = Parts(self, self._binder) if uses_parts(self.system) else None
 
     def _external_inputs(self) -> list[str]:
@@ -257,9 +263,31 @@ class CompiledModel:
             key,
             shape="list",
         )
+        flow: Fn | None = None
+        share: Stash | None = None
+        if reads_library(flows, ctx):
+            stash = Stash(self.stash_slot)
+            flow = self._function(
+                f"flow_{tag}",
+                "stepped flow",
+                f"the flow of {view.name}",
+                flows,
+                replace(ctx, failure=self.flow_failure),
+                key,
+                shape="list",
+                stash=stash,
+            )
+            share = self._stashes.setdefault(id(flow), stash)
         outputs_ir = signal_outputs(self.system)
         outputs = self._function(
-            f"out_{tag}", "signals", f"the signals of {view.name}", outputs_ir, ctx, key, shape="tuple"
+            f"out_{tag}",
+            "signals",
+            f"the signals of {view.name}",
+            outputs_ir,
+            ctx,
+            key,
+            shape="tuple",
+            share=share,
         )
         invariants = []
         for i, (name, expr) in enumerate(view.invariants):
@@ -269,7 +297,14 @@ class CompiledModel:
                 CompiledCondition(
                     name,
                     self._function(
-                        f"inv_{tag}_{i}", role, what, [self._rho(expr)], ctx, key, shape="scalar"
+                        f"inv_{tag}_{i}",
+                        role,
+                        what,
+                        [self._rho(expr)],
+                        ctx,
+                        key,
+                        shape="scalar",
+                        share=share,
                     ),
                     self._function(
                         f"invb_{tag}_{i}", role, what, [expr], ctx, key, shape="scalar"
@@ -295,7 +330,14 @@ class CompiledModel:
                 CompiledTransition(
                     name=tr.name,
                     rho=self._function(
-                        f"g_{tag}_{i}", role, what, [self._rho(tr.guard)], ctx, key, shape="scalar"
+                        f"g_{tag}_{i}",
+                        role,
+                        what,
+                        [self._rho(tr.guard)],
+                        ctx,
+                        key,
+                        shape="scalar",
+                        share=share,
                     ),
                     holds=self._function(
                         f"gb_{tag}_{i}", role, what, [tr.guard], ctx, key, shape="scalar"
@@ -314,7 +356,9 @@ class CompiledModel:
                     variant=variant if differences else None,
                 )
             )
-        return CompiledMode(view.key, view.name, rhs, outputs, invariants, transitions, view.urgent)
+        return CompiledMode(
+            view.key, view.name, rhs, outputs, invariants, transitions, view.urgent, flow
+        )
 
 
 def _identifier(name: str) -> str:

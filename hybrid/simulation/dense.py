@@ -53,13 +53,15 @@ def _fractions(m: int) -> np.ndarray:
 class StepCurve:
     """The state over one accepted step ``[t0, t1]``: ``at(t)`` and ``many(ts)`` (rows)."""
 
-    __slots__ = ("t0", "t1", "x0", "x1")
+    __slots__ = ("split", "t0", "t1", "x0", "x1")
 
     def __init__(self, t0: float, t1: float, x0: np.ndarray, x1: np.ndarray) -> None:
         self.t0 = t0
         self.t1 = t1
         self.x0 = x0
         self.x1 = x1
+        self.split: tuple[int, np.ndarray] | None = None
+        """The last :meth:`parts` asked for: the search and the monitor both cut the step so."""
 
     def at(self, t: float) -> np.ndarray:
         """The state at ``t`` (exactly ``x1`` at ``t1``, ``x0`` at ``t0``)."""
@@ -70,7 +72,18 @@ class StepCurve:
         raise NotImplementedError
 
     def parts(self, m: int) -> np.ndarray:
-        """The states at ``t0 + k (t1 - t0) / m`` for ``k = 1 .. m - 1``, one row each."""
+        """The states at ``t0 + k (t1 - t0) / m`` for ``k = 1 .. m - 1``, one row each.
+
+        The array is shared by the callers that ask for the same ``m`` (read only).
+        """
+        split = self.split
+        if split is not None and split[0] == m:
+            return split[1]
+        rows = self._parts(m)
+        self.split = (m, rows)
+        return rows
+
+    def _parts(self, m: int) -> np.ndarray:
         return self.many(self.t0 + (self.t1 - self.t0) * _fractions(m))
 
     def dense_output(self) -> DenseOutput:
@@ -107,7 +120,7 @@ class _PolynomialCurve(StepCurve):
         result: np.ndarray = (self.x0[:, None] + self.h * self.q.dot(p)).T
         return result
 
-    def parts(self, m: int) -> np.ndarray:
+    def _parts(self, m: int) -> np.ndarray:
         key = (m, self.q.shape[1])
         p = _POWERS.get(key)
         if p is None:

@@ -93,6 +93,9 @@ class CompiledMode:
     transitions: list[CompiledTransition]
     urgent: tuple[str, ...] = ()
     """Urgent locations of the mode: no time may pass while in one."""
+    flow: Fn | None = None
+    """What the solver steps, if not ``rhs``: ``rhs`` keeping its signals for the watch
+    and the outputs at the step's end (:class:`~hybrid.expr.codegen.Stash`)."""
 
 
 @dataclass(frozen=True)

@@ -86,7 +86,7 @@ class _Track:
     __slots__ = (
         "always",
         "best",
-        "best_band",
+        "best_x",
         "failed",
         "fn",
         "hi",
@@ -103,7 +103,7 @@ class _Track:
         self.sign = 1.0 if self.always else -1.0
         self.lo, self.hi = window if window is not None else (-math.inf, math.inf)
         self.best = math.inf
-        self.best_band = 0.0
+        self.best_x: Any = None  # the state at the best value (its band read at the end)
         self.violated_at: float | None = None
         self.seen = False
         self.failed: tuple[float, str] | None = None
@@ -168,11 +168,43 @@ class Monitor:
             grid = grids.get((a, b))
             if grid is None:
                 grid = grids[(a, b)] = _grid(curve, a, b, self.spacing)
-            for t, x in zip(*grid, strict=True):
-                value = self._value(tr, fn, t, x)
-                if value is None:
+            self._samples(tr, fn, curve, *grid)
+
+    def _samples(
+        self, tr: _Track, fn: Fn, curve: StepCurve, times: list[float], rows: list[Any]
+    ) -> None:
+        """Push the samples ``times`` (states ``rows``) of ``curve``'s step in order.
+
+        The margin is evaluated at all of them first; where an evaluation fails
+        (or a failure is pending) the samples from there on go one by one
+        through :meth:`_value`, which ends the track as it would have.
+        """
+        failure = self.table.failure
+        start = 0
+        if failure.error is None:
+            values = [fn(t, x) for t, x in zip(times, rows, strict=True)]
+            if failure.error is not None:
+                failure.clear()  # met again, at its sample, below
+                values = []
+            if self._quiet(tr, curve, times, rows, values):
+                return
+            sign, push, isfinite = tr.sign, self._push, math.isfinite
+            for v in values:
+                if failure.error is not None:  # left by a refinement: the next sample fails
                     break
-                self._push(tr, (t, value, x, curve))
+                margin = float(v)
+                if not isfinite(margin):
+                    t = times[start]
+                    tr.failed = (t, f"its margin is {margin} (at t={t:.9g})")
+                    tr.piece = []
+                    return
+                push(tr, (times[start], sign * margin, rows[start], curve))
+                start += 1
+        for t, x in zip(times[start:], rows[start:], strict=True):
+            value = self._value(tr, fn, t, x)
+            if value is None:
+                break
+            self._push(tr, (t, value, x, curve))
 
     def results(self, t_final: float) -> dict[str, RequirementResult]:
         """Each requirement's result, the run having ended at ``t_final``."""
@@ -191,7 +223,8 @@ class Monitor:
                 )
             else:
                 peak = -tr.best if tr.seen else -math.inf
-                holds = tr.seen and peak >= -tr.best_band
+                best_band = band(tr.best_x) if tr.best_x is not None else 0.0
+                holds = tr.seen and peak >= -best_band
                 found[w.name] = RequirementResult(w.name, holds, peak, None if holds else closes)
         return found
 
@@ -212,18 +245,54 @@ class Monitor:
             return None
         return tr.sign * value
 
+    def _quiet(
+        self, tr: _Track, curve: StepCurve, times: list[float], rows: list[Any], values: list[Any]
+    ) -> bool:
+        """Take the samples at once if pushing them one by one would only keep the lowest.
+
+        That is when the stretch is under way (two samples kept), every value is
+        finite, none is a local minimum of the values with the two kept before
+        them (nothing to refine) and none is below 0 (no violation); otherwise
+        False, and nothing is changed.
+        """
+        piece = tr.piece
+        if len(piece) != 2 or tr.started or not values:
+            return False
+        sign = tr.sign
+        signed = [sign * float(v) for v in values]
+        if not all(map(math.isfinite, signed)):
+            return False
+        low = min(signed)
+        if tr.always and tr.violated_at is None and not low >= 0.0:
+            return False
+        seq = [piece[0][1], piece[1][1], *signed]
+        for i in range(1, len(seq) - 1):
+            left, mid, right = seq[i - 1], seq[i], seq[i + 1]
+            if mid <= left and mid <= right and (mid < left or mid < right):
+                return False
+        tr.seen = True
+        if low < tr.best:
+            tr.best = low
+            tr.best_x = rows[signed.index(low)]
+        last = (times[-1], signed[-1], rows[-1], curve)
+        if len(signed) >= 2:
+            tr.piece = [(times[-2], signed[-2], rows[-2], curve), last]
+        else:
+            tr.piece = [piece[1], last]
+        return True
+
     def _observe(self, tr: _Track, t: float, value: float, x: Any) -> None:
         tr.seen = True
         if value < tr.best:
             tr.best = value
-            tr.best_band = band(x)
+            tr.best_x = x
 
     def _push(self, tr: _Track, sample: Sample) -> None:
         value = sample[1]
         tr.seen = True
         if value < tr.best:
             tr.best = value
-            tr.best_band = band(sample[2])
+            tr.best_x = sample[2]
         piece = tr.piece
         if len(piece) == 1 and tr.started:
             tr.started = False

@@ -3,7 +3,10 @@
 Points are collected per stay (:class:`StayRecord`: the end of every accepted
 step, or the points of a ``dt`` grid, and the end of the stay) and stored as
 arrays when the stay ends, signals computed then (a signal that fails must end
-the run there); the columns are assembled once, at the end.
+the run there); the columns are assembled once, at the end. At each step's end
+the recorder keeps what the stepped flow left there
+(:class:`~hybrid.expr.codegen.Stash`), so that the signals of that point reuse
+what it computed.
 """
 
 from __future__ import annotations
@@ -37,6 +40,9 @@ class StayRecord:
         self.dense = recorder.settings.dense
         self.step_ends = [t0]
         self.interpolants: list[Any] = []
+        self.slot = recorder.compiled.stash_slot if mode.flow is not None else None
+        self.stashes: list[Any] = []
+        """What the stash held as each step end was recorded, read again by :meth:`close`."""
 
     def step(self, curve: StepCurve, stop: float | None) -> None:
         """Record an accepted step; ``stop`` is where the stay ends inside it (None: it goes on).
@@ -49,6 +55,8 @@ class StayRecord:
             if stop is None:
                 self.ts.append(curve.t1)
                 self.xs.append(curve.x1)
+                if self.slot is not None:
+                    self.stashes.append(self.slot[0])
         else:
             grid = self._grid(curve.t0, curve.t1 if stop is None else stop, stop is None)
             if grid.size:
@@ -77,7 +85,9 @@ class StayRecord:
             self.ts.append(t)
             self.xs.append(x)
         if self.ts:
-            self.recorder.points(self.mode, self.j, np.array(self.ts), np.array(self.xs))
+            self.recorder.points(
+                self.mode, self.j, np.array(self.ts), np.array(self.xs), self.stashes
+            )
         if self.dense and self.interpolants:
             end = self.ts[-1] if self.ts else self.step_ends[-1]
             solution = OdeSolution(self.step_ends, self.interpolants)
@@ -109,12 +119,30 @@ class Recorder:
         if self.monitor is not None:
             self.monitor.point(mode, t, x)
 
-    def points(self, mode: CompiledMode, j: int, ts: np.ndarray, xs: np.ndarray) -> None:
-        """Store points ``ts`` (n,) with states ``xs`` (n, d) in ``mode`` at hybrid time ``j``."""
+    def points(
+        self,
+        mode: CompiledMode,
+        j: int,
+        ts: np.ndarray,
+        xs: np.ndarray,
+        stashes: list[Any] | None = None,
+    ) -> None:
+        """Store points ``ts`` (n,) with states ``xs`` (n, d) in ``mode`` at hybrid time ``j``.
+
+        ``stashes[k]`` is what the stash held when point ``k`` was recorded (if given).
+        """
         if ts.size:
             self.count += ts.size
             outputs = mode.outputs
-            signals = [outputs(t, x) for t, x in zip(ts.tolist(), xs, strict=True)]
+            if stashes:
+                slot = self.compiled.stash_slot
+                signals = []
+                for k, (t, x) in enumerate(zip(ts.tolist(), xs, strict=True)):
+                    if k < len(stashes):
+                        slot[0] = stashes[k]
+                    signals.append(outputs(t, x))
+            else:
+                signals = [outputs(t, x) for t, x in zip(ts.tolist(), xs, strict=True)]
             self.chunks.append((mode, j, ts, xs, signals))
 
     def stay(self, mode: CompiledMode, j: int, t0: float) -> StayRecord:

@@ -212,7 +212,7 @@ class StayIntegrator:
         settings = self.settings
         try:
             return self.solver_class(
-                mode.rhs,
+                mode.rhs if mode.flow is None else mode.flow,
                 t0,
                 x0,
                 settings.t_end,
