@@ -46,9 +46,9 @@ from hybrid.model import Automaton
 from hybrid.progress import Progress, Tracker, reporter
 from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.margins import watched_requirements
-from hybrid.simulation.settings import Settings
+from hybrid.simulation.settings import DEFAULTS, Settings, merged
 
-__all__ = ["SOLVER_OPTIONS", "executor_for", "hard_limit", "sweep"]
+__all__ = ["SOLVER_OPTIONS", "campaign_settings", "executor_for", "hard_limit", "sweep"]
 
 SOLVER_OPTIONS = (
     "rtol",
@@ -64,10 +64,36 @@ SOLVER_OPTIONS = (
 """The keywords of :func:`hybrid.simulate` a campaign passes to every run."""
 
 
+def campaign_settings(
+    what: str, settings: Settings | None, t_end: float | None, solver: Mapping[str, Any]
+) -> tuple[Settings, dict[str, Any]]:
+    """The settings of a campaign's runs, and the options of them that are not the defaults.
+
+    ``solver`` are the keywords given to ``what`` (an unknown one is refused as
+    Python refuses it); those given override ``settings``. The options returned
+    are what every run passes to :func:`hybrid.simulate` (and what the
+    campaign's fingerprint records): the same runs give the same options,
+    whether keywords or a :class:`~hybrid.simulation.settings.Settings` said them.
+
+    Examples
+    --------
+    >>> s, options = campaign_settings("sweep", None, 2.0, {"rtol": 1e-9, "atol": 1e-9})
+    >>> s.rtol, options
+    (1e-09, {'rtol': 1e-09})
+    """
+    unknown = sorted(set(solver) - set(SOLVER_OPTIONS))
+    if unknown:
+        raise UsageError(f"{what}() got an unexpected keyword '{unknown[0]}'")
+    chosen = merged(settings, t_end, **solver)
+    options = {k: getattr(chosen, k) for k in SOLVER_OPTIONS}
+    return chosen, {k: v for k, v in options.items() if v != DEFAULTS[k]}
+
+
 def sweep(
     model: Automaton | System,
-    t_end: float,
+    t_end: float | None = None,
     *,
+    settings: Settings | None = None,
     grid: Mapping[str, Sequence[float] | int] | Sequence[Axis | tuple[str, int]] | None = None,
     vary: Mapping[str, tuple[float, float] | None] | Sequence[Axis | str] | None = None,
     samples: int | None = None,
@@ -84,7 +110,7 @@ def sweep(
     resume: bool = False,
     progress: Progress = None,
     handle_sigint: bool = True,
-    backend: str = "scipy",
+    backend: str | None = None,
     batch: int | None = None,
     **solver: Any,
 ) -> SweepTable:
@@ -94,8 +120,12 @@ def sweep(
     ----------
     model : Automaton or System
         From :func:`hybrid.load`.
-    t_end : float
-        End time of every run.
+    t_end : float, optional
+        End time of every run; needed unless ``settings`` gives it.
+    settings : Settings, optional
+        The options of every run (:class:`hybrid.Settings`: ``t_end``, the
+        solver's options, ``backend``), overridden by the keywords given;
+        its ``dense`` is not read.
     grid : mapping or sequence of Axis, optional
         ``{name: values}``: every combination of the values is run, the first
         name slowest. A name is a parameter (``comp.name`` in a system),
@@ -141,13 +171,15 @@ def sweep(
         True/False: a tqdm bar or none (default: a bar in Jupyter; docs/campaigns.md).
     handle_sigint : bool
         Turn Ctrl-C into a clean stop (rows kept, ``table.complete`` False).
-    backend : str
-        ``"scipy"`` (default), ``"compiled"`` or ``"auto"`` (:mod:`hybrid.campaigns.choosing`).
+    backend : str, optional
+        ``"scipy"``, ``"compiled"`` or ``"auto"`` (:mod:`hybrid.campaigns.choosing`);
+        default: that of ``settings``, ``"scipy"`` without.
     batch : int, optional
         Runs per batch sent to a worker (default: chosen from the counts).
     **solver
-        ``rtol``, ``atol``, ``max_step``, ``method``, ``max_jumps``, ``dt``...
-        as :func:`hybrid.simulate` takes them.
+        ``rtol``, ``atol``, ``max_step``, ``method``, ``max_jumps``, ``dt``,
+        ``zeno``, ``max_jumps_per_instant``, ``t_start``, as
+        :func:`hybrid.simulate` takes them (overriding ``settings``).
 
     Returns
     -------
@@ -163,10 +195,8 @@ def sweep(
     >>> [(row["e"], row["cause"], row["jumps"]) for row in table.rows]
     [(0.5, 't_end', 1), (0.9, 't_end', 1)]
     """
-    unknown = sorted(set(solver) - set(SOLVER_OPTIONS))
-    if unknown:
-        raise UsageError(f"sweep() got an unexpected keyword '{unknown[0]}'")
-    Settings(t_end=t_end, **{k: v for k, v in solver.items() if v is not None})
+    chosen, solver = campaign_settings("sweep", settings, t_end, solver)
+    t_end, backend = chosen.t_end, backend or chosen.backend
     if parameters:
         model = model.with_parameters(dict(parameters))
     if points is not None:
@@ -221,7 +251,7 @@ def _finish(
         raise UsageError(f"run_timeout must be > 0 seconds, got {run_timeout}")
     plan, executor = settle(model, points, RunPlan(  # auto resolved; compiled: in process
         t_end=float(t_end),
-        solver={k: v for k, v in solver.items() if v is not None},
+        solver=dict(solver),
         summaries=tuple(wanted),
         inputs=tuple(sorted((inputs or {}).items())),
         timeout=run_timeout,

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from hybrid.cli.exits import EXIT_FINDINGS, EXIT_OK
+from hybrid.cli.settings import settings_from
 from hybrid.errors import UsageError
 from hybrid.progress import TerminalLine, terminal_reporter
 from hybrid.simulation.interrupts import Interrupts
@@ -109,17 +110,6 @@ def _common(p: argparse.ArgumentParser, types: Mapping[str, Callable[[str], Any]
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
 
 
-def _solver(args: argparse.Namespace) -> dict[str, Any]:
-    return {
-        "max_jumps": args.max_jumps,
-        "rtol": args.rtol,
-        "atol": args.atol,
-        "max_step": args.max_step,
-        "method": args.method,
-        "dt": args.dt,
-    }
-
-
 def _notifier(line: TerminalLine | None) -> Callable[[str], None]:
     def notify(text: str) -> None:
         if line is not None:
@@ -152,7 +142,7 @@ def run_sweep(args: argparse.Namespace) -> int:
         model = load(args.file)
         table = sweep(
             model,
-            args.t_end,
+            settings=settings_from(args),
             grid=grid,
             vary=vary or None,
             samples=args.sample,
@@ -168,7 +158,6 @@ def run_sweep(args: argparse.Namespace) -> int:
             resume=args.resume,
             progress=line if line is not None else False,
             backend=args.backend,
-            **_solver(args),
         )
     if line is not None:
         line.clear()
@@ -233,7 +222,7 @@ def run_falsify(args: argparse.Namespace) -> int:
             model,
             args.requirement,
             vary or None,
-            t_end=args.t_end,
+            settings=settings_from(args),
             budget=args.budget,
             seed=args.seed,
             sampler=args.sampler,
@@ -244,7 +233,6 @@ def run_falsify(args: argparse.Namespace) -> int:
             run_timeout=args.run_timeout,
             progress=line if line is not None else False,
             backend=args.backend,
-            **_solver(args),
         )
     if line is not None:
         line.clear()
