@@ -104,7 +104,7 @@ def test_a_bad_override_or_object_is_a_usage_error(ball: hybrid.Automaton) -> No
     good = hybrid.Settings(t_end=2.0)
     with pytest.raises(hybrid.UsageError, match="rtol must be a finite number, got inf"):
         hybrid.simulate(ball, settings=good, rtol=math.inf)
-    with pytest.raises(hybrid.UsageError, match="settings must be a hybrid.Settings"):
+    with pytest.raises(hybrid.UsageError, match=r"settings must be a hybrid\.Settings"):
         hybrid.simulate(ball, settings={"t_end": 2.0})  # type: ignore[arg-type]
     with pytest.raises(hybrid.UsageError, match="t_end must be a finite time"):
         hybrid.simulate(ball)  # neither t_end nor settings
