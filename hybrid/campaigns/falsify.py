@@ -40,7 +40,7 @@ from hybrid.campaigns.runs import (
 )
 from hybrid.campaigns.space import SAMPLERS, Axis, ranges_axes, unit_samples
 from hybrid.campaigns.sweep import campaign_settings, executor_for, hard_limit
-from hybrid.campaigns.targets import Constant, check_names, free_inputs, split
+from hybrid.campaigns.targets import Constant, check_names, split
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
@@ -193,30 +193,31 @@ def falsify(
         raise UsageError(f"unknown sampler '{sampler}' (choose from {', '.join(SAMPLERS)})")
     if parameters:
         model = model.with_parameters(dict(parameters))
-    axes = ranges_axes(model, vary)
+    system = as_system(model)  # the one model type below; the user's model goes to the workers
+    axes = ranges_axes(system, vary)
     if not axes:
         raise UsageError(
             "nothing to vary: give --vary NAME=LO:HI (the spec declares no initial set or "
             "input range)"
         )
     names = [a.name for a in axes]
-    check_names(model, names)
-    if f"{requirement}.holds" not in requirement_columns(model):
-        known = [c[: -len(".holds")] for c in requirement_columns(model)[::3]]
+    check_names(system, names)
+    if f"{requirement}.holds" not in requirement_columns(system):
+        known = [c[: -len(".holds")] for c in requirement_columns(system)[::3]]
         raise UsageError(
             f"no requirement '{requirement}' in {model.name} "
             f"(requirements: {', '.join(known) or 'none'})"
         )
-    ranged = as_system(model).input_ranges()  # held at its nominal value when not varied
+    ranged = system.input_ranges()  # held at its nominal value when not varied
     missing = [
         n
-        for n in free_inputs(model)
+        for n in system.free_inputs
         if n not in (inputs or {}) and f"input.{n}" not in names and n not in ranged
     ]
     if missing:
         raise UsageError(
             f"input '{missing[0]}' needs a value: vary it or give it",
-            at=as_system(model).input_position(missing[0]),
+            at=system.input_position(missing[0]),
         )
     plan = RunPlan(
         t_end=float(t_end),
@@ -226,9 +227,9 @@ def falsify(
         backend=backend,
     )
     executor = executor_for(workers, scheduler)
-    search = _Search(model, requirement, axes, plan, budget, seed, sampler, global_share, starts)
+    search = _Search(system, requirement, axes, plan, budget, seed, sampler, global_share, starts)
     middle = search.values_of([0.5] * len(axes))  # what auto times one scipy run of
-    search.plan, executor = settle(model, [middle], plan, executor, runs=budget)
+    search.plan, executor = settle(system, [middle], plan, executor, runs=budget)
     with sigint_watch(handle_sigint) as interrupts, executor:
         executor.start(pack(model), search.plan)
         search.run(executor, lambda: interrupts.requested, progress)
@@ -240,7 +241,7 @@ class _Search:
 
     def __init__(
         self,
-        model: Automaton | System,
+        model: System,
         requirement: str,
         axes: Sequence[Axis],
         plan: RunPlan,

@@ -20,7 +20,7 @@ from typing import Any
 
 from hybrid.campaigns.choosing import settle
 from hybrid.campaigns.executors import Executor, InProcess, LocalPool, default_workers
-from hybrid.campaigns.payload import pack
+from hybrid.campaigns.payload import Payload, pack
 from hybrid.campaigns.resumable import LOST, ChunkStore
 from hybrid.campaigns.runs import (
     OUTCOME_COLUMNS,
@@ -39,7 +39,7 @@ from hybrid.campaigns.space import (
     sample_points,
 )
 from hybrid.campaigns.table import FAILED, SweepTable
-from hybrid.campaigns.targets import INPUT, check_names, free_inputs
+from hybrid.campaigns.targets import INPUT, check_names
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
@@ -199,35 +199,37 @@ def sweep(
     t_end, backend = chosen.t_end, backend or chosen.backend
     if parameters:
         model = model.with_parameters(dict(parameters))
+    system = as_system(model)  # the one model type below; the user's model goes to the workers
     if points is not None:
         if grid or vary or samples is not None:
             raise UsageError("give points, or a grid and/or samples, not both")
         names, listed = _listed(points)
-        check_names(model, names)
-        return _finish(model, t_end, listed, names, solver, summaries, inputs, run_timeout,
+        check_names(system, names)
+        return _finish(system, pack(model), t_end, listed, names, solver, summaries, inputs, run_timeout,
                        backend, executor_for(workers, scheduler, batch), out, resume, progress,
                        handle_sigint)  # fmt: skip
-    on_grid = grid_axes(model, grid)
+    on_grid = grid_axes(system, grid)
     if samples is not None:
         gridded = {a.name for a in on_grid}
-        vary_axes = [a for a in ranges_axes(model, vary) if vary or a.name not in gridded]
+        vary_axes = [a for a in ranges_axes(system, vary) if vary or a.name not in gridded]
         sampled: list[Point] | None = sample_points(vary_axes, samples, seed, sampler)
     else:
         if vary:
             raise UsageError("ranges to vary need a number of samples (--sample N)")
         vary_axes, sampled = [], None
     names = [a.name for a in on_grid] + [a.name for a in vary_axes]
-    check_names(model, names)
+    check_names(system, names)
     if not names:
         raise UsageError("nothing to vary: give a grid (--grid NAME=LO:HI:N) or samples")
     made = combine(grid_points(on_grid), sampled)
     executor = executor_for(workers, scheduler, batch)
-    return _finish(model, t_end, made, names, solver, summaries, inputs, run_timeout, backend,
+    return _finish(system, pack(model), t_end, made, names, solver, summaries, inputs, run_timeout, backend,
                    executor, out, resume, progress, handle_sigint)  # fmt: skip
 
 
 def _finish(
-    model: Automaton | System,
+    model: System,
+    payload: Payload,
     t_end: float,
     points: Sequence[Point],
     names: Sequence[str],
@@ -257,11 +259,14 @@ def _finish(
         timeout=run_timeout,
         backend=backend,
     ), executor)
-    return run_campaign(model, points, names, plan, executor, out, resume, progress, handle_sigint)
+    return run_campaign(
+        model, payload, points, names, plan, executor, out, resume, progress, handle_sigint
+    )
 
 
 def run_campaign(
-    model: Automaton | System,
+    model: System,
+    payload: Payload,
     points: Sequence[Point],
     names: Sequence[str],
     plan: RunPlan,
@@ -271,9 +276,8 @@ def run_campaign(
     progress: Progress,
     handle_sigint: bool,
 ) -> SweepTable:
-    """Run ``points`` on ``executor``; the table (written to ``out`` when complete)."""
-    payload = pack(model)
-    requirements = [w.name for w in watched_requirements(as_system(model))]
+    """Run ``points`` of ``model`` (sent as ``payload``) on ``executor``; the table."""
+    requirements = [w.name for w in watched_requirements(model)]
     columns = [
         "run",
         *names,
@@ -382,9 +386,9 @@ def _listed(points: Sequence[Mapping[str, float]]) -> tuple[list[str], list[Poin
 
 
 def _check_inputs(
-    model: Automaton | System, names: Sequence[str], inputs: Mapping[str, str]
+    model: System, names: Sequence[str], inputs: Mapping[str, str]
 ) -> None:
-    declared = free_inputs(model)
+    declared = model.free_inputs
     for name in inputs:
         if name not in declared:
             raise UsageError(
@@ -393,13 +397,13 @@ def _check_inputs(
         if f"{INPUT}{name}" in names:
             raise UsageError(f"input '{name}' is both varied and given")
     given = set(inputs) | {n[len(INPUT) :] for n in names if n.startswith(INPUT)}
-    ranged = as_system(model).input_ranges()  # held at its nominal value when not given
+    ranged = model.input_ranges()  # held at its nominal value when not given
     missing = [n for n in declared if n not in given and n not in ranged]
     if missing:
         raise UsageError(
             f"input '{missing[0]}' needs a value in every run: vary it (input.{missing[0]}) "
             f"or give it (--input {missing[0]}=EXPR)",
-            at=as_system(model).input_position(missing[0]),
+            at=model.input_position(missing[0]),
         )
     from hybrid.simulation.inputs import ExpressionInput
 

@@ -28,7 +28,7 @@ import time
 import numpy as np
 from numpy.typing import NDArray
 
-from hybrid.compose import System
+from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.expr import ir
 from hybrid.model import Automaton, Forbidden
@@ -131,7 +131,8 @@ def reach(
     if isinstance(max_jumps, bool) or not isinstance(max_jumps, int):
         raise UsageError(f"max_jumps must be an integer >= 0, got {max_jumps!r}")
     started = time.process_time()
-    forms = forms_of(model)
+    system = as_system(model)  # the flowpipes' model; the witnesses run the user's
+    forms = forms_of(system)
     entries = [
         (e, _condition(forms, e, forms.system.initial_mode)) for e in model.properties.forbidden
     ]
@@ -141,7 +142,7 @@ def reach(
     sets: list[ReachSet] = []
     complete = False
     if not (early and all(e is not None for e in early)):
-        sets, complete = explore(model, t_end=t_end, max_jumps=max_jumps, step=step, forms=forms)
+        sets, complete = explore(system, t_end=t_end, max_jumps=max_jumps, step=step, forms=forms)
     grouped: dict[tuple[str, ...], list[ReachSet]] = {}
     for s in sets:  # once: each entry then looks at the modes, not at every set
         grouped.setdefault(s.mode, []).append(s)

@@ -72,10 +72,9 @@ def _columns(table: Table, what: str) -> dict[str, NDArray[np.float64]]:
     return columns
 
 
-def _slot(model: Automaton | System, compiled: CompiledNative, key: str) -> int:
+def _slot(system: System, compiled: CompiledNative, key: str) -> int:
     """The parameter slot a user's name (``name`` or ``comp.name``) refers to."""
-    model.with_parameters({key: 0.0})  # the reference's errors for unknown or ambiguous names
-    system = as_system(model)
+    system.with_parameters({key: 0.0})  # the reference's errors for unknown or ambiguous names
     if system.single or "." not in key:
         owners = [i for i, c in enumerate(system.components) if key in c.automaton.parameters]
         return compiled.native.slots[(owners[0], key)]
@@ -264,14 +263,15 @@ def simulate_many(
     if len(sizes) > 1:
         raise UsageError(f"parameters and initial have different numbers of rows {sorted(sizes)}")
     n = sizes.pop() if sizes else 1
-    refuse_requirements(as_system(model))
+    system = as_system(model)
+    refuse_requirements(system)
     check_supported(settings, None)  # a method other than RK45, given in settings
     with immediate("compiling the model (nothing was run)"):
         compiled = compiled_native(model)
     native = compiled.native
     params = np.tile(np.array(native.parameter_vector(model), dtype=float), (n, 1))
     for key, column in params_table.items():
-        params[:, _slot(model, compiled, key)] = column
+        params[:, _slot(system, compiled, key)] = column
     x0s = np.tile(np.array(model.initial_vector(), dtype=float), (n, 1))
     for name, column in starts.items():
         if name not in native.state_names:
