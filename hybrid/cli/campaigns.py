@@ -44,7 +44,6 @@ def add_campaign_commands(
 
     p = sub.add_parser("sweep", help="run a spec over a grid or samples of parameters")
     p.add_argument("file", metavar="FILE", help="spec or system file")
-    p.add_argument("--t-end", type=types["positive"], required=True, help="end time of each run")
     p.add_argument("--grid", action="append", default=[], metavar="NAME=LO:HI:N",
                    help="N values from LO to HI (a parameter, init.x or input.u; NAME=N: across "
                         "the declared set of init.x or input.u); repeatable")  # fmt: skip
@@ -71,7 +70,6 @@ def add_campaign_commands(
 
     p = sub.add_parser("falsify", help="search parameter ranges for a requirement's violation")
     p.add_argument("file", metavar="FILE", help="spec or system file")
-    p.add_argument("--t-end", type=types["positive"], required=True, help="end time of each run")
     p.add_argument("--requirement", required=True, metavar="NAME", help="the requirement")
     p.add_argument("--vary", action="append", default=[], metavar="NAME=LO:HI",
                    help="a range to search (a parameter, init.x or input.u; a bare init.x or "
@@ -88,7 +86,7 @@ def add_campaign_commands(
 
 
 def _common(p: argparse.ArgumentParser, types: Mapping[str, Callable[[str], Any]]) -> None:
-    from hybrid.simulation.settings import METHODS
+    from hybrid.cli.settings import add_settings_flags
 
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=types["count"], default=None,
@@ -101,12 +99,7 @@ def _common(p: argparse.ArgumentParser, types: Mapping[str, Callable[[str], Any]
                    metavar="NAME=VALUE", help="hold a parameter at a value")  # fmt: skip
     p.add_argument("--input", type=types["assignment"], action="append", default=[],
                    metavar="NAME=EXPR", help="drive a free input with an expression of t")  # fmt: skip
-    p.add_argument("--max-jumps", type=types["count"], default=10_000, help="jumps per run at most")
-    p.add_argument("--rtol", type=types["positive"], default=1e-6, help="relative tolerance")
-    p.add_argument("--atol", type=types["positive"], default=1e-9, help="absolute tolerance")
-    p.add_argument("--max-step", type=types["positive"], default=None, help="largest solver step")
-    p.add_argument("--method", default=METHODS[0], choices=METHODS, help="solve_ivp method")
-    p.add_argument("--dt", type=types["positive"], default=None, help="store points on a grid")
+    add_settings_flags(p, types["positive"], types["count"], each_run=True)
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
 
 

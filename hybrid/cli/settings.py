@@ -2,10 +2,12 @@
 
 ``simulate``, ``sweep`` and ``falsify`` share the flags of the simulator's
 options (``--t-end``, ``--max-jumps``, ``--rtol``, ``--atol``, ``--max-step``,
-``--method``, ``--dt``, ``--backend``); :func:`settings_from` turns them into
-the one :class:`~hybrid.simulation.settings.Settings` the command passes on, so
+``--method``, ``--dt``, ``--backend``): :func:`add_settings_flags` declares
+them once for every such command, and :func:`settings_from` turns them into the
+one :class:`~hybrid.simulation.settings.Settings` the command passes on, so
 that a flag means what the keyword of the same name means in Python (and is
-checked by the same code, with the same messages).
+checked by the same code, with the same messages). ``--backend`` is declared by
+each command (``auto`` is chosen per command).
 
 Examples
 --------
@@ -20,10 +22,36 @@ Examples
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 
-from hybrid.simulation.settings import BACKENDS, Settings, merged
+from hybrid.simulation.settings import BACKENDS, DEFAULTS, METHODS, Settings, merged
 
-__all__ = ["settings_from"]
+__all__ = ["add_settings_flags", "settings_from"]
+
+
+def add_settings_flags(
+    p: argparse.ArgumentParser,
+    positive: Callable[[str], float],
+    count: Callable[[str], int],
+    *,
+    each_run: bool = False,
+) -> None:
+    """Declare ``--t-end`` and the solver's flags on ``p``, with the defaults of :class:`Settings`.
+
+    ``each_run``: the command runs many (a campaign), and the help says so.
+    """
+    runs = " of each run" if each_run else ""
+    p.add_argument("--t-end", type=positive, required=True, help=f"end time{runs}")
+    p.add_argument("--max-jumps", type=count, default=DEFAULTS["max_jumps"],
+                   help=f"stop{' each run' if each_run else ''} after this many jumps")  # fmt: skip
+    p.add_argument("--rtol", type=positive, default=DEFAULTS["rtol"],
+                   help="relative tolerance of the solver")  # fmt: skip
+    p.add_argument("--atol", type=positive, default=DEFAULTS["atol"],
+                   help="absolute tolerance of the solver")  # fmt: skip
+    p.add_argument("--max-step", type=positive, default=None,
+                   help="largest solver step; lower it to catch narrow guard windows")  # fmt: skip
+    p.add_argument("--method", default=DEFAULTS["method"], choices=METHODS, help="solve_ivp method")
+    p.add_argument("--dt", type=positive, default=None, help="store points on a uniform grid")
 
 
 def settings_from(args: argparse.Namespace) -> Settings:

@@ -237,3 +237,14 @@ def test_the_cli_builds_its_settings_in_one_place() -> None:
         )
         defaults = settings_from(parser.parse_args([*command, "--t-end", "2"]))
         assert defaults == hybrid.Settings(t_end=2.0)
+
+    # the flags are declared once: every command has the same ones, with the same defaults
+    (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    flags = {"--t-end", "--max-jumps", "--rtol", "--atol", "--max-step", "--method", "--dt"}
+    declared = {
+        name: {(a.option_strings[0], a.default, tuple(a.choices or ())) for a in
+               sub.choices[name]._actions if a.option_strings and a.option_strings[0] in flags}
+        for name in ("simulate", "sweep", "falsify")
+    }  # fmt: skip
+    assert len(declared["simulate"]) == len(flags)
+    assert declared["simulate"] == declared["sweep"] == declared["falsify"]
