@@ -36,6 +36,7 @@ if TYPE_CHECKING:
     from hybrid.simulation.engine import simulate
     from hybrid.simulation.native.many import Ensemble, simulate_many
     from hybrid.simulation.result import Jump, Run, Termination
+    from hybrid.simulation.settings import Settings
 
 __all__ = [
     "Automaton",
@@ -49,6 +50,7 @@ __all__ = [
     "ReachResult",
     "Report",
     "Run",
+    "Settings",
     "SimulationError",
     "SpecError",
     "SweepTable",
@@ -80,6 +82,7 @@ _LAZY = {
     "Jump": "hybrid.simulation.result",
     "Run": "hybrid.simulation.result",
     "Termination": "hybrid.simulation.result",
+    "Settings": "hybrid.simulation.settings",
     "simulate": "hybrid.simulation.engine",
     "simulate_many": "hybrid.simulation.native.many",
     "Ensemble": "hybrid.simulation.native.many",

@@ -16,10 +16,12 @@ Examples
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from types import MappingProxyType
+from typing import Protocol
 
 from hybrid.binding import input_problems, signal_cycle_problems
 from hybrid.errors import Position, SpecError, did_you_mean
@@ -28,11 +30,61 @@ from hybrid.model import Automaton, Properties, Range, Requirement, StateVar
 
 __all__ = [
     "Component",
+    "Model",
     "System",
     "as_system",
     "check_system",
     "compose",
 ]
+
+
+class Model(Protocol):
+    """What an :class:`~hybrid.model.Automaton` and a :class:`System` both are, stated once.
+
+    A public entry point takes either (the type ``Automaton | System``), turns it
+    into a system once with :func:`as_system` (an automaton is a system of one,
+    whose locations keep their plain names), and everything below it takes a
+    :class:`System`. Code that needs only these members reads them off either
+    model as it is, without converting it.
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+    >>> def start(model: Model) -> dict[str, float]:
+    ...     return dict(zip(model.state_names, model.initial_vector()))
+    >>> start(ball) == start(as_system(ball)) == {"h": 10.0, "v": 0.0}
+    True
+    """
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def file(self) -> str: ...
+    @property
+    def position(self) -> Position: ...
+    @property
+    def description(self) -> str: ...
+    @property
+    def properties(self) -> Properties: ...
+    @property
+    def requirements(self) -> tuple[Requirement, ...]: ...
+    @property
+    def states(self) -> tuple[StateVar, ...]: ...
+    @property
+    def state_names(self) -> tuple[str, ...]: ...
+    @property
+    def signal_names(self) -> tuple[str, ...]: ...
+    @property
+    def labels(self) -> tuple[str, ...]: ...
+    def initial_vector(self) -> list[float]:
+        """The initial state, in the order of ``state_names``."""
+    def initial_set(self) -> dict[str, Range]:
+        """The initial set of every state variable."""
+    def input_ranges(self) -> dict[str, Range]:
+        """The declared range of every bounded free input."""
+    def with_parameters(self, overrides: Mapping[str, float] | None) -> Model:
+        """A copy with parameters replaced."""
 
 
 @dataclass(frozen=True)
@@ -193,9 +245,18 @@ class System:
         return [x for c in self.components for x in c.automaton.initial_vector()]
 
     def with_parameters(self, overrides: Mapping[str, float] | None) -> System:
-        """A copy with parameters replaced: ``comp.name``, or ``name`` if only one has it."""
+        """A copy with parameters replaced: ``comp.name``, or ``name`` if only one has it.
+
+        The system of one automaton (``single``) takes the names its automaton
+        takes, with the automaton's messages: it stands for that automaton.
+        """
         if not overrides:
             return self
+        if self.single:
+            (c,) = self.components
+            return _replace_components(
+                self, (Component(c.name, c.automaton.with_parameters(overrides), c.position),)
+            )
         per: dict[str, dict[str, float]] = {c.name: {} for c in self.components}
         for key, value in overrides.items():
             comp, pname = _resolve_parameter(self, key)
@@ -248,10 +309,28 @@ def _resolve_parameter(system: System, key: str) -> tuple[str, str]:
 
 
 def as_system(model: Automaton | System) -> System:
-    """The system view of a model (an automaton is a system of one)."""
+    """The system view of a model (an automaton is a system of one).
+
+    Called once where a model enters (:func:`hybrid.simulate`, :func:`hybrid.sweep`
+    and the other public functions); the same automaton gives the same system
+    object, so the caches keyed by a model's identity (its compiled forms) keep
+    working for runs of one automaton.
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+    >>> system = as_system(ball)
+    >>> system.single, system.mode_name(("falling",)), as_system(ball) is system
+    (True, 'falling', True)
+    """
     if isinstance(model, System):
         return model
-    return System(
+    with _SYSTEMS_LOCK:
+        hit = _SYSTEMS.get(id(model))
+        if hit is not None and hit[0] is model:
+            return hit[1]
+    system = System(
         model.name,
         (Component(model.name, model, model.position),),
         model.properties,
@@ -260,6 +339,16 @@ def as_system(model: Automaton | System) -> System:
         model.position,
         single=True,
     )
+    with _SYSTEMS_LOCK:
+        _SYSTEMS[id(model)] = (model, system)  # holds the automaton: no other object takes its id
+        if len(_SYSTEMS) > _SYSTEMS_KEPT:
+            _SYSTEMS.pop(next(iter(_SYSTEMS)))
+    return system
+
+
+_SYSTEMS: dict[int, tuple[Automaton, System]] = {}
+_SYSTEMS_KEPT = 64
+_SYSTEMS_LOCK = threading.Lock()
 
 
 def compose(

@@ -39,8 +39,8 @@ from hybrid.campaigns.runs import (
     simulate_quietly,
 )
 from hybrid.campaigns.space import SAMPLERS, Axis, ranges_axes, unit_samples
-from hybrid.campaigns.sweep import SOLVER_OPTIONS, executor_for, hard_limit
-from hybrid.campaigns.targets import Constant, check_names, free_inputs, split
+from hybrid.campaigns.sweep import campaign_settings, executor_for, hard_limit
+from hybrid.campaigns.targets import Constant, check_names, split
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
@@ -112,7 +112,8 @@ def falsify(
     requirement: str,
     vary: Mapping[str, tuple[float, float] | None] | Sequence[Axis | str] | None = None,
     *,
-    t_end: float,
+    t_end: float | None = None,
+    settings: Settings | None = None,
     budget: int = 100,
     seed: int = 0,
     sampler: str = "lhs",
@@ -125,7 +126,7 @@ def falsify(
     run_timeout: float | None = None,
     progress: Progress = None,
     handle_sigint: bool = True,
-    backend: str = "scipy",
+    backend: str | None = None,
     **solver: Any,
 ) -> Falsification:
     """Search ``vary`` for a run of ``model`` that violates ``requirement``.
@@ -141,8 +142,11 @@ def falsify(
         or ``input.u`` with the range ``None`` (or a bare name in a sequence) is
         searched over the range its spec declares; not given: every range the
         spec declares (initial sets and input ranges, as :func:`hybrid.sweep`).
-    t_end : float
-        End time of every run.
+    t_end : float, optional
+        End time of every run; needed unless ``settings`` gives it.
+    settings : Settings, optional
+        The options of every run (:class:`hybrid.Settings`), overridden by the
+        keywords given, as for :func:`hybrid.sweep`.
     budget : int
         Simulations at most, both phases together.
     seed : int
@@ -156,7 +160,8 @@ def falsify(
     parameters, inputs, workers, scheduler, run_timeout, progress, handle_sigint, backend
         As for :func:`hybrid.sweep`.
     **solver
-        ``rtol``, ``atol``, ``max_step``... as :func:`hybrid.simulate` takes them.
+        ``rtol``, ``atol``, ``max_step``... as :func:`hybrid.simulate` takes them
+        (overriding ``settings``).
 
     Returns
     -------
@@ -178,10 +183,8 @@ def falsify(
     >>> result.found, result.values["k"] > 0.0575, result.robustness < 0
     (True, True, True)
     """
-    unknown = sorted(set(solver) - set(SOLVER_OPTIONS))
-    if unknown:
-        raise UsageError(f"falsify() got an unexpected keyword '{unknown[0]}'")
-    Settings(t_end=t_end, **{k: v for k, v in solver.items() if v is not None})
+    chosen, solver = campaign_settings("falsify", settings, t_end, solver)
+    t_end, backend = chosen.t_end, backend or chosen.backend
     if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
         raise UsageError(f"budget must be a whole number >= 1, got {budget!r}")
     if not 0.0 < global_share <= 1.0:
@@ -190,42 +193,43 @@ def falsify(
         raise UsageError(f"unknown sampler '{sampler}' (choose from {', '.join(SAMPLERS)})")
     if parameters:
         model = model.with_parameters(dict(parameters))
-    axes = ranges_axes(model, vary)
+    system = as_system(model)  # the one model type below; the user's model goes to the workers
+    axes = ranges_axes(system, vary)
     if not axes:
         raise UsageError(
             "nothing to vary: give --vary NAME=LO:HI (the spec declares no initial set or "
             "input range)"
         )
     names = [a.name for a in axes]
-    check_names(model, names)
-    if f"{requirement}.holds" not in requirement_columns(model):
-        known = [c[: -len(".holds")] for c in requirement_columns(model)[::3]]
+    check_names(system, names)
+    if f"{requirement}.holds" not in requirement_columns(system):
+        known = [c[: -len(".holds")] for c in requirement_columns(system)[::3]]
         raise UsageError(
             f"no requirement '{requirement}' in {model.name} "
             f"(requirements: {', '.join(known) or 'none'})"
         )
-    ranged = as_system(model).input_ranges()  # held at its nominal value when not varied
+    ranged = system.input_ranges()  # held at its nominal value when not varied
     missing = [
         n
-        for n in free_inputs(model)
+        for n in system.free_inputs
         if n not in (inputs or {}) and f"input.{n}" not in names and n not in ranged
     ]
     if missing:
         raise UsageError(
             f"input '{missing[0]}' needs a value: vary it or give it",
-            at=as_system(model).input_position(missing[0]),
+            at=system.input_position(missing[0]),
         )
     plan = RunPlan(
         t_end=float(t_end),
-        solver={k: v for k, v in solver.items() if v is not None},
+        solver=dict(solver),
         inputs=tuple(sorted((inputs or {}).items())),
         timeout=run_timeout,
         backend=backend,
     )
     executor = executor_for(workers, scheduler)
-    search = _Search(model, requirement, axes, plan, budget, seed, sampler, global_share, starts)
+    search = _Search(system, requirement, axes, plan, budget, seed, sampler, global_share, starts)
     middle = search.values_of([0.5] * len(axes))  # what auto times one scipy run of
-    search.plan, executor = settle(model, [middle], plan, executor, runs=budget)
+    search.plan, executor = settle(system, [middle], plan, executor, runs=budget)
     with sigint_watch(handle_sigint) as interrupts, executor:
         executor.start(pack(model), search.plan)
         search.run(executor, lambda: interrupts.requested, progress)
@@ -237,7 +241,7 @@ class _Search:
 
     def __init__(
         self,
-        model: Automaton | System,
+        model: System,
         requirement: str,
         axes: Sequence[Axis],
         plan: RunPlan,

@@ -30,11 +30,17 @@ import numpy as np
 
 from hybrid.campaigns.payload import Payload, unpack
 from hybrid.campaigns.runs import RunPlan, run_point, run_points
+from hybrid.compose import System, as_system
 
 __all__ = ["Job", "execute", "serve"]
 
 Job = tuple[int, str, Any]
 """``(index, task, argument)``."""
+
+
+def _model(payload: Payload) -> System:
+    """The campaign's model, as the system every task takes (once per process: unpack's)."""
+    return as_system(unpack(payload))
 
 
 def _task(name: str) -> Any:
@@ -49,7 +55,7 @@ def _task(name: str) -> Any:
 
 def execute(payload: Payload, plan: RunPlan, jobs: Sequence[Job]) -> list[tuple[int, Any]]:
     """Run ``jobs`` here; their results, in order (the batch function of a Dask task)."""
-    model = unpack(payload)
+    model = _model(payload)
     with np.errstate(all="ignore"):
         if _together(plan, jobs):
             return _runs_together(model, plan, jobs)
@@ -61,7 +67,7 @@ def _together(plan: RunPlan, jobs: Sequence[Job]) -> bool:
     return plan.backend == "compiled" and len(jobs) > 1 and all(t == "run" for _, t, _ in jobs)
 
 
-def _runs_together(model: Any, plan: RunPlan, jobs: Sequence[Job]) -> list[tuple[int, Any]]:
+def _runs_together(model: System, plan: RunPlan, jobs: Sequence[Job]) -> list[tuple[int, Any]]:
     rows = run_points(model, [(index, arg) for index, _, arg in jobs], plan)
     return [(index, row) for (index, _, _), row in zip(jobs, rows, strict=True)]
 
@@ -69,7 +75,7 @@ def _runs_together(model: Any, plan: RunPlan, jobs: Sequence[Job]) -> list[tuple
 def serve(conn: Connection, payload: Payload, plan: RunPlan) -> None:
     """A local worker process: receive batches of jobs, send back each result when done."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    model = unpack(payload)
+    model = _model(payload)
     try:
         while True:
             batch = conn.recv()

@@ -40,7 +40,6 @@ from scipy.optimize import minimize
 
 from hybrid.campaigns.runs import RunPlan, run_point
 from hybrid.compose import System
-from hybrid.model import Automaton
 
 __all__ = ["local_search", "objective"]
 
@@ -62,7 +61,7 @@ def objective(row: Mapping[str, Any], requirement: str) -> tuple[float, bool]:
 
 
 def local_search(
-    model: Automaton | System, index: int, task: Mapping[str, Any], plan: RunPlan
+    model: System, index: int, task: Mapping[str, Any], plan: RunPlan
 ) -> dict[str, Any]:
     """Minimise the robustness from ``task["start"]`` (see the module docstring)."""
     names = list(task["names"])

@@ -29,7 +29,8 @@ denser; a requirement's robustness is the exact extreme):
 Examples
 --------
 >>> import hybrid
->>> ball = hybrid.load("specs/bouncing_ball.yaml")
+>>> from hybrid.compose import as_system
+>>> ball = as_system(hybrid.load("specs/bouncing_ball.yaml"))  # what a worker is given
 >>> plan = RunPlan(t_end=3.0, summaries=(Summary.parse("jump_t:1"), Summary.parse("max:v")))
 >>> row = run_point(ball, 0, {"e": 0.5}, plan)
 >>> row["run"], row["e"], row["cause"], row["jumps"], round(row["jump_t:1"], 6)
@@ -50,9 +51,8 @@ from typing import Any
 import numpy as np
 
 from hybrid.campaigns.targets import Constant, split
-from hybrid.compose import System, as_system
+from hybrid.compose import System
 from hybrid.errors import HybridError, UsageError
-from hybrid.model import Automaton
 from hybrid.simulation.bounds import BoundsWarning
 from hybrid.simulation.engine import simulate
 from hybrid.simulation.margins import watched_requirements
@@ -105,9 +105,8 @@ class Summary:
     def column(self) -> str:
         return f"{self.kind}:{self.name}"
 
-    def check(self, model: Automaton | System) -> None:
-        """A :class:`UsageError` if ``model`` has nothing of that name."""
-        system = as_system(model)
+    def check(self, system: System) -> None:
+        """A :class:`UsageError` if ``system`` has nothing of that name."""
         if self.kind in ("max", "min", "last", "mean"):
             known = [*system.state_names, *system.signal_columns]
             if self.name not in known:
@@ -165,21 +164,21 @@ class RunPlan:
     """The backend asked for when it was ``auto`` (:mod:`hybrid.campaigns.choosing`), else empty."""
 
 
-def requirement_columns(model: Automaton | System) -> list[str]:
+def requirement_columns(system: System) -> list[str]:
     """``name.holds``, ``name.robustness``, ``name.violated_at`` per requirement, in order."""
-    names = [w.name for w in watched_requirements(as_system(model))]
+    names = [w.name for w in watched_requirements(system)]
     return [f"{n}.{f}" for n in names for f in REQUIREMENT_FIELDS]
 
 
-_VARIANTS: OrderedDict[tuple[int, tuple[tuple[str, float], ...]], tuple[Any, System]] = (
+_VARIANTS: OrderedDict[tuple[int, tuple[tuple[str, float], ...]], tuple[System, System]] = (
     OrderedDict()
 )
 _VARIANT_CACHE = 16
 _VARIANTS_LOCK = threading.Lock()
 
 
-def model_variant(model: Automaton | System, parameters: Mapping[str, float]) -> System:
-    """``model`` with ``parameters``, as a system, the same object for the same values.
+def model_variant(model: System, parameters: Mapping[str, float]) -> System:
+    """``model`` with ``parameters``, the same object for the same values.
 
     The simulator keeps a compiled model per model object (and thread), so runs that
     differ only in initial values or inputs reuse one compiled model.
@@ -190,7 +189,7 @@ def model_variant(model: Automaton | System, parameters: Mapping[str, float]) ->
         if hit is not None and hit[0] is model:
             _VARIANTS.move_to_end(key)
             return hit[1]
-    system = as_system(model.with_parameters(dict(parameters)) if parameters else model)
+    system = model.with_parameters(dict(parameters)) if parameters else model
     with _VARIANTS_LOCK:
         _VARIANTS[key] = (model, system)
         if len(_VARIANTS) > _VARIANT_CACHE:
@@ -210,7 +209,7 @@ def simulate_quietly(*args: Any, **kwargs: Any) -> Run:
 
 
 def run_point(
-    model: Automaton | System, index: int, point: Mapping[str, float], plan: RunPlan
+    model: System, index: int, point: Mapping[str, float], plan: RunPlan
 ) -> dict[str, Any]:
     """The row of run ``index`` at ``point`` (see the module docstring)."""
     row: dict[str, Any] = {"run": index, **point}
@@ -268,7 +267,7 @@ def _row_of(row: dict[str, Any], run: Run, plan: RunPlan) -> dict[str, Any]:
 
 
 def run_points(
-    model: Automaton | System, batch: Sequence[tuple[int, Mapping[str, float]]], plan: RunPlan
+    model: System, batch: Sequence[tuple[int, Mapping[str, float]]], plan: RunPlan
 ) -> list[dict[str, Any]]:
     """The rows of a batch of ``(index, point)``.
 
@@ -301,7 +300,7 @@ def _fits_ensemble(batch: Sequence[tuple[int, Mapping[str, float]]], plan: RunPl
 
 
 def _ensemble_rows(
-    model: Automaton | System, batch: Sequence[tuple[int, Mapping[str, float]]], plan: RunPlan
+    model: System, batch: Sequence[tuple[int, Mapping[str, float]]], plan: RunPlan
 ) -> list[dict[str, Any]]:
     """The batch's rows from one :func:`hybrid.simulate_many` call."""
     from hybrid.simulation.native.many import simulate_many
@@ -323,7 +322,7 @@ def _ensemble_rows(
 
 
 def failed_row(
-    model: Automaton | System, plan: RunPlan, cause: str, message: str
+    model: System, plan: RunPlan, cause: str, message: str
 ) -> dict[str, Any]:
     """The outcome columns of a run that did not finish (``error``, ``timeout``)."""
     row: dict[str, Any] = dict.fromkeys(OUTCOME_COLUMNS)

@@ -45,9 +45,8 @@ import numpy as np
 
 from hybrid.campaigns.samplers import SAMPLERS
 from hybrid.campaigns.targets import INITIAL, INPUT, check_names
-from hybrid.compose import System, as_system
+from hybrid.compose import Model, System
 from hybrid.errors import UsageError
-from hybrid.model import Automaton
 
 __all__ = [
     "SAMPLERS",
@@ -187,7 +186,7 @@ def combine(grid: Sequence[Point], samples: Sequence[Point] | None) -> list[Poin
     return [{**g, **s} for g in grid for s in samples]
 
 
-def declared_ranges(model: Automaton | System) -> dict[str, tuple[float, float]]:
+def declared_ranges(model: Model) -> dict[str, tuple[float, float]]:
     """The ranges a spec declares itself, by varied name: ``init.x`` and ``input.u``.
 
     Every state variable with an interval initial set (``x: {initial: [lo, hi]}``
@@ -208,23 +207,22 @@ def declared_ranges(model: Automaton | System) -> dict[str, tuple[float, float]]
     >>> declared_ranges(m)
     {'init.x': (0.0, 2.0), 'input.u': (-1.0, 1.0)}
     """
-    system = as_system(model)
     found = {
         f"{INITIAL}{name}": (r.lo, r.hi)
-        for name, r in system.initial_set().items()
+        for name, r in model.initial_set().items()
         if not r.is_point
     }
     found.update(
         {
             f"{INPUT}{name}": (r.lo, r.hi)
-            for name, r in system.input_ranges().items()
+            for name, r in model.input_ranges().items()
             if not r.is_point
         }
     )
     return found
 
 
-def declared_axis(model: Automaton | System, name: str, count: int | None = None) -> Axis:
+def declared_axis(model: System, name: str, count: int | None = None) -> Axis:
     """The axis of ``name`` over the range the spec declares for it (a clear error if none).
 
     With ``count``, a grid axis of ``count`` values across that range, ends included.
@@ -232,18 +230,18 @@ def declared_axis(model: Automaton | System, name: str, count: int | None = None
     Examples
     --------
     >>> import hybrid
-    >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+    >>> from hybrid.compose import as_system
+    >>> ball = as_system(hybrid.load("specs/bouncing_ball.yaml"))
     >>> declared_axis(ball, "init.h")
     Traceback (most recent call last):
     ...
     hybrid.errors.UsageError: init.h: bouncing_ball declares one initial value of h (10), not a set: give a range, init.h=LO:HI
     """
     check_names(model, [name])
-    system = as_system(model)
     shape = "LO:HI" if count is None else "LO:HI:N"
     if name.startswith(INITIAL):
         var = name[len(INITIAL) :]
-        r = system.initial_set()[var]
+        r = model.initial_set()[var]
         if r.is_point:
             raise UsageError(
                 f"{name}: {model.name} declares one initial value of {var} ({r.lo:g}), not a "
@@ -252,7 +250,7 @@ def declared_axis(model: Automaton | System, name: str, count: int | None = None
         return Axis.of(name, r.lo, r.hi, count)
     if name.startswith(INPUT):
         var = name[len(INPUT) :]
-        found = system.input_ranges().get(var)
+        found = model.input_ranges().get(var)
         if found is None or found.is_point:
             raise UsageError(
                 f"{name}: {model.name} declares no range for input {var}: give one, {name}={shape}"
@@ -262,7 +260,7 @@ def declared_axis(model: Automaton | System, name: str, count: int | None = None
 
 
 def grid_axes(
-    model: Automaton | System,
+    model: System,
     given: Mapping[str, Sequence[float] | int] | Sequence[Axis | tuple[str, int]] | None,
 ) -> list[Axis]:
     """The axes of ``grid``: ``{name: values}``, Axis, or a count of values (``{name: N}``,
@@ -310,7 +308,7 @@ def parse_grid(text: str) -> Axis | tuple[str, int]:
 
 
 def ranges_axes(
-    model: Automaton | System,
+    model: System,
     given: Mapping[str, tuple[float, float] | None] | Sequence[Axis | str] | None,
 ) -> list[Axis]:
     """The axes of ``vary``: ``{name: (lo, hi)}``, Axis, or a name (or ``None`` range) for

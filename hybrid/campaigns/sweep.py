@@ -20,7 +20,7 @@ from typing import Any
 
 from hybrid.campaigns.choosing import settle
 from hybrid.campaigns.executors import Executor, InProcess, LocalPool, default_workers
-from hybrid.campaigns.payload import pack
+from hybrid.campaigns.payload import Payload, pack
 from hybrid.campaigns.resumable import LOST, ChunkStore
 from hybrid.campaigns.runs import (
     OUTCOME_COLUMNS,
@@ -39,16 +39,16 @@ from hybrid.campaigns.space import (
     sample_points,
 )
 from hybrid.campaigns.table import FAILED, SweepTable
-from hybrid.campaigns.targets import INPUT, check_names, free_inputs
+from hybrid.campaigns.targets import INPUT, check_names
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.progress import Progress, Tracker, reporter
 from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.margins import watched_requirements
-from hybrid.simulation.settings import Settings
+from hybrid.simulation.settings import DEFAULTS, Settings, merged
 
-__all__ = ["SOLVER_OPTIONS", "executor_for", "hard_limit", "sweep"]
+__all__ = ["SOLVER_OPTIONS", "campaign_settings", "executor_for", "hard_limit", "sweep"]
 
 SOLVER_OPTIONS = (
     "rtol",
@@ -64,10 +64,36 @@ SOLVER_OPTIONS = (
 """The keywords of :func:`hybrid.simulate` a campaign passes to every run."""
 
 
+def campaign_settings(
+    what: str, settings: Settings | None, t_end: float | None, solver: Mapping[str, Any]
+) -> tuple[Settings, dict[str, Any]]:
+    """The settings of a campaign's runs, and the options of them that are not the defaults.
+
+    ``solver`` are the keywords given to ``what`` (an unknown one is refused as
+    Python refuses it); those given override ``settings``. The options returned
+    are what every run passes to :func:`hybrid.simulate` (and what the
+    campaign's fingerprint records): the same runs give the same options,
+    whether keywords or a :class:`~hybrid.simulation.settings.Settings` said them.
+
+    Examples
+    --------
+    >>> s, options = campaign_settings("sweep", None, 2.0, {"rtol": 1e-9, "atol": 1e-9})
+    >>> s.rtol, options
+    (1e-09, {'rtol': 1e-09})
+    """
+    unknown = sorted(set(solver) - set(SOLVER_OPTIONS))
+    if unknown:
+        raise UsageError(f"{what}() got an unexpected keyword '{unknown[0]}'")
+    chosen = merged(settings, t_end, **solver)
+    options = {k: getattr(chosen, k) for k in SOLVER_OPTIONS}
+    return chosen, {k: v for k, v in options.items() if v != DEFAULTS[k]}
+
+
 def sweep(
     model: Automaton | System,
-    t_end: float,
+    t_end: float | None = None,
     *,
+    settings: Settings | None = None,
     grid: Mapping[str, Sequence[float] | int] | Sequence[Axis | tuple[str, int]] | None = None,
     vary: Mapping[str, tuple[float, float] | None] | Sequence[Axis | str] | None = None,
     samples: int | None = None,
@@ -84,7 +110,7 @@ def sweep(
     resume: bool = False,
     progress: Progress = None,
     handle_sigint: bool = True,
-    backend: str = "scipy",
+    backend: str | None = None,
     batch: int | None = None,
     **solver: Any,
 ) -> SweepTable:
@@ -94,8 +120,12 @@ def sweep(
     ----------
     model : Automaton or System
         From :func:`hybrid.load`.
-    t_end : float
-        End time of every run.
+    t_end : float, optional
+        End time of every run; needed unless ``settings`` gives it.
+    settings : Settings, optional
+        The options of every run (:class:`hybrid.Settings`: ``t_end``, the
+        solver's options, ``backend``), overridden by the keywords given;
+        its ``dense`` is not read.
     grid : mapping or sequence of Axis, optional
         ``{name: values}``: every combination of the values is run, the first
         name slowest. A name is a parameter (``comp.name`` in a system),
@@ -141,13 +171,15 @@ def sweep(
         True/False: a tqdm bar or none (default: a bar in Jupyter; docs/campaigns.md).
     handle_sigint : bool
         Turn Ctrl-C into a clean stop (rows kept, ``table.complete`` False).
-    backend : str
-        ``"scipy"`` (default), ``"compiled"`` or ``"auto"`` (:mod:`hybrid.campaigns.choosing`).
+    backend : str, optional
+        ``"scipy"``, ``"compiled"`` or ``"auto"`` (:mod:`hybrid.campaigns.choosing`);
+        default: that of ``settings``, ``"scipy"`` without.
     batch : int, optional
         Runs per batch sent to a worker (default: chosen from the counts).
     **solver
-        ``rtol``, ``atol``, ``max_step``, ``method``, ``max_jumps``, ``dt``...
-        as :func:`hybrid.simulate` takes them.
+        ``rtol``, ``atol``, ``max_step``, ``method``, ``max_jumps``, ``dt``,
+        ``zeno``, ``max_jumps_per_instant``, ``t_start``, as
+        :func:`hybrid.simulate` takes them (overriding ``settings``).
 
     Returns
     -------
@@ -163,41 +195,41 @@ def sweep(
     >>> [(row["e"], row["cause"], row["jumps"]) for row in table.rows]
     [(0.5, 't_end', 1), (0.9, 't_end', 1)]
     """
-    unknown = sorted(set(solver) - set(SOLVER_OPTIONS))
-    if unknown:
-        raise UsageError(f"sweep() got an unexpected keyword '{unknown[0]}'")
-    Settings(t_end=t_end, **{k: v for k, v in solver.items() if v is not None})
+    chosen, solver = campaign_settings("sweep", settings, t_end, solver)
+    t_end, backend = chosen.t_end, backend or chosen.backend
     if parameters:
         model = model.with_parameters(dict(parameters))
+    system = as_system(model)  # the one model type below; the user's model goes to the workers
     if points is not None:
         if grid or vary or samples is not None:
             raise UsageError("give points, or a grid and/or samples, not both")
         names, listed = _listed(points)
-        check_names(model, names)
-        return _finish(model, t_end, listed, names, solver, summaries, inputs, run_timeout,
+        check_names(system, names)
+        return _finish(system, pack(model), t_end, listed, names, solver, summaries, inputs, run_timeout,
                        backend, executor_for(workers, scheduler, batch), out, resume, progress,
                        handle_sigint)  # fmt: skip
-    on_grid = grid_axes(model, grid)
+    on_grid = grid_axes(system, grid)
     if samples is not None:
         gridded = {a.name for a in on_grid}
-        vary_axes = [a for a in ranges_axes(model, vary) if vary or a.name not in gridded]
+        vary_axes = [a for a in ranges_axes(system, vary) if vary or a.name not in gridded]
         sampled: list[Point] | None = sample_points(vary_axes, samples, seed, sampler)
     else:
         if vary:
             raise UsageError("ranges to vary need a number of samples (--sample N)")
         vary_axes, sampled = [], None
     names = [a.name for a in on_grid] + [a.name for a in vary_axes]
-    check_names(model, names)
+    check_names(system, names)
     if not names:
         raise UsageError("nothing to vary: give a grid (--grid NAME=LO:HI:N) or samples")
     made = combine(grid_points(on_grid), sampled)
     executor = executor_for(workers, scheduler, batch)
-    return _finish(model, t_end, made, names, solver, summaries, inputs, run_timeout, backend,
+    return _finish(system, pack(model), t_end, made, names, solver, summaries, inputs, run_timeout, backend,
                    executor, out, resume, progress, handle_sigint)  # fmt: skip
 
 
 def _finish(
-    model: Automaton | System,
+    model: System,
+    payload: Payload,
     t_end: float,
     points: Sequence[Point],
     names: Sequence[str],
@@ -221,17 +253,20 @@ def _finish(
         raise UsageError(f"run_timeout must be > 0 seconds, got {run_timeout}")
     plan, executor = settle(model, points, RunPlan(  # auto resolved; compiled: in process
         t_end=float(t_end),
-        solver={k: v for k, v in solver.items() if v is not None},
+        solver=dict(solver),
         summaries=tuple(wanted),
         inputs=tuple(sorted((inputs or {}).items())),
         timeout=run_timeout,
         backend=backend,
     ), executor)
-    return run_campaign(model, points, names, plan, executor, out, resume, progress, handle_sigint)
+    return run_campaign(
+        model, payload, points, names, plan, executor, out, resume, progress, handle_sigint
+    )
 
 
 def run_campaign(
-    model: Automaton | System,
+    model: System,
+    payload: Payload,
     points: Sequence[Point],
     names: Sequence[str],
     plan: RunPlan,
@@ -241,9 +276,8 @@ def run_campaign(
     progress: Progress,
     handle_sigint: bool,
 ) -> SweepTable:
-    """Run ``points`` on ``executor``; the table (written to ``out`` when complete)."""
-    payload = pack(model)
-    requirements = [w.name for w in watched_requirements(as_system(model))]
+    """Run ``points`` of ``model`` (sent as ``payload``) on ``executor``; the table."""
+    requirements = [w.name for w in watched_requirements(model)]
     columns = [
         "run",
         *names,
@@ -352,9 +386,9 @@ def _listed(points: Sequence[Mapping[str, float]]) -> tuple[list[str], list[Poin
 
 
 def _check_inputs(
-    model: Automaton | System, names: Sequence[str], inputs: Mapping[str, str]
+    model: System, names: Sequence[str], inputs: Mapping[str, str]
 ) -> None:
-    declared = free_inputs(model)
+    declared = model.free_inputs
     for name in inputs:
         if name not in declared:
             raise UsageError(
@@ -363,13 +397,13 @@ def _check_inputs(
         if f"{INPUT}{name}" in names:
             raise UsageError(f"input '{name}' is both varied and given")
     given = set(inputs) | {n[len(INPUT) :] for n in names if n.startswith(INPUT)}
-    ranged = as_system(model).input_ranges()  # held at its nominal value when not given
+    ranged = model.input_ranges()  # held at its nominal value when not given
     missing = [n for n in declared if n not in given and n not in ranged]
     if missing:
         raise UsageError(
             f"input '{missing[0]}' needs a value in every run: vary it (input.{missing[0]}) "
             f"or give it (--input {missing[0]}=EXPR)",
-            at=as_system(model).input_position(missing[0]),
+            at=model.input_position(missing[0]),
         )
     from hybrid.simulation.inputs import ExpressionInput
 

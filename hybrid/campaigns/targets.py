@@ -3,7 +3,8 @@
 Examples
 --------
 >>> import hybrid
->>> ball = hybrid.load("specs/bouncing_ball.yaml")
+>>> from hybrid.compose import as_system
+>>> ball = as_system(hybrid.load("specs/bouncing_ball.yaml"))  # as hybrid.sweep passes it
 >>> check_names(ball, ["e", "init.h"])
 >>> split({"e": 0.7, "init.h": 5.0})
 Overrides(parameters={'e': 0.7}, initial={'h': 5.0}, inputs={})
@@ -18,9 +19,8 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
-from hybrid.compose import System, as_system
+from hybrid.compose import System
 from hybrid.errors import SpecError, UsageError, did_you_mean
-from hybrid.model import Automaton
 
 __all__ = ["INITIAL", "INPUT", "Constant", "Overrides", "check_names", "split"]
 
@@ -62,16 +62,11 @@ def split(point: Mapping[str, float]) -> Overrides:
     return found
 
 
-def free_inputs(model: Automaton | System) -> tuple[str, ...]:
-    """The free inputs of ``model`` (an automaton's, or those a system leaves unbound)."""
-    return tuple(as_system(model).free_inputs)
-
-
-def check_names(model: Automaton | System, names: Iterable[str]) -> None:
+def check_names(model: System, names: Iterable[str]) -> None:
     """Raise a :class:`UsageError` naming the first varied name ``model`` does not have."""
     seen: set[str] = set()
     states = list(model.state_names)
-    inputs = list(free_inputs(model))
+    inputs = list(model.free_inputs)
     for name in names:
         if name in seen:
             raise UsageError(f"{name} is varied twice")

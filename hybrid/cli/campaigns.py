@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from hybrid.cli.exits import EXIT_FINDINGS, EXIT_OK
+from hybrid.cli.settings import settings_from
 from hybrid.errors import UsageError
 from hybrid.progress import TerminalLine, terminal_reporter
 from hybrid.simulation.interrupts import Interrupts
@@ -43,7 +44,6 @@ def add_campaign_commands(
 
     p = sub.add_parser("sweep", help="run a spec over a grid or samples of parameters")
     p.add_argument("file", metavar="FILE", help="spec or system file")
-    p.add_argument("--t-end", type=types["positive"], required=True, help="end time of each run")
     p.add_argument("--grid", action="append", default=[], metavar="NAME=LO:HI:N",
                    help="N values from LO to HI (a parameter, init.x or input.u; NAME=N: across "
                         "the declared set of init.x or input.u); repeatable")  # fmt: skip
@@ -70,7 +70,6 @@ def add_campaign_commands(
 
     p = sub.add_parser("falsify", help="search parameter ranges for a requirement's violation")
     p.add_argument("file", metavar="FILE", help="spec or system file")
-    p.add_argument("--t-end", type=types["positive"], required=True, help="end time of each run")
     p.add_argument("--requirement", required=True, metavar="NAME", help="the requirement")
     p.add_argument("--vary", action="append", default=[], metavar="NAME=LO:HI",
                    help="a range to search (a parameter, init.x or input.u; a bare init.x or "
@@ -87,7 +86,7 @@ def add_campaign_commands(
 
 
 def _common(p: argparse.ArgumentParser, types: Mapping[str, Callable[[str], Any]]) -> None:
-    from hybrid.simulation.settings import METHODS
+    from hybrid.cli.settings import add_settings_flags
 
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=types["count"], default=None,
@@ -100,24 +99,8 @@ def _common(p: argparse.ArgumentParser, types: Mapping[str, Callable[[str], Any]
                    metavar="NAME=VALUE", help="hold a parameter at a value")  # fmt: skip
     p.add_argument("--input", type=types["assignment"], action="append", default=[],
                    metavar="NAME=EXPR", help="drive a free input with an expression of t")  # fmt: skip
-    p.add_argument("--max-jumps", type=types["count"], default=10_000, help="jumps per run at most")
-    p.add_argument("--rtol", type=types["positive"], default=1e-6, help="relative tolerance")
-    p.add_argument("--atol", type=types["positive"], default=1e-9, help="absolute tolerance")
-    p.add_argument("--max-step", type=types["positive"], default=None, help="largest solver step")
-    p.add_argument("--method", default=METHODS[0], choices=METHODS, help="solve_ivp method")
-    p.add_argument("--dt", type=types["positive"], default=None, help="store points on a grid")
+    add_settings_flags(p, types["positive"], types["count"], each_run=True)
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
-
-
-def _solver(args: argparse.Namespace) -> dict[str, Any]:
-    return {
-        "max_jumps": args.max_jumps,
-        "rtol": args.rtol,
-        "atol": args.atol,
-        "max_step": args.max_step,
-        "method": args.method,
-        "dt": args.dt,
-    }
 
 
 def _notifier(line: TerminalLine | None) -> Callable[[str], None]:
@@ -152,7 +135,7 @@ def run_sweep(args: argparse.Namespace) -> int:
         model = load(args.file)
         table = sweep(
             model,
-            args.t_end,
+            settings=settings_from(args),
             grid=grid,
             vary=vary or None,
             samples=args.sample,
@@ -168,7 +151,6 @@ def run_sweep(args: argparse.Namespace) -> int:
             resume=args.resume,
             progress=line if line is not None else False,
             backend=args.backend,
-            **_solver(args),
         )
     if line is not None:
         line.clear()
@@ -233,7 +215,7 @@ def run_falsify(args: argparse.Namespace) -> int:
             model,
             args.requirement,
             vary or None,
-            t_end=args.t_end,
+            settings=settings_from(args),
             budget=args.budget,
             seed=args.seed,
             sampler=args.sampler,
@@ -244,7 +226,6 @@ def run_falsify(args: argparse.Namespace) -> int:
             run_timeout=args.run_timeout,
             progress=line if line is not None else False,
             backend=args.backend,
-            **_solver(args),
         )
     if line is not None:
         line.clear()

@@ -77,9 +77,10 @@ def _count(text: str) -> int:
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``hybrid`` command (the CLI reference is generated from it)."""
     from hybrid.analysis.formats import FORMATS as REPORT_FORMATS
+    from hybrid.cli.settings import add_settings_flags
     from hybrid.export.diagrams import DIAGRAM_FORMATS
     from hybrid.export.pictures import RENDERED_FORMATS
-    from hybrid.simulation.settings import BACKENDS, METHODS
+    from hybrid.simulation.settings import BACKENDS
 
     parser = _Parser(
         prog="hybrid",
@@ -122,17 +123,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("simulate", help="simulate a spec")
     p.add_argument("file", metavar="FILE", help="spec or system file")
-    p.add_argument("--t-end", type=_positive, required=True, help="end time")
-    p.add_argument("--max-jumps", type=_count, default=10_000, help="stop after this many jumps")
-    p.add_argument("--rtol", type=_positive, default=1e-6, help="relative tolerance of the solver")
-    p.add_argument("--atol", type=_positive, default=1e-9, help="absolute tolerance of the solver")
-    p.add_argument(
-        "--max-step",
-        type=_positive,
-        default=None,
-        help="largest solver step; lower it to catch narrow guard windows",
-    )
-    p.add_argument("--method", default=METHODS[0], choices=METHODS, help="solve_ivp method")
+    add_settings_flags(p, _positive, _count)
     p.add_argument(
         "--backend",
         default=BACKENDS[0],
@@ -163,7 +154,6 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FILE",
         help="drive free inputs with time series: a CSV with columns t,NAME,...",
     )
-    p.add_argument("--dt", type=_positive, default=None, help="write points on a uniform grid")
     p.add_argument("--out", help="trajectory file (.csv, .npz or .mat)")
     p.add_argument("--events", help="events JSON file")
     p.add_argument("--plot", help="figure file (needs the 'plot' extra)")

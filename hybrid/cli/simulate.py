@@ -17,6 +17,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_OK
+from hybrid.cli.settings import settings_from
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError, did_you_mean
 from hybrid.model import Automaton
@@ -63,13 +64,7 @@ def run_simulate(args: argparse.Namespace) -> int:
             backend = chosen.backend
         run = simulate(
             model,
-            t_end=args.t_end,
-            max_jumps=args.max_jumps,
-            rtol=args.rtol,
-            atol=args.atol,
-            max_step=args.max_step,
-            method=args.method,
-            dt=args.dt,
+            settings=settings_from(args),
             dense=args.plot is not None,
             inputs=inputs or None,
             progress=line,

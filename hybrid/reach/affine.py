@@ -23,7 +23,8 @@ Examples
 ... state: {x: {initial: [1, 2]}}
 ... locations: {on: {flow: {x: -a * x + 2 * u + 1}}}
 ... ''')
->>> f = Forms(m)
+>>> from hybrid.compose import as_system
+>>> f = Forms(as_system(m))
 >>> a, b, c = f.flow(("on",))
 >>> a.tolist(), b.tolist(), c.tolist()
 ([[-0.5, 0.0], [0.0, 0.0]], [[2.0], [0.0]], [1.0, 1.0])
@@ -39,13 +40,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hybrid.analysis.linear import Affine, Linearizer, structural_key
-from hybrid.compose import System, as_system
+from hybrid.compose import System
 from hybrid.errors import Position, SpecError
 from hybrid.expr import ir
 from hybrid.expr.printer import to_source
 from hybrid.expr.ranges import IntervalEvaluator
 from hybrid.expr.transform import bind_parameters
-from hybrid.model import Automaton
 
 __all__ = ["TIME", "Condition", "Forms", "Rows"]
 
@@ -85,8 +85,8 @@ class Forms:
     with a range (the columns of ``B``), ``u_lo``/``u_hi`` their ranges.
     """
 
-    def __init__(self, model: Automaton | System) -> None:
-        self.system = as_system(model)
+    def __init__(self, system: System) -> None:
+        self.system = system
         self.component_names = [c.name for c in self.system.components]
         self.variables: tuple[str, ...] = (*self.system.state_names, TIME)
         self.index = {v: i for i, v in enumerate(self.variables)}

@@ -28,7 +28,7 @@ import time
 import numpy as np
 from numpy.typing import NDArray
 
-from hybrid.compose import System
+from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.expr import ir
 from hybrid.model import Automaton, Forbidden
@@ -46,6 +46,7 @@ from hybrid.reach.witness import (
     support_candidate,
 )
 from hybrid.simulation.result import Run
+from hybrid.simulation.settings import Settings
 
 __all__ = ["DEFAULT_STEPS", "reach"]
 
@@ -58,8 +59,9 @@ RANDOM_RUNS = 4
 
 def reach(
     model: Automaton | System,
-    t_end: float,
+    t_end: float | None = None,
     *,
+    settings: Settings | None = None,
     max_jumps: int = 10,
     step: float | None = None,
     witness: bool = True,
@@ -74,8 +76,12 @@ def reach(
         affine, guards and invariants linear (conjunctions and disjunctions of
         comparisons). Every input a flow or reset reads needs a range; it may
         take any value in it at any time.
-    t_end : float
-        Horizon.
+    t_end : float, optional
+        Horizon; needed unless ``settings`` gives it.
+    settings : Settings, optional
+        A :class:`hybrid.Settings`, of which reach reads ``t_end`` only (when
+        ``t_end`` is not given): its flowpipes have their own ``step`` and jump
+        bound, and its witnesses are simulated at their own tolerances.
     max_jumps : int
         Jump bound.
     step : float, optional
@@ -111,7 +117,13 @@ def reach(
     >>> lo, hi = r.hull()
     >>> bool(hi[0] >= 10.0 and lo[0] <= 0.0)
     True
+    >>> hybrid.reach(ball, settings=hybrid.Settings(t_end=2.0), max_jumps=3, step=0.001).t_end
+    2.0
     """
+    if settings is not None and not isinstance(settings, Settings):
+        raise UsageError(f"settings must be a hybrid.Settings, got {settings!r}")
+    if t_end is None and settings is not None:
+        t_end = settings.t_end
     if isinstance(t_end, bool) or not isinstance(t_end, int | float) or not math.isfinite(t_end):
         raise UsageError(f"t_end must be a finite number, got {t_end!r}")
     if step is None:
@@ -119,7 +131,8 @@ def reach(
     if isinstance(max_jumps, bool) or not isinstance(max_jumps, int):
         raise UsageError(f"max_jumps must be an integer >= 0, got {max_jumps!r}")
     started = time.process_time()
-    forms = forms_of(model)
+    system = as_system(model)  # the flowpipes' model; the witnesses run the user's
+    forms = forms_of(system)
     entries = [
         (e, _condition(forms, e, forms.system.initial_mode)) for e in model.properties.forbidden
     ]
@@ -129,7 +142,7 @@ def reach(
     sets: list[ReachSet] = []
     complete = False
     if not (early and all(e is not None for e in early)):
-        sets, complete = explore(model, t_end=t_end, max_jumps=max_jumps, step=step, forms=forms)
+        sets, complete = explore(system, t_end=t_end, max_jumps=max_jumps, step=step, forms=forms)
     grouped: dict[tuple[str, ...], list[ReachSet]] = {}
     for s in sets:  # once: each entry then looks at the modes, not at every set
         grouped.setdefault(s.mode, []).append(s)

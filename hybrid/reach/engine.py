@@ -26,7 +26,8 @@ Examples
 ... state: {x: {initial: [1, 2]}}
 ... locations: {l: {flow: {x: -x}}}
 ... ''')
->>> sets, complete = explore(m, t_end=1.0, max_jumps=0, step=0.01)
+>>> from hybrid.compose import as_system
+>>> sets, complete = explore(as_system(m), t_end=1.0, max_jumps=0, step=0.01)
 >>> complete, len(sets), sets[-1].t[1] >= 1.0
 (True, 101, True)
 """
@@ -44,7 +45,7 @@ from numpy.typing import NDArray
 
 from hybrid.compose import System
 from hybrid.errors import UsageError
-from hybrid.model import Automaton, Edge
+from hybrid.model import Edge
 from hybrid.reach.affine import TIME, Condition, Forms, Rows
 from hybrid.reach.boxes import affine_image, meets, meets_many
 from hybrid.reach.flowpipe import Overflow, flowpipe
@@ -179,12 +180,15 @@ class _Modes:
 
 
 _READ: weakref.WeakKeyDictionary[Forms, _Modes] = weakref.WeakKeyDictionary()
-_FORMS: dict[int, tuple[weakref.ref[Automaton | System], Forms]] = {}
+_FORMS: dict[int, tuple[weakref.ref[System], Forms]] = {}
 """:func:`forms_of`'s cache: a model's id -> (the model, weakly; its forms)."""
 
 
-def forms_of(model: Automaton | System) -> Forms:
+def forms_of(model: System) -> Forms:
     """The forms of ``model``, read once per model object (a model is immutable).
+
+    :func:`~hybrid.compose.as_system` gives the same system for the same
+    automaton, so the runs of :func:`hybrid.reach` on one automaton share them.
 
     Examples
     --------
@@ -194,7 +198,8 @@ def forms_of(model: Automaton | System) -> Forms:
     ... state: {x: {initial: 1}}
     ... locations: {l: {flow: {x: -x}}}
     ... ''')
-    >>> forms_of(m) is forms_of(m)
+    >>> from hybrid.compose import as_system
+    >>> forms_of(as_system(m)) is forms_of(as_system(m))
     True
     """
     key = id(model)
@@ -240,7 +245,7 @@ def initial_boxes(forms: Forms) -> list[tuple[tuple[str, ...], Array, Array]]:
 
 
 def explore(
-    model: Automaton | System,
+    model: System,
     *,
     t_end: float,
     max_jumps: int,

@@ -49,7 +49,8 @@ Examples
 ... locations: {on: {flow: {x: -0.1 * x + 2 + u}}}
 ... properties: {forbidden: [{when: x > 25}]}
 ... ''')
->>> forms = Forms(m)
+>>> from hybrid.compose import as_system
+>>> forms = Forms(as_system(m))
 >>> key, lo, hi = initial_boxes(forms)[0]
 >>> cond = forms.condition(m.properties.forbidden[0].when, 0, key, m.position, "x > 25")
 >>> found = refute(forms, mode_of(forms, key), lo, hi, cond, t_end=10.0, step=0.05)

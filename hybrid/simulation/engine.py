@@ -11,7 +11,6 @@ model, compiles it (once per model and thread,
 
 from __future__ import annotations
 
-import math
 import threading
 from collections.abc import Callable, Mapping
 from dataclasses import replace
@@ -31,7 +30,7 @@ from hybrid.simulation.margins import margin_table
 from hybrid.simulation.monitor import Monitor
 from hybrid.simulation.monitor_apart import cut_results, join_groups, with_group_requirements
 from hybrid.simulation.result import Run
-from hybrid.simulation.settings import MAX_JUMPS_PER_INSTANT, Settings, finite_number
+from hybrid.simulation.settings import Settings, finite_number, merged
 from hybrid.simulation.start import describe_start, run_inputs
 
 __all__ = ["simulate"]
@@ -39,25 +38,26 @@ __all__ = ["simulate"]
 
 def simulate(
     model: Automaton | System,
-    t_end: float,
+    t_end: float | None = None,
     *,
-    max_jumps: int = 10_000,
-    rtol: float = 1e-6,
-    atol: float = 1e-9,
+    settings: Settings | None = None,
+    max_jumps: int | None = None,
+    rtol: float | None = None,
+    atol: float | None = None,
     max_step: float | None = None,
-    method: str = "RK45",
+    method: str | None = None,
     parameters: Mapping[str, float] | None = None,
     initial: Mapping[str, float] | None = None,
     initial_location: str | None = None,
     inputs: Mapping[str, Callable[[float], float]] | None = None,
-    t_start: float = 0.0,
+    t_start: float | None = None,
     dt: float | None = None,
-    zeno: bool = True,
-    max_jumps_per_instant: int = MAX_JUMPS_PER_INSTANT,
+    zeno: bool | None = None,
+    max_jumps_per_instant: int | None = None,
     handle_sigint: bool = True,
-    dense: bool = False,
+    dense: bool | None = None,
     progress: Reporter | None = None,
-    backend: str = "scipy",
+    backend: str | None = None,
 ) -> Run:
     """Simulate ``model`` from ``t_start`` to ``t_end``.
 
@@ -65,13 +65,19 @@ def simulate(
     ----------
     model : Automaton or System
         From :func:`hybrid.load`.
-    t_end : float
+    t_end : float, optional
         End time; the run ends there with cause ``t_end`` unless it ends before.
+        Needed unless ``settings`` gives it (then it overrides that one).
+    settings : Settings, optional
+        The options of the run as one object (:class:`hybrid.Settings`);
+        every option below given as a keyword overrides its field. Not given:
+        the defaults.
     max_jumps : int
-        Stop with cause ``max_jumps`` after this many jumps.
+        Stop with cause ``max_jumps`` after this many jumps (default 10 000).
     rtol, atol, max_step, method
-        Passed to :func:`scipy.integrate.solve_ivp`. Lower ``max_step`` so that
-        a guard that is true only briefly is not stepped over.
+        Passed to :func:`scipy.integrate.solve_ivp` (defaults 1e-6, 1e-9, not
+        limited, ``"RK45"``). Lower ``max_step`` so that a guard that is true
+        only briefly is not stepped over.
     parameters : mapping, optional
         Parameter overrides (``comp.name`` in a system), finite numbers.
     initial : mapping, optional
@@ -84,13 +90,13 @@ def simulate(
         :mod:`hybrid.simulation.inputs` for expressions and time series). A
         free input with a ``range`` given none is held at its nominal value.
     t_start : float
-        Start time.
+        Start time (default 0).
     dt : float, optional
         Store points on a uniform grid (jump points are always stored).
     zeno : bool
-        Detect geometric accumulation of jumps (cause ``zeno``).
+        Detect geometric accumulation of jumps (cause ``zeno``; default on).
     max_jumps_per_instant : int
-        Jumps allowed at one instant before the run ends as ``zeno``.
+        Jumps allowed at one instant before the run ends as ``zeno`` (default 1000).
     handle_sigint : bool
         Turn Ctrl-C into a clean end (cause ``interrupted``), keeping the output.
     dense : bool
@@ -100,8 +106,13 @@ def simulate(
         ``t_end``, ``jumps`` and ``points`` so far, rate, time left) at most
         five times a second while the run goes on, and once when it ends.
     backend : str
-        ``"scipy"`` (the reference engine) or ``"compiled"`` (the same semantics
-        compiled to machine code with numba: the ``fast`` extra; docs/backends.md).
+        ``"scipy"`` (the reference engine, default) or ``"compiled"`` (the same
+        semantics compiled to machine code with numba: the ``fast`` extra;
+        docs/backends.md).
+
+    The options (``t_end`` to ``backend`` but ``parameters``, ``initial``,
+    ``initial_location``, ``inputs``, ``handle_sigint`` and ``progress``) are
+    the fields of :class:`hybrid.Settings`; one given as ``None`` is not given.
 
     Returns
     -------
@@ -122,14 +133,18 @@ def simulate(
     >>> run = hybrid.simulate(ball, t_end=3.0, rtol=1e-10, atol=1e-12)
     >>> round(run.jumps[0].t, 9)  # sqrt(2 * 10 / 9.81)
     1.427843123
+    >>> same = hybrid.simulate(ball, settings=hybrid.Settings(t_end=3.0, rtol=1e-10, atol=1e-12))
+    >>> same.jumps[0].t == run.jumps[0].t
+    True
     """
-    settings = Settings(
-        t_end=t_end,
+    settings = merged(
+        settings,
+        t_end,
         t_start=t_start,
         max_jumps=max_jumps,
         rtol=rtol,
         atol=atol,
-        max_step=math.inf if max_step is None else max_step,
+        max_step=max_step,
         method=method,
         dt=dt,
         dense=dense,
@@ -137,6 +152,7 @@ def simulate(
         max_jumps_per_instant=max_jumps_per_instant,
         backend=backend,
     )
+    t_start, t_end = settings.t_start, settings.t_end
     parameters = _numbers("parameter", parameters)
     initial = _numbers("initial value of", initial)
     _check_inputs(inputs)

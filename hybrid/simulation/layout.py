@@ -10,7 +10,8 @@ Examples
 >>> layout = run_layout(hybrid.load("docs/examples/tank_system.yaml"))
 >>> layout["components"]   # plant: state h and signal level; ctrl: signal command
 (('plant', ('h', 'level')), ('ctrl', ('command',)))
->>> run_layout(hybrid.load("specs/bouncing_ball.yaml"))
+>>> from hybrid.compose import as_system
+>>> run_layout(as_system(hybrid.load("specs/bouncing_ball.yaml")))  # a system of one
 {'units': {'h': 'm', 'v': 'm/s'}, 'components': ()}
 """
 
@@ -18,20 +19,16 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from hybrid.compose import as_system
-
 if TYPE_CHECKING:
     from hybrid.compose import System
-    from hybrid.model import Automaton
 
 __all__ = ["run_layout"]
 
 
-def run_layout(model: Automaton | System) -> dict[str, Any]:
+def run_layout(system: System) -> dict[str, Any]:
     """``units`` (state variable or signal to its ``unit:``) and ``components`` (per component of a
     system: its name and its columns, state variables first, then signal columns;
     empty for a plain automaton): the keyword arguments a :class:`Run` takes."""
-    system = as_system(model)
     units = {s.name: s.unit for s in system.states if s.unit}
     for component in system.components:
         units.update(component.automaton.signal_units)

@@ -1,6 +1,10 @@
-"""The settings of one simulation run, validated once, frozen.
+"""The settings of one simulation run, validated once, frozen: ``hybrid.Settings``.
 
-Every setting is checked up front, so that a run never starts with a value
+:class:`Settings` is the one options object of the simulator: built once, it can
+be given to :func:`hybrid.simulate`, :func:`hybrid.simulate_many`,
+:func:`hybrid.sweep`, :func:`hybrid.falsify` and (its ``t_end``)
+:func:`hybrid.reach`, and each of them takes the same options as keywords too,
+which override the object's (:func:`merged`). Every setting is checked up front, so that a run never starts with a value
 that would make it hang or fail later: times and tolerances must be finite
 numbers in range, and ``max_step`` and ``dt`` must leave a number of steps or
 points a computer can take (see :data:`MAX_STEPS` and :data:`MAX_GRID_POINTS`).
@@ -24,20 +28,23 @@ from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
 from hybrid.errors import UsageError
 
 __all__ = [
     "BACKENDS",
+    "DEFAULTS",
     "MAX_GRID_POINTS",
     "MAX_JUMPS_PER_INSTANT",
     "MAX_STEPS",
     "METHODS",
     "MIN_RTOL",
+    "OPTIONS",
     "Settings",
     "finite_number",
+    "merged",
 ]
 
 METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
@@ -105,9 +112,68 @@ def _whole(name: str, value: Any, least: int) -> int:
     return int(value)
 
 
+def _flag(name: str, value: Any) -> None:
+    if not (value is True or value is False or (_plain_number(value) and value in (0, 1))):
+        raise UsageError(f"{name} must be True or False, got {value!r}")
+
+
 @dataclass(frozen=True)
 class Settings:
-    """How to integrate and when to stop; ``max_step`` is ``inf`` when not limited."""
+    """How to integrate and when to stop: the options of a run, checked once, frozen.
+
+    The same object serves :func:`hybrid.simulate`, :func:`hybrid.simulate_many`,
+    :func:`hybrid.sweep`, :func:`hybrid.falsify` and :func:`hybrid.reach` (which
+    reads its ``t_end`` only); each of them also takes these fields as keywords,
+    and a keyword given overrides the field (``hybrid.simulate(model,
+    settings=s, rtol=1e-9)``). A value out of range is a
+    :class:`~hybrid.errors.UsageError` naming the field, raised when the object
+    is made. ``dataclasses.replace(s, dt=None)`` makes a copy with fields
+    changed (checked again).
+
+    Parameters
+    ----------
+    t_end : float
+        End time; a run ends there with cause ``t_end`` unless it ends before.
+    t_start : float
+        Start time (default 0).
+    max_jumps : int
+        A run stops with cause ``max_jumps`` after this many jumps (default 10 000).
+    rtol, atol : float
+        Tolerances of the solver (default 1e-6 and 1e-9); ``rtol`` at least
+        :data:`MIN_RTOL` and below 1, ``atol`` > 0.
+    max_step : float
+        Largest solver step (default ``inf``: not limited). Lower it so that a
+        guard true only briefly is not stepped over.
+    method : str
+        One of :data:`METHODS` (default ``"RK45"``; the compiled backend has only that one).
+    dt : float, optional
+        Store points on a uniform grid of this spacing (jump points always
+        stored); default: at the solver's steps.
+    dense : bool
+        Keep each segment's interpolant in ``run.segments`` (smooth plots).
+    zeno : bool
+        Detect geometric accumulation of jumps (cause ``zeno``; default on).
+    max_jumps_per_instant : int
+        Jumps allowed at one instant before a run ends as ``zeno`` (default 1000).
+    backend : str
+        ``"scipy"`` (the reference engine, default) or ``"compiled"``
+        (:mod:`hybrid.simulation.native`; docs/backends.md).
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+    >>> fine = hybrid.Settings(t_end=3.0, rtol=1e-10, atol=1e-12)
+    >>> run = hybrid.simulate(ball, settings=fine)
+    >>> round(run.jumps[0].t, 9), run.settings["rtol"]
+    (1.427843123, 1e-10)
+    >>> hybrid.simulate(ball, settings=fine, t_end=1.0).termination.t  # keywords override
+    1.0
+    >>> hybrid.Settings(t_end=3.0, atol=0.0)
+    Traceback (most recent call last):
+    ...
+    hybrid.errors.UsageError: atol must be > 0, got 0.0
+    """
 
     t_end: float
     t_start: float = 0.0
@@ -175,6 +241,8 @@ class Settings:
             raise UsageError(f"unknown method '{self.method}'; choose one of {', '.join(METHODS)}")
         if self.backend not in BACKENDS:
             raise UsageError(f"unknown backend '{self.backend}'; choose one of {', '.join(BACKENDS)}")
+        _flag("dense", self.dense)
+        _flag("zeno", self.zeno)
 
     def as_dict(self) -> dict[str, Any]:
         """The settings as the events JSON records them (``max_step`` null when not limited)."""
@@ -182,3 +250,40 @@ class Settings:
         if math.isinf(self.max_step):
             record["max_step"] = None
         return record
+
+
+OPTIONS = tuple(f.name for f in fields(Settings))
+"""The fields of :class:`Settings`, in order: the options every entry point takes."""
+
+DEFAULTS: dict[str, Any] = {f.name: f.default for f in fields(Settings) if f.name != "t_end"}
+"""Each field's default (every field but ``t_end`` has one)."""
+
+
+def merged(settings: Settings | None, t_end: Any = None, **options: Any) -> Settings:
+    """The settings of one call: ``settings`` with the options given put in.
+
+    An option given as ``None`` is not given (the keywords of the entry points
+    default to ``None``); ``t_end`` given overrides the settings' one. Without
+    ``settings`` the options are those of a new :class:`Settings`, so a missing
+    or bad ``t_end`` is the message of :class:`Settings`.
+
+    Examples
+    --------
+    >>> s = Settings(t_end=10.0, rtol=1e-9)
+    >>> merged(s, rtol=None) is s, merged(s, 5.0, atol=1e-12).t_end
+    (True, 5.0)
+    >>> merged(None, 2.0, method="BDF").method
+    'BDF'
+    >>> merged({"t_end": 1.0})
+    Traceback (most recent call last):
+    ...
+    hybrid.errors.UsageError: settings must be a hybrid.Settings, got {'t_end': 1.0}
+    """
+    given = {k: v for k, v in options.items() if v is not None}
+    if settings is None:
+        return Settings(t_end=t_end, **given)
+    if not isinstance(settings, Settings):
+        raise UsageError(f"settings must be a hybrid.Settings, got {settings!r}")
+    if t_end is not None:
+        given["t_end"] = t_end
+    return replace(settings, **given) if given else settings

@@ -37,7 +37,7 @@ import threading
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from hybrid.compose import System, as_system
+from hybrid.compose import Model, System, as_system
 from hybrid.model import Automaton, Range
 
 __all__ = ["Held", "describe_start", "held_inputs", "run_inputs"]
@@ -57,15 +57,15 @@ class Held:
 
 
 def held_inputs(
-    model: Automaton | System, given: Mapping[str, Callable[[float], float]] | None
+    model: Model, given: Mapping[str, Callable[[float], float]] | None
 ) -> dict[str, Callable[[float], float]]:
     """The free inputs with a range that ``given`` leaves out, each held at its nominal value."""
-    ranges = as_system(model).input_ranges()
+    ranges = model.input_ranges()
     return {name: Held(r.nominal) for name, r in ranges.items() if name not in (given or {})}
 
 
 def run_inputs(
-    model: Automaton | System, given: Mapping[str, Callable[[float], float]] | None
+    model: Model, given: Mapping[str, Callable[[float], float]] | None
 ) -> dict[str, Callable[[float], float]]:
     """The inputs a run of ``model`` reads: those ``given``, and the others held (:func:`held_inputs`)."""
     return {**held_inputs(model, given), **(given or {})}
@@ -155,7 +155,7 @@ def _describe_start(
                 f"{who}starts in '{a.initial_location}', the first of its initial locations "
                 f"{', '.join(a.initial_locations)}"
             )
-    sets = as_system(original).initial_set()
+    sets = original.initial_set()
     state: dict[str, float] = {}
     for name, value in zip(system.state_names, system.initial_vector(), strict=True):
         if initial and name in initial:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import replace
 from typing import Any, overload
 
 import numpy as np
@@ -31,6 +32,7 @@ from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import run_from
 from hybrid.simulation.native.engine import (
     CompiledNative,
+    check_supported,
     compiled_native,
     config,
     run_arrays,
@@ -39,7 +41,7 @@ from hybrid.simulation.native.engine import (
 from hybrid.simulation.native.features import refuse_requirements
 from hybrid.simulation.native.interruptible import run_in_worker
 from hybrid.simulation.result import Run
-from hybrid.simulation.settings import MAX_JUMPS_PER_INSTANT, Settings
+from hybrid.simulation.settings import Settings, merged
 
 __all__ = ["Ensemble", "simulate_many"]
 
@@ -70,10 +72,9 @@ def _columns(table: Table, what: str) -> dict[str, NDArray[np.float64]]:
     return columns
 
 
-def _slot(model: Automaton | System, compiled: CompiledNative, key: str) -> int:
+def _slot(system: System, compiled: CompiledNative, key: str) -> int:
     """The parameter slot a user's name (``name`` or ``comp.name``) refers to."""
-    model.with_parameters({key: 0.0})  # the reference's errors for unknown or ambiguous names
-    system = as_system(model)
+    system.with_parameters({key: 0.0})  # the reference's errors for unknown or ambiguous names
     if system.single or "." not in key:
         owners = [i for i, c in enumerate(system.components) if key in c.automaton.parameters]
         return compiled.native.slots[(owners[0], key)]
@@ -182,18 +183,19 @@ class Ensemble(Sequence[Run]):
 
 def simulate_many(
     model: Automaton | System,
-    t_end: float,
+    t_end: float | None = None,
     *,
+    settings: Settings | None = None,
     parameters: Table = None,
     initial: Table = None,
-    max_jumps: int = 10_000,
-    rtol: float = 1e-6,
-    atol: float = 1e-9,
+    max_jumps: int | None = None,
+    rtol: float | None = None,
+    atol: float | None = None,
     max_step: float | None = None,
-    t_start: float = 0.0,
+    t_start: float | None = None,
     dt: float | None = None,
-    zeno: bool = True,
-    max_jumps_per_instant: int = MAX_JUMPS_PER_INSTANT,
+    zeno: bool | None = None,
+    max_jumps_per_instant: int | None = None,
     threads: int | None = None,
     handle_sigint: bool = True,
 ) -> Ensemble:
@@ -203,8 +205,12 @@ def simulate_many(
     ----------
     model : Automaton or System
         From :func:`hybrid.load`.
-    t_end : float
-        End time of every run.
+    t_end : float, optional
+        End time of every run; needed unless ``settings`` gives it.
+    settings : Settings, optional
+        The options of every run (:class:`hybrid.Settings`), overridden by the
+        keywords given. Its ``backend`` and ``dense`` are not read (the runs are
+        compiled and keep no interpolants) and its ``method`` must be ``RK45``.
     parameters : table, optional
         One row per run: a mapping of columns (``{"e": [0.7, 0.8]}``), a list
         of rows (``[{"e": 0.7}, {"e": 0.8}]``) or a data frame. Columns name
@@ -236,18 +242,19 @@ def simulate_many(
     >>> runs.n_jumps.tolist(), [round(run.jumps[0].t, 6) for run in runs if run.jumps]
     ([1, 1, 0], [1.009638, 1.427843])
     """
-    settings = Settings(
-        t_end=t_end,
+    settings = merged(
+        settings,
+        t_end,
         t_start=t_start,
         max_jumps=max_jumps,
         rtol=rtol,
         atol=atol,
-        max_step=math.inf if max_step is None else max_step,
+        max_step=max_step,
         dt=dt,
         zeno=zeno,
         max_jumps_per_instant=max_jumps_per_instant,
-        backend="compiled",
     )
+    settings = replace(settings, backend="compiled", dense=False)
     table = _columns(parameters, "parameters")
     starts = {k[5:]: v for k, v in table.items() if k.startswith("init.")}
     params_table = {k: v for k, v in table.items() if not k.startswith("init.")}
@@ -256,13 +263,15 @@ def simulate_many(
     if len(sizes) > 1:
         raise UsageError(f"parameters and initial have different numbers of rows {sorted(sizes)}")
     n = sizes.pop() if sizes else 1
-    refuse_requirements(as_system(model))
+    system = as_system(model)
+    refuse_requirements(system)
+    check_supported(settings, None)  # a method other than RK45, given in settings
     with immediate("compiling the model (nothing was run)"):
         compiled = compiled_native(model)
     native = compiled.native
     params = np.tile(np.array(native.parameter_vector(model), dtype=float), (n, 1))
     for key, column in params_table.items():
-        params[:, _slot(model, compiled, key)] = column
+        params[:, _slot(system, compiled, key)] = column
     x0s = np.tile(np.array(model.initial_vector(), dtype=float), (n, 1))
     for name, column in starts.items():
         if name not in native.state_names:
@@ -286,7 +295,7 @@ def simulate_many(
 
         def call(flag: NDArray[np.int64], arrays: b.RunArrays = arrays, lo: int = lo,
                  hi: int = hi) -> None:  # fmt: skip
-            compiled.run_many(params[lo:hi], x0s[lo:hi], t_start, m0, cfg, arrays, flag)
+            compiled.run_many(params[lo:hi], x0s[lo:hi], settings.t_start, m0, cfg, arrays, flag)
 
         run_in_worker(call, handle_sigint, flag)
         ensemble._add(arrays, hi - lo)
