@@ -184,7 +184,7 @@ def falsify(
     (True, True, True)
     """
     chosen, solver = campaign_settings("falsify", settings, t_end, solver)
-    t_end, backend = chosen.t_end, backend or chosen.backend
+    t_end, backend = chosen.t_end, backend or chosen.backend or "auto"
     if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
         raise UsageError(f"budget must be a whole number >= 1, got {budget!r}")
     if not 0.0 < global_share <= 1.0:

@@ -172,8 +172,9 @@ def sweep(
     handle_sigint : bool
         Turn Ctrl-C into a clean stop (rows kept, ``table.complete`` False).
     backend : str, optional
-        ``"scipy"``, ``"compiled"`` or ``"auto"`` (:mod:`hybrid.campaigns.choosing`);
-        default: that of ``settings``, ``"scipy"`` without.
+        ``"scipy"``, ``"compiled"`` or ``"auto"`` (:mod:`hybrid.campaigns.choosing`:
+        compiled when it pays for its compile, else scipy, with a note saying which);
+        default: that of ``settings``, ``"auto"`` when neither gives one.
     batch : int, optional
         Runs per batch sent to a worker (default: chosen from the counts).
     **solver
@@ -196,7 +197,7 @@ def sweep(
     [(0.5, 't_end', 1), (0.9, 't_end', 1)]
     """
     chosen, solver = campaign_settings("sweep", settings, t_end, solver)
-    t_end, backend = chosen.t_end, backend or chosen.backend
+    t_end, backend = chosen.t_end, backend or chosen.backend or "auto"
     if parameters:
         model = model.with_parameters(dict(parameters))
     system = as_system(model)  # the one model type below; the user's model goes to the workers

@@ -60,9 +60,9 @@ def add_campaign_commands(
     from hybrid.simulation.settings import BACKENDS
 
     campaign_backends = (*BACKENDS, "auto")  # auto: hybrid.campaigns.choosing
-    p.add_argument("--backend", default=BACKENDS[0], choices=campaign_backends,
+    p.add_argument("--backend", default=None, choices=campaign_backends,
                    help="scipy (reference), compiled (numba: one ensemble call per batch) or "
-                   "auto (compiled when cached or when it pays; docs/backends.md)")  # fmt: skip
+                   "auto (the default: compiled when cached or when it pays; docs/backends.md)")  # fmt: skip
     p.add_argument("--out", required=True, help="results file (.csv or .parquet)")
     p.add_argument("--resume", action="store_true", help="finish an interrupted campaign")
     p.add_argument("--format", choices=REPORT_FORMATS, default="summary",
@@ -78,9 +78,9 @@ def add_campaign_commands(
     p.add_argument("--seed", type=int, default=0, help="seed of the global phase (default 0)")
     p.add_argument("--sampler", choices=SAMPLERS, default="lhs", help="the global design")
     _common(p, types)
-    p.add_argument("--backend", default=BACKENDS[0], choices=campaign_backends,
+    p.add_argument("--backend", default=None, choices=campaign_backends,
                    help="scipy (reference), compiled (numba; requirements are monitored over "
-                   "its steps) or auto (compiled when cached or when it pays; "
+                   "its steps) or auto (the default: compiled when cached or when it pays; "
                    "docs/backends.md)")  # fmt: skip
     p.add_argument("--out", metavar="DIR", help="write the counterexample here")
 

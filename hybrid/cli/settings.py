@@ -15,8 +15,8 @@ Examples
 >>> args = argparse.Namespace(t_end=2.0, max_jumps=10_000, rtol=1e-9, atol=1e-9,
 ...                           max_step=None, method="RK45", dt=None, backend="auto")
 >>> s = settings_from(args)
->>> s.t_end, s.rtol, s.max_step, s.backend
-(2.0, 1e-09, inf, 'scipy')
+>>> s.t_end, s.rtol, s.max_step, s.backend is None  # auto: the command's to resolve
+(2.0, 1e-09, inf, True)
 """
 
 from __future__ import annotations

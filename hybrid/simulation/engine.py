@@ -14,6 +14,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable, Mapping
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -106,9 +107,11 @@ def simulate(
         ``t_end``, ``jumps`` and ``points`` so far, rate, time left) at most
         five times a second while the run goes on, and once when it ends.
     backend : str
-        ``"scipy"`` (the reference engine, default) or ``"compiled"`` (the same
+        ``"scipy"`` (the reference engine, default), ``"compiled"`` (the same
         semantics compiled to machine code with numba: the ``fast`` extra;
-        docs/backends.md).
+        docs/backends.md) or ``"auto"``: compiled only when the model's compiled
+        code is loaded in this process already (a loop of runs after its first),
+        else scipy; ``run.settings["backend"]`` says which ran.
 
     The options (``t_end`` to ``backend`` but ``parameters``, ``initial``,
     ``initial_location``, ``inputs``, ``handle_sigint`` and ``progress``) are
@@ -154,6 +157,8 @@ def simulate(
     )
     t_start, t_end = settings.t_start, settings.t_end
     parameters = _numbers("parameter", parameters)
+    if settings.backend != "compiled" and settings.backend != "scipy":  # not given, or auto
+        settings = replace(settings, backend=_one_run_backend(model, settings, inputs))
     initial = _numbers("initial value of", initial)
     _check_inputs(inputs)
     model = model.with_parameters(parameters) if parameters else model
@@ -253,6 +258,18 @@ def _simulate_compiled(
         run.segments = []
         run.settings["dense"] = False
     return run
+
+
+def _one_run_backend(
+    model: Automaton | System, settings: Settings, inputs: Mapping[str, Any] | None
+) -> str:
+    """The backend of one run when it is not given (scipy) or ``auto`` (compiled only if
+    nothing is to be loaded or compiled first: :func:`hybrid.simulation.native.choice.choose`)."""
+    if settings.backend is None:
+        return "scipy"
+    from hybrid.simulation.native.choice import choose
+
+    return choose(model, 1, method=settings.method, inputs=bool(inputs)).backend
 
 
 def _has_requirements(model: Automaton | System) -> bool:

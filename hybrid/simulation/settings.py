@@ -35,6 +35,7 @@ from hybrid.errors import UsageError
 
 __all__ = [
     "BACKENDS",
+    "CHOICES",
     "DEFAULTS",
     "MAX_GRID_POINTS",
     "MAX_JUMPS_PER_INSTANT",
@@ -52,6 +53,9 @@ METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 
 BACKENDS = ("scipy", "compiled")
 """``scipy``: the solve_ivp engine (the reference); ``compiled``: hybrid.simulation.native."""
+
+CHOICES = (*BACKENDS, "auto")
+"""What ``backend`` may say: a backend, or ``auto`` (the one that pays; docs/backends.md)."""
 
 MAX_JUMPS_PER_INSTANT = 1000
 """Jumps allowed at one instant before a run ends as ``zeno`` (a zero-time cycle)."""
@@ -155,9 +159,12 @@ class Settings:
         Detect geometric accumulation of jumps (cause ``zeno``; default on).
     max_jumps_per_instant : int
         Jumps allowed at one instant before a run ends as ``zeno`` (default 1000).
-    backend : str
-        ``"scipy"`` (the reference engine, default) or ``"compiled"``
-        (:mod:`hybrid.simulation.native`; docs/backends.md).
+    backend : str, optional
+        ``"scipy"`` (the reference engine), ``"compiled"``
+        (:mod:`hybrid.simulation.native`) or ``"auto"`` (compiled where it pays for its
+        compile: docs/backends.md). Not given (``None``): the entry point's default,
+        ``"scipy"`` for :func:`hybrid.simulate`, ``"auto"`` for :func:`hybrid.sweep`
+        and :func:`hybrid.falsify`.
 
     Examples
     --------
@@ -186,7 +193,7 @@ class Settings:
     dense: bool = False
     zeno: bool = True
     max_jumps_per_instant: int = MAX_JUMPS_PER_INSTANT
-    backend: str = "scipy"
+    backend: str | None = None
 
     def __post_init__(self) -> None:
         t0 = finite_number("t_start", self.t_start)
@@ -239,8 +246,8 @@ class Settings:
                 )
         if self.method not in METHODS:
             raise UsageError(f"unknown method '{self.method}'; choose one of {', '.join(METHODS)}")
-        if self.backend not in BACKENDS:
-            raise UsageError(f"unknown backend '{self.backend}'; choose one of {', '.join(BACKENDS)}")
+        if self.backend is not None and self.backend not in CHOICES:
+            raise UsageError(f"unknown backend '{self.backend}'; choose one of {', '.join(CHOICES)}")
         _flag("dense", self.dense)
         _flag("zeno", self.zeno)
 
