@@ -45,6 +45,11 @@ KERNEL_MODULES = (
 """The kernel modules, in this order (callees first); the last is the parallel ensemble loop."""
 
 MARKER = "# --- kernel ---"
+INLINE = (
+    "sample", "watch_terms", "watch_min", "watch_at", "curve_at", "dense_eval", "watch_on_curve",
+    "failed", "parts", "record_point", "value_checked", "band", "step_ahead", "choose",
+    "eval_rhs", "watch_value", "note_used", "note_reached",
+)
 JIT = 'cache=True, nogil=True, error_model="numpy"'
 
 
@@ -116,11 +121,13 @@ def kernel_module(parallel_over: str = "") -> Generated:
         "# dropped, a third of what compiling run_one took)",
         "_ALLOCATING = ('run_many',)",
         "_PLAIN = {_name: globals()[_name] for _name in _NAMES}",
+        f"_INLINE = {INLINE!r}",
         "def _jit(_name):",
         "    _sig = numba_signature(_PLAIN[_name].__annotations__, _TYPES)",
         "    _options = dict(no_cpython_wrapper=_name not in ('run_one', 'run_many'),",
         "                    no_cfunc_wrapper=_name not in _ALIASES,",
-        "                    _nrt=_name in _ALLOCATING)",
+        "                    _nrt=_name in _ALLOCATING,",
+        "                    inline='always' if _name in _INLINE else 'never')",
         f"    return njit(_sig, parallel={parallel}, {JIT}, **_options)(_PLAIN[_name])",
         "def finish_compiling():",
         '    """Nothing left: every piece is loaded or compiled (else: compile_kernel\'s finish)."""',
