@@ -80,6 +80,9 @@ class BoundExcursion:
         }
 
 
+_FMIN, _FMAX = np.fmin.reduce, np.fmax.reduce
+
+
 def bound_excursions(
     declared: Sequence[StateVar],
     names: Sequence[str],
@@ -99,8 +102,12 @@ def bound_excursions(
         if (math.isinf(var.lower) and math.isinf(var.upper)) or var.name not in names:
             continue
         column = states[:, names.index(var.name)]
-        below = column < var.lower - (atol + rtol * abs(var.lower))
-        above = column > var.upper + (atol + rtol * abs(var.upper))
+        low = var.lower - (atol + rtol * abs(var.lower))
+        high = var.upper + (atol + rtol * abs(var.upper))
+        if column.size == 0 or not (_FMIN(column) < low or _FMAX(column) > high):
+            continue  # its extremes (NaN left out) within: no point beyond (half the cost)
+        below = column < low
+        above = column > high
         beyond = np.flatnonzero((below | above) & np.isfinite(column))
         if beyond.size:
             k = int(beyond[0])

@@ -38,8 +38,36 @@ def termination_of(
     buf: b.RunArrays,
     inputs: Inputs = None,
 ) -> Termination:
-    """How the run in ``buf`` ended, worded as the reference engine words it."""
+    """How the run in ``buf`` ended, worded as the reference engine words it.
+
+    A plain end (``t_end``, ``max_jumps``, ``interrupted``) where the last run
+    of the same model ended is that run's record again (it is frozen): a
+    repeated run builds none.
+    """
     oi, of = buf.oi.tolist(), buf.of.tolist()  # Python numbers, read at once
+    detail = oi[b.I_DETAIL]
+    if detail == b.D_NONE:
+        t = of[b.F_T]
+        key = (oi[b.I_CAUSE], t, math.copysign(1.0, t), oi[b.I_J], oi[b.I_MODE],
+               settings.max_jumps)  # fmt: skip
+        last = _LAST_END[0]
+        if last is not None and last[0] is native and last[1] == key:
+            return last[2]
+        plain = _termination(native, layout, model, settings, buf, inputs, oi, of)
+        _LAST_END[0] = (native, key, plain)  # one tuple, replaced at once
+        return plain
+    return _termination(native, layout, model, settings, buf, inputs, oi, of)
+
+
+_LAST_END: list[tuple[NativeModel, tuple[Any, ...], Termination] | None] = [None]
+"""The last plain end: its model structure, key (cause, t and its sign, j, mode, max_jumps) and
+record."""
+
+
+def _termination(native: NativeModel, layout: Layout, model: Automaton | System,
+                 settings: Settings, buf: b.RunArrays, inputs: Inputs, oi: list[int],
+                 of: list[float]) -> Termination:  # fmt: skip
+    """:func:`termination_of` from ``buf``'s counts and numbers read as ``oi`` and ``of``."""
     cause = b.CAUSE_CODES[oi[b.I_CAUSE]]
     t, j, m = of[b.F_T], oi[b.I_J], oi[b.I_MODE]
     detail, index = oi[b.I_DETAIL], oi[b.I_DETAIL_INDEX]

@@ -26,6 +26,7 @@ The watcher and the worker are started once per process (again after a fork).
 from __future__ import annotations
 
 import contextlib
+import importlib
 import os
 import queue
 import signal
@@ -103,20 +104,18 @@ def _run_here(call: Callable[[NDArray[np.int64]], None], flag: NDArray[np.int64]
     handler sees each Ctrl-C as the loop returns; outside one a handler of
     this run's own counts them (what :func:`~hybrid.simulation.interrupts.sigint_watch`
     does, without its context managers: they cost more than a short run's signal handling).
+    The handler is swapped with ``_signal.signal`` (what ``signal.signal``
+    wraps): the wrapper converts every handler to and from an enum, which cost
+    three times the swap itself.
     """
     active = _ACTIVE[-1] if _ACTIVE else None
     if active is not None and active.requested:
         flag[0] = 1
     write_end = _watcher()
-    presses = [0]
     previous: Any = None
     if active is None:
-
-        def count(signum: int, frame: Any) -> None:
-            presses[0] += 1
-            note_interrupt()
-
-        previous = signal.signal(signal.SIGINT, count)
+        _PRESSES[0] = 0
+        previous = _SET_HANDLER(_SIGINT, _count)
     try:
         _WATCHED[0] = flag
         try:
@@ -134,10 +133,23 @@ def _run_here(call: Callable[[NDArray[np.int64]], None], flag: NDArray[np.int64]
                 _WATCHED[0] = None
     finally:
         if active is None:
-            signal.signal(signal.SIGINT, previous)
-    if presses[0] or (active is not None and active.requested):  # its handler has run by now
-        flag[0] = 1
+            _SET_HANDLER(_SIGINT, previous)
+    if (active is None and _PRESSES[0]) or (active is not None and active.requested):
+        flag[0] = 1  # the handler has run by now
     return bool(flag[0])
+
+
+_SIGINT = int(signal.SIGINT)
+_SET_HANDLER: Callable[[int, Any], Any] = importlib.import_module("_signal").signal
+"""``signal.signal`` without its conversions to and from enums (the C function it wraps)."""
+_PRESSES: list[int] = [0]
+"""Ctrl-C presses seen by :func:`_count` during the run in progress in the main thread."""
+
+
+def _count(signum: int, frame: Any) -> None:
+    """The SIGINT handler of a run outside a command: count the press (no KeyboardInterrupt)."""
+    _PRESSES[0] += 1
+    note_interrupt()
 
 
 _WATCHED: list[NDArray[np.int64] | None] = [None]

@@ -37,25 +37,24 @@ __all__ = ["JumpRecords", "jump_records"]
 class JumpRecords(Sequence[Jump]):
     """The jumps of one compiled run, as arrays; a :class:`Jump` per item on access.
 
+    It keeps the rows the loop filled (one copy: time, hybrid time, transition,
+    key, state before and after, enabled flags) and reads its columns when asked.
     Compares equal to a list of the same jumps (and to another such sequence);
     pickles as that list.
     """
 
-    __slots__ = ("_after", "_before", "_j", "_keys", "_layout", "_t", "_width")
+    __slots__ = ("_d", "_layout", "_rows")
 
-    def __init__(self, layout: Layout, t: NDArray[np.float64], j: NDArray[np.int64], keys: Any,
-                 before: NDArray[np.float64], after: NDArray[np.float64],
-                 width: int) -> None:  # fmt: skip
-        self._layout, self._t, self._j, self._keys = layout, t, j, keys
-        self._before, self._after, self._width = before, after, width
+    def __init__(self, layout: Layout, rows: NDArray[np.float64], d: int) -> None:
+        self._layout, self._rows, self._d = layout, rows, d
 
     @property
     def times(self) -> NDArray[np.float64]:
         """The jump times (a copy)."""
-        return self._t.copy()
+        return self._rows[:, b.J_T].copy()
 
     def __len__(self) -> int:
-        return int(self._t.shape[0])
+        return int(self._rows.shape[0])
 
     @overload
     def __getitem__(self, index: int) -> Jump: ...
@@ -104,16 +103,22 @@ class JumpRecords(Sequence[Jump]):
         if not rows:
             return []
         lo, hi = rows.start, rows.stop
-        layout, names = self._layout, self._layout.state_names
-        keys = self._keys[lo:hi]
-        keys = keys.tolist() if isinstance(keys, np.ndarray) else keys
-        befores = _state_dicts(names, self._before[lo:hi].T.tolist(), hi - lo)
-        afters = _state_dicts(names, self._after[lo:hi].T.tolist(), hi - lo)
-        seen, fields_of, width = layout.choices, layout.fields, self._width
+        layout, names, d = self._layout, self._layout.state_names, self._d
+        block = self._rows[lo:hi]
+        x, y, z = b.J_X, b.J_X + d, b.J_X + 2 * d
+        width = block.shape[1] - z
+        if layout.packed:
+            keys: Any = block[:, b.J_KEY].tolist()
+        else:
+            keys = layout.jump_keys(block[:, b.J_TR], block[:, z:])
+        befores = _state_dicts(names, block[:, x:y].T.tolist(), hi - lo)
+        afters = _state_dicts(names, block[:, y:z].T.tolist(), hi - lo)
+        seen, fields_of = layout.choices, layout.fields
         new, set_field = object.__new__, object.__setattr__
         jumps: list[Jump] = []
         append = jumps.append
-        for t, j, key, before, after in zip(self._t[lo:hi].tolist(), self._j[lo:hi].tolist(),
+        for t, j, key, before, after in zip(block[:, b.J_T].tolist(),
+                                            block[:, b.J_J].astype(np.int64).tolist(),
                                             keys, befores, afters, strict=True):  # fmt: skip
             fields = (seen.get(key) or fields_of(key, width)).copy()
             fields["t"], fields["j"], fields["before"], fields["after"] = t, j, before, after
@@ -124,18 +129,8 @@ class JumpRecords(Sequence[Jump]):
 
 
 def jump_records(layout: Layout, buf: b.RunArrays) -> JumpRecords:
-    """The jumps of the run in ``buf`` (one run's arrays), copied out of it."""
-    n = int(buf.oi[b.I_JUMPS])
-    d = len(layout.state_names)
-    x, y, z = b.J_X, b.J_X + d, b.J_X + 2 * d
-    rows = buf.jps[:n]
-    width = rows.shape[1] - z
-    if layout.packed:
-        keys: Any = rows[:, b.J_KEY].copy()
-    else:
-        keys = layout.jump_keys(rows[:, b.J_TR], rows[:, z:])
-    return JumpRecords(layout, rows[:, b.J_T].copy(), rows[:, b.J_J].astype(np.int64), keys,
-                       rows[:, x:y].copy(), rows[:, y:z].copy(), width)  # fmt: skip
+    """The jumps of the run in ``buf`` (one run's arrays), copied out of it (one copy)."""
+    return JumpRecords(layout, buf.jps[: int(buf.oi[b.I_JUMPS])].copy(), len(layout.state_names))
 
 
 def _state_dicts(names: tuple[str, ...], columns: list[list[float]],

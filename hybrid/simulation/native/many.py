@@ -15,6 +15,7 @@ variable counts them and names the first (:func:`~hybrid.simulation.bounds.warn_
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import replace
@@ -101,29 +102,34 @@ class Ensemble(Sequence[Run]):
         self.params = params
         self.parameters, self.initial = parameters, initial
         self._chunks: list[b.RunArrays] = []
-        self._where: list[tuple[int, int]] = []
+        self._firsts: list[int] = []
+        """The number of each chunk's first run (chunks in order, each a run per row)."""
+        self._n = 0
         self._alone: dict[int, Run] = {}
         self.out_of_bounds: dict[int, tuple[BoundExcursion, ...]] = {}
 
     def _add(self, chunk: b.RunArrays, rows: int) -> None:
-        index = len(self._chunks)
         self._chunks.append(chunk)
-        self._where += [(index, r) for r in range(rows)]
+        self._firsts.append(self._n)
+        self._n += rows
+
+    def _where(self, i: int) -> tuple[int, int]:
+        """The chunk of run ``i`` and its row there."""
+        c = bisect.bisect_right(self._firsts, i) - 1
+        return c, i - self._firsts[c]
 
     def _summary(self, slot: int, floats: bool) -> NDArray[Any]:
-        values = []
-        for i, (c, r) in enumerate(self._where):
-            if i in self._alone:
-                run = self._alone[i]
-                term = run.termination
-                values.append(
-                    {b.F_T: term.t, b.I_J: term.j, b.I_JUMPS: len(run.jumps)}[slot]
-                    if slot != b.I_CAUSE
-                    else b.CAUSE_CODES.index(term.cause)
-                )
-            else:
-                values.append(self._chunks[c].of[r, slot] if floats else self._chunks[c].oi[r, slot])
-        return np.array(values, dtype=float if floats else np.int64)
+        parts = [(chunk.of[:, slot] if floats else chunk.oi[:, slot]) for chunk in self._chunks]
+        values: NDArray[Any] = np.concatenate(parts) if parts else np.zeros(0)
+        values = values.astype(float if floats else np.int64)  # a copy, in the summary's type
+        for i, run in self._alone.items():
+            term = run.termination
+            values[i] = (
+                {b.F_T: term.t, b.I_J: term.j, b.I_JUMPS: len(run.jumps)}[slot]
+                if slot != b.I_CAUSE
+                else b.CAUSE_CODES.index(term.cause)
+            )
+        return values
 
     @property
     def causes(self) -> NDArray[np.str_]:
@@ -148,7 +154,7 @@ class Ensemble(Sequence[Run]):
         return self._summary(b.I_JUMPS, False)
 
     def __len__(self) -> int:
-        return len(self._where)
+        return self._n
 
     @overload
     def __getitem__(self, i: int) -> Run: ...
@@ -159,9 +165,11 @@ class Ensemble(Sequence[Run]):
             return [self[k] for k in range(*i.indices(len(self)))]
         if i < 0:
             i += len(self)
+        if not 0 <= i < self._n:
+            raise IndexError("run index out of range")
         if i in self._alone:
             return self._alone[i]
-        c, r = self._where[i]
+        c, r = self._where(i)
         arrays = self._chunks[c].row(r)
         model = self.model
         if int(arrays.oi[b.I_DETAIL]) in (b.D_EVAL, b.D_FLOW):
@@ -289,16 +297,18 @@ def simulate_many(
     points = 2 * int(pilot.oi[b.I_POINTS]) + 16
     jumps = 2 * int(pilot.oi[b.I_JUMPS]) + 4
     flag = np.zeros(1, dtype=np.int64)  # after a Ctrl-C, the remaining runs end at once
+    room: b.RunArrays | None = None  # the chunks' room, one allocation (its memory touched once)
     for lo in range(0, n, CHUNK):
         hi = min(n, lo + CHUNK)
-        arrays = compiled.buffers(points, jumps, 1, runs=hi - lo)
+        if room is None or room.pts.shape[1] != points or room.jps.shape[1] != jumps:
+            room = compiled.buffers(points, jumps, 1, runs=min(n, CHUNK))
+        arrays = _first_rows(room, hi - lo)
 
         def call(flag: NDArray[np.int64], arrays: b.RunArrays = arrays, lo: int = lo,
                  hi: int = hi) -> None:  # fmt: skip
             compiled.run_many(params[lo:hi], x0s[lo:hi], settings.t_start, m0, cfg, arrays, flag)
 
         run_in_worker(call, handle_sigint, flag)
-        ensemble._add(arrays, hi - lo)
         overflowed = np.flatnonzero(arrays.oi[:, b.I_OVERFLOW])
         for r in overflowed.tolist():
             one = _alone(model, ensemble, settings, lo + r, x0s[lo + r])
@@ -306,6 +316,7 @@ def simulate_many(
             one.out_of_bounds = _run_excursions(model, settings, one.state_names, one.t,
                                                 one.j, one.states)  # fmt: skip
         _chunk_excursions(ensemble, arrays, lo)
+        ensemble._add(_kept(arrays), hi - lo)
         if overflowed.size:  # give later chunks the room the longest run needed
             longest = max(len(ensemble._alone[lo + r]) for r in overflowed.tolist())
             most = max(len(ensemble._alone[lo + r].jumps) for r in overflowed.tolist())
@@ -314,6 +325,29 @@ def simulate_many(
     ensemble.out_of_bounds = dict(sorted({**ensemble.out_of_bounds, **alone}.items()))
     warn_ensemble(ensemble.out_of_bounds, n)
     return ensemble
+
+
+def _first_rows(arrays: b.RunArrays, rows: int) -> b.RunArrays:
+    """The first ``rows`` runs' rows of a chunk's arrays (views)."""
+    return b.RunArrays(arrays.pts[:rows], arrays.jps[:rows], arrays.sts[:rows],
+                       arrays.oi[:rows], arrays.of[:rows], arrays.wf[:rows],
+                       arrays.wi[:rows])  # fmt: skip
+
+
+def _kept(arrays: b.RunArrays) -> b.RunArrays:
+    """What an ensemble keeps of a chunk: copies of the rows its runs filled, no scratch.
+
+    The room of each row is twice the pilot run's; a run that outgrew it is
+    run alone (its row is never read), so the points, jumps and steps of the
+    others fit in as many as the most of them recorded.
+    """
+    fitted = arrays.oi[arrays.oi[:, b.I_OVERFLOW] == 0]
+    p, j, s = (int(fitted[:, slot].max()) if fitted.size else 0
+               for slot in (b.I_POINTS, b.I_JUMPS, b.I_STORED_STEPS))  # fmt: skip
+    rows = arrays.oi.shape[0]
+    return b.RunArrays(arrays.pts[:, :p].copy(), arrays.jps[:, :j].copy(),
+                       arrays.sts[:, :s].copy(), arrays.oi.copy(), arrays.of.copy(),
+                       np.zeros((rows, 0)), np.zeros((rows, 0), dtype=np.int64))  # fmt: skip
 
 
 def _run_excursions(model: Automaton | System, settings: Settings, names: Sequence[str],
@@ -331,13 +365,16 @@ def _chunk_excursions(ensemble: Ensemble, arrays: b.RunArrays, lo: int) -> None:
     variable); only the runs found beyond are read one by one.
     """
     settings, names = ensemble.settings, ensemble.compiled.layout.state_names
-    valid = np.arange(arrays.pts.shape[1]) < arrays.oi[:, b.I_POINTS][:, None]
-    valid &= ~arrays.oi[:, b.I_OVERFLOW].astype(bool)[:, None]  # run alone, checked there
+    bounded = [var for var in ensemble.model.states
+               if not (math.isinf(var.lower) and math.isinf(var.upper)) and var.name in names]  # fmt: skip
+    if not bounded:
+        return
+    counts = arrays.oi[:, b.I_POINTS] * (arrays.oi[:, b.I_OVERFLOW] == 0)  # overflowed: run alone
+    used = int(counts.max()) if counts.size else 0  # the rows past every run's points: unread
+    valid = np.arange(used) < counts[:, None]
     beyond = np.zeros(valid.shape[0], dtype=bool)
-    for var in ensemble.model.states:
-        if (math.isinf(var.lower) and math.isinf(var.upper)) or var.name not in names:
-            continue
-        x = arrays.pts[:, :, b.P_X + names.index(var.name)]
+    for var in bounded:
+        x = arrays.pts[:, :used, b.P_X + names.index(var.name)]
         with np.errstate(invalid="ignore"):  # the unused tail of a row holds anything
             out = (x < var.lower - (settings.atol + settings.rtol * abs(var.lower))) | (
                 x > var.upper + (settings.atol + settings.rtol * abs(var.upper))
