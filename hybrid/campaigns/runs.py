@@ -55,7 +55,7 @@ from hybrid.compose import System
 from hybrid.errors import HybridError, UsageError
 from hybrid.simulation.bounds import BoundsWarning
 from hybrid.simulation.engine import simulate
-from hybrid.simulation.margins import watched_requirements
+from hybrid.simulation.monitor import watched_requirements
 from hybrid.simulation.result import Run
 
 __all__ = [

@@ -27,9 +27,13 @@ from hybrid.simulation.bounds import bound_excursions, warn_excursions
 from hybrid.simulation.compiled import CompiledModel
 from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.loop import EventLoop
-from hybrid.simulation.margins import margin_table
-from hybrid.simulation.monitor import Monitor
-from hybrid.simulation.monitor_apart import cut_results, join_groups, with_group_requirements
+from hybrid.simulation.monitor import (
+    Monitor,
+    cut_results,
+    join_groups,
+    margin_table,
+    with_group_requirements,
+)
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings, finite_number, merged
 from hybrid.simulation.start import describe_start, run_inputs

@@ -1,11 +1,23 @@
-"""The requirement monitor: robustness and the first violation, found inside every step.
+"""The requirements of a run: their margins, the monitor, and components simulated apart.
+
+**Margins.** A requirement's **margin** is the negative of its condition's rho
+(:func:`hybrid.expr.rho.guard_to_rho`): ``margin(t, x) >= 0`` where the condition
+holds, and its value is the usual robustness of signal temporal logic for an
+atomic predicate (``x >= 15`` has margin ``x - 15``; ``and`` is the smaller of two
+margins, ``or`` the larger, ``not`` the negation). It is compiled, like a guard,
+once per mode in which the requirement is in scope (its ``in:`` location), with
+the signal definitions in force there and the owning component's parameters
+bound. Evaluation errors are recorded in :attr:`MarginTable.failure`, never in
+the compiled model's own records: a requirement never changes the run.
+
+**The monitor**: robustness and the first violation, found inside every step.
 
 The monitor watches a run as the recorder stores it: every point that is not
 inside a stay (the initial point, each post-jump point) and every accepted
 solver step of each stay, as the solver's interpolant over the part of the
 step that belongs to the trajectory. It never changes the run. For each
 requirement in scope (its ``in:`` location, cut to its ``within`` window) it
-evaluates the requirement's margin (:mod:`~hybrid.simulation.margins`) the way
+evaluates the requirement's margin (the margins above) the way
 the search for events evaluates the watch (:mod:`~hybrid.simulation.crossing`):
 
 1. **Samples.** The part ``[a, b]`` of a step is cut into
@@ -30,8 +42,38 @@ What it cannot see is what the search for events cannot: a dip that lies
 between two samples and leaves no local minimum in the sampled values.
 ``max_step`` bounds the parts.
 
+**Components simulated apart.** :mod:`~hybrid.simulation.apart` runs each group of components that share no
+label and read no signal of each other on its own, and merges the runs. A
+requirement is monitored inside the run of the group it belongs to, exactly as
+in a run of the whole system:
+
+- a component's requirement, or a system file's requirement that reads (and is
+  scoped to) one group only, is monitored in that group's run;
+- a system file's requirement that reads state variables or signals of several
+  groups (or is scoped to a location of another group) joins those groups:
+  they are simulated together (:func:`join_groups`), never approximated.
+
+The merged run can end before a group's own run does (another group ended
+early, or the system's ``max_jumps`` was reached): the group's requirements
+are then monitored again over its own run cut at the system's end, on the
+interpolants the group kept (:func:`cut_results`), with the same samples and
+the same rules as while it ran.
+
 Examples
 --------
+>>> import hybrid, numpy as np
+>>> from hybrid.simulation.compiled import CompiledModel
+>>> heater = hybrid.load_text('''
+... automaton: heater
+... state: {x: {initial: 20.0}}
+... locations: {cooling: {flow: {x: -0.1*x}}}
+... requirements: [{name: warm, always: "x >= 15"}]
+... ''')
+>>> compiled = CompiledModel(heater)
+>>> table = MarginTable(compiled, watched_requirements(compiled.system))
+>>> [(k, float(fn(0.0, np.array([20.0])))) for k, fn in table.of(compiled.mode(compiled.initial_key))]
+[(0, 5.0)]
+
 >>> import hybrid, math
 >>> heater = hybrid.load_text('''
 ... automaton: heater
@@ -49,25 +91,194 @@ Examples
 True
 >>> mild.holds, round(mild.robustness, 6), mild.violated_at
 (True, 0.130613, None)
+
+>>> import hybrid
+>>> ball = hybrid.load("specs/bouncing_ball.yaml")
+>>> heater = hybrid.load_text('''
+... automaton: heater
+... state: {x: {initial: 20.0}}
+... locations: {cooling: {flow: {x: -0.1*x}}}
+... requirements: [{name: warm, always: "x >= 15"}]
+... ''')
+>>> run = hybrid.simulate(hybrid.compose(ball, heater), t_end=2.0)
+>>> sorted(run.requirements), run.requirements["heater.warm"].holds
+(['heater.warm'], True)
 """
 
 from __future__ import annotations
 
 import math
+import threading
+import weakref
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
-from hybrid.simulation.compiled import CompiledMode
+from hybrid.compose import System
+from hybrid.expr import ir
+from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
+from hybrid.expr.rho import guard_to_rho
+from hybrid.model import Requirement
+from hybrid.modes import Binder, Mode, mode_of
+from hybrid.simulation.compiled import CompiledMode, CompiledModel, Source
 from hybrid.simulation.crossing import HORIZON_SAMPLES, band, parts
 from hybrid.simulation.dense import StepCurve
 from hybrid.simulation.failures import describe_failure
-from hybrid.simulation.margins import Fn, MarginTable
-from hybrid.simulation.result import RequirementResult
+from hybrid.simulation.result import RequirementResult, Run
 from hybrid.simulation.settings import Settings
 
-__all__ = ["DIP_REACH", "Monitor"]
+__all__ = [
+    "DIP_REACH",
+    "MarginTable",
+    "Monitor",
+    "Watched",
+    "cut_results",
+    "join_groups",
+    "margin_table",
+    "owners",
+    "watched_requirements",
+    "with_group_requirements",
+]
+
+
+Fn = Callable[[float, Any], Any]
+
+
+@dataclass(frozen=True)
+class Watched:
+    """A requirement as the monitor of a system sees it.
+
+    ``name`` is what results are reported under: the plain name in an automaton
+    and for a system file's own requirements, ``comp.name`` for a component's
+    requirement inside a system. ``component`` is the component whose
+    parameters the condition reads (None for a system file's requirement);
+    ``location`` is the ``in:`` location as ``(component index, location)``.
+    """
+
+    name: str
+    requirement: Requirement
+    component: int | None
+    location: tuple[int, str] | None
+
+
+def watched_requirements(system: System) -> list[Watched]:
+    """Every requirement of ``system``: each component's (in order), then the system file's."""
+    found: list[Watched] = []
+    for i, c in enumerate(system.components):
+        for r in c.automaton.requirements:
+            where = (i, r.location) if r.location is not None else None
+            found.append(Watched(system.qualified(i, r.name), r, i, where))
+    names = [c.name for c in system.components]
+    for r in system.requirements:
+        where = None
+        if r.location is not None:
+            comp, _, loc = r.location.partition(".")
+            where = (names.index(comp), loc)
+        found.append(Watched(r.name, r, None, where))
+    return found
+
+
+def owners(system: System, watched: Watched) -> set[int]:
+    """The components a requirement depends on: its own, or those owning what it reads."""
+    if watched.component is not None:
+        return {watched.component}
+    read = ir.names_in(watched.requirement.predicate)
+    found = {
+        i
+        for i, c in enumerate(system.components)
+        if read & {*c.automaton.state_names, *c.automaton.signal_names}
+    }
+    if watched.location is not None:
+        found.add(watched.location[0])
+    return found
+
+
+class MarginTable:
+    """The margin function of each requirement in scope, per mode (compiled on first use)."""
+
+    def __init__(self, compiled: CompiledModel, watched: Sequence[Watched]) -> None:
+        self.compiled = compiled
+        self.watched = list(watched)
+        self.failure = EvalFailure()
+        self._binder = Binder(compiled.system)
+        self._modes: dict[Mode, list[tuple[int, Fn]]] = {}
+        self._functions: dict[tuple[int, tuple[tuple[str, int], ...]], Fn] = {}
+
+    def of(self, mode: CompiledMode) -> list[tuple[int, Fn]]:
+        """``(requirement index, margin)`` of every requirement in scope in ``mode``."""
+        found = self._modes.get(mode.key)
+        if found is None:
+            found = self._compile(mode)
+            self._modes[mode.key] = found
+        return found
+
+    def _compile(self, mode: CompiledMode) -> list[tuple[int, Fn]]:
+        system = self.compiled.system
+        view = None
+        found: list[tuple[int, Fn]] = []
+        for k, w in enumerate(self.watched):
+            if w.location is not None and mode.key[w.location[0]] != w.location[1]:
+                continue
+            if view is None:
+                view = mode_of(system, mode.key, binder=self._binder)
+            predicate = w.requirement.predicate
+            if w.component is not None:
+                predicate = self._binder(w.component, predicate)
+            margin = ir.Unary("-", guard_to_rho(predicate))
+            reads = _signals_read(margin, view.signals)
+            key = (k, tuple((s, id(view.signals[s])) for s in reads))
+            fn = self._functions.get(key)
+            if fn is None:
+                ctx = CodeContext(
+                    states=self.compiled.state_names,
+                    signals=view.signals,
+                    inputs=self.compiled.inputs,
+                    functions=system.functions,
+                    failure=self.failure,
+                )
+                name = f"margin_{k}_{len(self._functions)}"
+                fn = compile_function(name, [margin], ctx, shape="scalar")
+                what = f"the condition of requirement '{w.name}'"
+                self.compiled.sources[name] = Source(what, (margin,), ctx)
+                self._functions[key] = fn
+            found.append((k, fn))
+        return found
+
+
+def _signals_read(expr: ir.Expr, signals: Any) -> list[str]:
+    """The signals ``expr`` reads, directly or through other signals, sorted."""
+    seen: set[str] = set()
+    todo = list(ir.names_in(expr))
+    while todo:
+        name = todo.pop()
+        if name in seen or name not in signals:
+            continue
+        seen.add(name)
+        todo.extend(ir.names_in(signals[name]))
+    return sorted(seen)
+
+
+_LOCK = threading.Lock()
+_TABLES: weakref.WeakKeyDictionary[CompiledModel, MarginTable | None] = weakref.WeakKeyDictionary()
+
+
+def margin_table(compiled: CompiledModel) -> MarginTable | None:
+    """The margins of ``compiled``'s requirements (None without any), kept as long as it lives.
+
+    The simulator reuses a compiled model across runs of the same model in a
+    thread; its requirements' margins are compiled once with it.
+    """
+    with _LOCK:
+        if compiled in _TABLES:
+            return _TABLES[compiled]
+        watched = watched_requirements(compiled.system)
+        table = MarginTable(compiled, watched) if watched else None
+        _TABLES[compiled] = table
+        return table
+
 
 DIP_REACH = 2.0
 """A local minimum is refined unless its value minus this many times the differences
@@ -422,3 +633,99 @@ def _grid(curve: StepCurve, a: float, b: float, spacing: float) -> tuple[list[fl
     times.append(b)
     rows.append(curve.x1 if b == curve.t1 else curve.at(b))
     return times, rows
+
+
+def join_groups(system: System, groups: Sequence[tuple[int, ...]]) -> list[tuple[int, ...]]:
+    """``groups`` with those a system requirement spans merged into one (sorted tuples)."""
+    merged = [set(g) for g in groups]
+    for w in watched_requirements(system):
+        if w.component is not None:
+            continue
+        needed = owners(system, w)
+        touched = [g for g in merged if g & needed]
+        if len(touched) > 1:
+            union = set().union(*touched)
+            merged = [g for g in merged if not g & needed] + [union]
+    return sorted(tuple(sorted(g)) for g in merged)
+
+
+def with_group_requirements(system: System, sub: System) -> System:
+    """``sub`` (a group of ``system``'s components) with the system requirements it owns."""
+    members = {i for i, c in enumerate(system.components) if any(c is s for s in sub.components)}
+    own = tuple(
+        w.requirement
+        for w in watched_requirements(system)
+        if w.component is None and owners(system, w) <= members
+    )
+    return replace(sub, requirements=own) if own else sub
+
+
+def cut_results(
+    parts: Sequence[tuple[Run, CompiledModel]], merged: Run, settings: Settings
+) -> dict[str, RequirementResult]:
+    """The requirements of every group, each over its run cut at the end of ``merged``."""
+    found: dict[str, RequirementResult] = {}
+    t_stop = merged.termination.t
+    taken = {(jump.t, jump.edge) for jump in merged.jumps}
+    for run, compiled in parts:
+        if not run.requirements:
+            continue
+        j_stop = sum(1 for jump in run.jumps if (jump.t, jump.edge) in taken)
+        end = run.termination
+        if (end.t, end.j) == (t_stop, j_stop):
+            found.update(run.requirements)
+        else:
+            found.update(_replay(run, compiled, settings, t_stop, j_stop))
+    return found
+
+
+def _replay(
+    run: Run, compiled: CompiledModel, settings: Settings, t_stop: float, j_stop: int
+) -> dict[str, RequirementResult]:
+    """Monitor ``run`` again up to hybrid time ``(t_stop, j_stop)``, on its kept interpolants."""
+    table = margin_table(compiled)
+    assert table is not None
+    monitor = Monitor(table, settings)
+    modes = {m.name: m for m in compiled._modes.values()}
+    first: dict[int, int] = {}
+    for k, j in enumerate(run.j.tolist()):
+        first.setdefault(j, k)
+    stays: dict[int, list[tuple[float, float, Any]]] = {}
+    for j, t0, t1, solution in run.segments:
+        stays.setdefault(j, []).append((t0, t1, solution))
+    for j in range(j_stop + 1):
+        k = first[j]
+        mode = modes[str(run.location[k])]
+        monitor.point(mode, float(run.t[k]), run.states[k])
+        for t0, t1, solution in sorted(stays.get(j, []), key=lambda s: s[0]):
+            end = min(t1, t_stop) if j == j_stop else t1
+            ends = solution.ts
+            for i, piece in enumerate(solution.interpolants):
+                a, b = float(ends[i]), float(ends[i + 1])
+                if b <= t0 or a >= end:
+                    continue
+                curve = _Curve(a, b, piece)
+                monitor.segment(mode, curve, None if b <= end else end)
+    return monitor.results(t_stop)
+
+
+class _Curve(StepCurve):
+    """A step of a kept interpolant (a scipy ``DenseOutput``) as the monitor reads a step."""
+
+    __slots__ = ("dense",)
+
+    def __init__(self, t0: float, t1: float, dense: Any) -> None:
+        super().__init__(
+            t0, t1, np.asarray(dense(t0), dtype=float), np.asarray(dense(t1), dtype=float)
+        )
+        self.dense = dense
+
+    def at(self, t: float) -> np.ndarray:
+        if t == self.t0:
+            return self.x0
+        if t == self.t1:
+            return self.x1
+        return np.asarray(self.dense(t), dtype=float)
+
+    def many(self, ts: np.ndarray) -> np.ndarray:
+        return np.asarray(self.dense(ts), dtype=float).reshape(len(self.x0), -1).T

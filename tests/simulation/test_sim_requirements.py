@@ -20,7 +20,7 @@ import pytest
 
 import hybrid
 from hybrid.simulation.apart import independent_groups
-from hybrid.simulation.monitor_apart import join_groups
+from hybrid.simulation.monitor import join_groups
 
 TIGHT = {"rtol": 1e-10, "atol": 1e-12, "handle_sigint": False}
 

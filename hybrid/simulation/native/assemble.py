@@ -1,15 +1,49 @@
 """A :class:`~hybrid.simulation.result.Run` from the arrays a compiled run filled.
 
-The counterpart of :meth:`hybrid.simulation.recorder.Recorder.run` (columns,
-jumps, segments); the names come from the model's
-:class:`~hybrid.simulation.native.names.Layout`, the termination and its words
-from :mod:`~hybrid.simulation.native.ending`.
+The counterpart of :meth:`hybrid.simulation.recorder.Recorder.run` (columns, jumps,
+segments), in four parts.
+
+**Names by index** (:class:`Layout`). The compiled loop records modes, transitions and
+invariants by number, and a jump by its transition and the flags of the transitions
+enabled with it (packed into one key, ``J_KEY``); :class:`Layout` turns these back into
+the names and words of the reference engine's :class:`~hybrid.simulation.result.Jump`.
+
+**Jumps kept in arrays** (:class:`JumpRecords`). A
+:class:`~hybrid.simulation.result.Jump` is a frozen dataclass with two dicts of states:
+about a kilobyte each, ten times its numbers, and building the records of a short run
+cost about half of its compiled loop. A compiled :class:`~hybrid.simulation.result.Run`
+holds :class:`JumpRecords` instead: a read-only sequence over the arrays the loop filled
+(copied out), equal to the list of records the reference engine builds, whose items are
+built on access (``run.jumps[k]``, iterating); ``run.jump_times`` reads its array.
+
+**How the run ended** (:func:`termination_of`), worded as the reference engine words it.
+The counterpart of the messages :class:`hybrid.simulation.loop.EventLoop` writes into a
+:class:`~hybrid.simulation.result.Termination`: the texts are the same, so a user reads
+the same thing from either backend. An evaluation failure is described by running the
+reference engine's compiled function at the failing point
+(:func:`hybrid.simulation.failures.describe_failure`), so the message names the
+expression and its arguments exactly as it does there.
+
+**The run** (:func:`run_from`): the columns, the jumps, the segments and the settings
+record.
+
+Examples
+--------
+>>> import hybrid
+>>> from pathlib import Path
+>>> ball = hybrid.load(Path("specs/bouncing_ball.yaml"))
+>>> run = hybrid.simulate(ball, t_end=5.0, backend="compiled", handle_sigint=False)
+>>> jumps = run.jumps
+>>> len(jumps), jumps[0].edge, round(jumps[0].t, 6), jumps[-1] == list(jumps)[-1]
+(2, 'bounce', 1.427843, True)
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from collections.abc import Callable, Hashable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -17,14 +51,426 @@ from numpy.typing import NDArray
 from hybrid.compose import System
 from hybrid.model import Automaton
 from hybrid.simulation.native import buffers as b
-from hybrid.simulation.native.ending import Inputs, termination_of
-from hybrid.simulation.native.jumps import jump_records
-from hybrid.simulation.native.names import Layout
 from hybrid.simulation.native.structure import NativeModel
-from hybrid.simulation.result import Run
+from hybrid.simulation.result import Jump, Run, Termination
 from hybrid.simulation.settings import Settings
 
-__all__ = ["DenseSegment", "run_from", "settings_record"]
+__all__ = [
+    "PACKED_WIDTH",
+    "DenseSegment",
+    "Inputs",
+    "JumpFields",
+    "JumpRecords",
+    "Layout",
+    "describe_native_failure",
+    "jump_records",
+    "run_from",
+    "settings_record",
+    "termination_of",
+]
+
+
+JumpFields = dict[str, Any]
+"""A :class:`Jump`'s fields in order, ``t``, ``j``, ``before`` and ``after`` to be filled in."""
+
+PACKED_WIDTH = b.PACKED_WIDTH
+"""Most transitions a mode may have for a jump's enabled flags to be packed into an int key."""
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Names by index: modes, transitions (global order of the tables), invariants."""
+
+    mode_names: NDArray[np.str_]
+    transitions: tuple[tuple[int, int, Any], ...]
+    """Per global transition: (source mode, place in its mode, NativeTransition)."""
+    invariant_first: tuple[int, ...]
+    """Per mode, the global index of its first invariant (as ``MODE_INV``)."""
+    describe: tuple[tuple[str, str | None, str, str], ...]
+    """Per global transition: its name, label, source and target mode names."""
+    choices: dict[Hashable, JumpFields]
+    """The fields of a jump but its time and states, per :meth:`jump_keys` key seen so far."""
+    modes: tuple[Any, ...]
+    """The modes (:class:`~hybrid.simulation.native.structure.NativeMode`)."""
+    state_names: tuple[str, ...]
+    bits: NDArray[np.int64]
+    """``1 << k`` for each flag column of a jump (as many as a mode has transitions, at most
+    :data:`PACKED_WIDTH`)."""
+    packed: bool
+    """Whether the compiled loop's ``J_KEY`` holds each jump's key exactly (at most
+    :data:`PACKED_WIDTH` flag columns, and every key below ``2**53``)."""
+
+    @classmethod
+    def of(cls, native: NativeModel) -> Layout:
+        rows: list[tuple[int, int, Any]] = []
+        first = [0]
+        for m, mode in enumerate(native.modes):
+            rows += [(m, k, tr) for k, tr in enumerate(mode.transitions)]
+            first.append(first[-1] + len(mode.invariants))
+        names = np.array([mode.name for mode in native.modes], dtype=np.str_)
+        describe = tuple(
+            (tr.view.name, tr.view.label, native.modes[m].name,
+             native.modes[native.index[tr.view.target]].name)
+            for m, _, tr in rows
+        )  # fmt: skip
+        width = max(1, *(len(mode.transitions) for mode in native.modes))  # jps' flag columns
+        bits = np.left_shift(1, np.arange(min(width, PACKED_WIDTH), dtype=np.int64))
+        packed = width <= PACKED_WIDTH and len(rows) << width <= 1 << 53
+        return cls(names, tuple(rows), tuple(first), describe, {}, tuple(native.modes),
+                   tuple(native.state_names), bits, packed)  # fmt: skip
+
+    def enabled(self, tr: int, flags: bytes) -> tuple[tuple[str, ...], str]:
+        """The names of the transitions enabled with ``tr`` chosen, and how it was chosen."""
+        m, _, chosen = self.transitions[tr]
+        mode = self.modes[m]
+        on = [t for k, t in enumerate(mode.transitions) if flags[k]]
+        if len(on) <= 1:
+            how = "only"
+        else:
+            top = [t for t in on if t.view.priority == chosen.view.priority]
+            how = "priority" if len(top) == 1 else "file order"
+        return tuple(t.view.name for t in on), how
+
+    def jump_keys(self, transitions: NDArray[np.float64], flags: NDArray[np.float64]) -> list[Any]:
+        """A key per jump for :attr:`choices` from its transition and enabled flags (a row each):
+        up to :data:`PACKED_WIDTH` flags, ``tr << width`` plus bit ``k`` per enabled ``k``;
+        beyond, ``(tr, flags as bytes)``."""
+        on = flags != 0.0
+        tr = transitions.astype(np.int64)
+        width = on.shape[1]
+        if width <= PACKED_WIDTH:
+            bits = self.bits if self.bits.size == width else np.left_shift(1, np.arange(width))
+            return ((tr << width) | (on.astype(np.int64) @ bits)).tolist()  # type: ignore[no-any-return]
+        data = on.astype(np.uint8).tobytes()
+        return [(t, data[k * width : (k + 1) * width]) for k, t in enumerate(tr.tolist())]
+
+    def fields(self, key: Any, width: int) -> JumpFields:
+        """The fields of a jump of a :meth:`jump_keys` key (or the loop's ``J_KEY``, a float)
+        but its time and states (None)."""
+        if isinstance(key, (int, float)):
+            packed = int(key)
+            tr, flags = packed >> width, bytes((packed >> k) & 1 for k in range(width))
+        else:
+            tr, flags = key
+        edge, label, source, target = self.describe[tr]
+        enabled, how = self.enabled(tr, flags)
+        found = self.choices[key] = {
+            "t": None, "j": None, "edge": edge, "label": label, "source": source, "target": target,
+            "before": None, "after": None, "enabled": enabled, "chosen_by": how,
+        }  # fmt: skip
+        return found
+
+
+class JumpRecords(Sequence[Jump]):
+    """The jumps of one compiled run, as arrays; a :class:`Jump` per item on access.
+
+    It keeps the rows the loop filled (one copy: time, hybrid time, transition,
+    key, state before and after, enabled flags) and reads its columns when asked.
+    Compares equal to a list of the same jumps (and to another such sequence);
+    pickles as that list.
+    """
+
+    __slots__ = ("_d", "_layout", "_rows")
+
+    def __init__(self, layout: Layout, rows: NDArray[np.float64], d: int) -> None:
+        self._layout, self._rows, self._d = layout, rows, d
+
+    @property
+    def times(self) -> NDArray[np.float64]:
+        """The jump times (a copy)."""
+        return self._rows[:, b.J_T].copy()
+
+    def __len__(self) -> int:
+        return int(self._rows.shape[0])
+
+    @overload
+    def __getitem__(self, index: int) -> Jump: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> list[Jump]: ...
+
+    def __getitem__(self, index: int | slice) -> Jump | list[Jump]:
+        if isinstance(index, slice):
+            rows = range(len(self))[index]
+            return self._build(rows) if rows.step == 1 else self._build(range(len(self)))[index]
+        n = len(self)
+        k = index + n if index < 0 else index
+        if not 0 <= k < n:
+            raise IndexError("jump index out of range")
+        return self._build(range(k, k + 1))[0]
+
+    def __iter__(self) -> Iterator[Jump]:
+        return iter(self._build(range(len(self))))
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, JumpRecords) or type(other) is list:
+            return list(self) == list(other)
+        return NotImplemented
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __add__(self, other: Sequence[Jump]) -> list[Jump]:
+        return [*self, *other]
+
+    def __radd__(self, other: Sequence[Jump]) -> list[Jump]:
+        return [*other, *self]
+
+    def __repr__(self) -> str:
+        return repr(list(self))
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (list, (list(self),))
+
+    def _build(self, rows: range) -> list[Jump]:
+        """The records of ``rows`` (consecutive): fields copied from each key's, set at once.
+
+        Jump is a frozen dataclass without slots, and its generated ``__init__``
+        costs an ``object.__setattr__`` per field; the states' dicts are built in bulk.
+        """
+        if not rows:
+            return []
+        lo, hi = rows.start, rows.stop
+        layout, names, d = self._layout, self._layout.state_names, self._d
+        block = self._rows[lo:hi]
+        x, y, z = b.J_X, b.J_X + d, b.J_X + 2 * d
+        width = block.shape[1] - z
+        if layout.packed:
+            keys: Any = block[:, b.J_KEY].tolist()
+        else:
+            keys = layout.jump_keys(block[:, b.J_TR], block[:, z:])
+        befores = _state_dicts(names, block[:, x:y].T.tolist(), hi - lo)
+        afters = _state_dicts(names, block[:, y:z].T.tolist(), hi - lo)
+        seen, fields_of = layout.choices, layout.fields
+        new, set_field = object.__new__, object.__setattr__
+        jumps: list[Jump] = []
+        append = jumps.append
+        for t, j, key, before, after in zip(block[:, b.J_T].tolist(),
+                                            block[:, b.J_J].astype(np.int64).tolist(),
+                                            keys, befores, afters, strict=True):  # fmt: skip
+            fields = (seen.get(key) or fields_of(key, width)).copy()
+            fields["t"], fields["j"], fields["before"], fields["after"] = t, j, before, after
+            jump = new(Jump)
+            set_field(jump, "__dict__", fields)
+            append(jump)
+        return jumps
+
+
+def jump_records(layout: Layout, buf: b.RunArrays) -> JumpRecords:
+    """The jumps of the run in ``buf`` (one run's arrays), copied out of it (one copy)."""
+    return JumpRecords(layout, buf.jps[: int(buf.oi[b.I_JUMPS])].copy(), len(layout.state_names))
+
+
+def _state_dicts(names: tuple[str, ...], columns: list[list[float]],
+                 n: int) -> list[dict[str, float]]:  # fmt: skip
+    """``dict(zip(names, row))`` per row of the ``n`` rows of ``columns`` (one list per name);
+    for one or two names a dict display (a third of the cost)."""
+    if len(names) == 1:
+        (a,) = names
+        return [{a: v} for v in columns[0]]
+    if len(names) == 2:
+        a, c = names
+        return [{a: u, c: v} for u, v in zip(*columns, strict=True)]
+    if not names:
+        return [{} for _ in range(n)]
+    return [dict(zip(names, row)) for row in zip(*columns, strict=True)]  # noqa: B905 (each row holds len(names) values)
+
+
+Inputs = Mapping[str, Callable[[float], float]] | None
+"""The reference engine's inputs of a model (to word a failure as the reference does)."""
+
+
+def termination_of(
+    native: NativeModel,
+    layout: Layout,
+    model: Automaton | System,
+    settings: Settings,
+    buf: b.RunArrays,
+    inputs: Inputs = None,
+) -> Termination:
+    """How the run in ``buf`` ended, worded as the reference engine words it.
+
+    A plain end (``t_end``, ``max_jumps``, ``interrupted``) where the last run
+    of the same model ended is that run's record again (it is frozen): a
+    repeated run builds none.
+    """
+    oi, of = buf.oi.tolist(), buf.of.tolist()  # Python numbers, read at once
+    detail = oi[b.I_DETAIL]
+    if detail == b.D_NONE:
+        t = of[b.F_T]
+        key = (oi[b.I_CAUSE], t, math.copysign(1.0, t), oi[b.I_J], oi[b.I_MODE],
+               settings.max_jumps)  # fmt: skip
+        last = _LAST_END[0]
+        if last is not None and last[0] is native and last[1] == key:
+            return last[2]
+        plain = _termination(native, layout, model, settings, buf, inputs, oi, of)
+        _LAST_END[0] = (native, key, plain)  # one tuple, replaced at once
+        return plain
+    return _termination(native, layout, model, settings, buf, inputs, oi, of)
+
+
+_LAST_END: list[tuple[NativeModel, tuple[Any, ...], Termination] | None] = [None]
+"""The last plain end: its model structure, key (cause, t and its sign, j, mode, max_jumps) and
+record."""
+
+
+def _termination(native: NativeModel, layout: Layout, model: Automaton | System,
+                 settings: Settings, buf: b.RunArrays, inputs: Inputs, oi: list[int],
+                 of: list[float]) -> Termination:  # fmt: skip
+    """:func:`termination_of` from ``buf``'s counts and numbers read as ``oi`` and ``of``."""
+    cause = b.CAUSE_CODES[oi[b.I_CAUSE]]
+    t, j, m = of[b.F_T], oi[b.I_J], oi[b.I_MODE]
+    detail, index = oi[b.I_DETAIL], oi[b.I_DETAIL_INDEX]
+    mode = native.modes[m]
+    zeno_time = of[b.F_ZENO_TIME] if cause == "zeno" else None
+    if detail == b.D_INITIAL:
+        message = "initial state is not finite"
+    elif detail in (b.D_BLOCKED_ENTRY, b.D_BLOCKED_FLOW):
+        how = "does not hold" if detail == b.D_BLOCKED_ENTRY else "is about to be left"
+        message = f"invariant of {mode.invariants[index][0]} {how} and no transition is enabled"
+    elif detail == b.D_URGENT:
+        message = (
+            f"urgent location {', '.join(mode.urgent)}: no time may pass there and no "
+            "transition is enabled"
+        )
+    elif detail == b.D_STALL:
+        message = (
+            "events keep firing at the same instant without any transition "
+            "becoming enabled (a guard touching its boundary?)"
+        )
+    elif detail == b.D_ZENO_INSTANT:
+        name = layout.transitions[index][2].view.name
+        message = (
+            f"{settings.max_jumps_per_instant} jumps at the same instant: a cycle of "
+            f"transitions takes no time (last: {name})"
+        )
+    elif detail == b.D_ZENO_GEOMETRIC:
+        message = (
+            "jumps accumulate (gaps shrink geometrically); estimated Zeno time "
+            f"{zeno_time:.12g}"
+        )
+    elif detail == b.D_RESET_NONFINITE:
+        message = f"reset of {layout.transitions[index][2].view.name} gave a non-finite state"
+    elif detail in (b.D_EVAL, b.D_FLOW):
+        fail_t = float(buf.of[b.F_FAIL_T])
+        described = describe_native_failure(native, layout, model, buf, inputs)
+        if described is None:
+            what = _reference_function(int(buf.oi[b.I_FAIL_KIND]), int(buf.oi[b.I_FAIL_INDEX]),
+                                       int(buf.oi[b.I_FAIL_MODE]), None, layout, native)[0]  # fmt: skip
+            described = f"{what} gave a non-finite value"
+        message = f"{described} (at t={fail_t:.9g})"
+        if detail == b.D_FLOW:
+            message += f"; the solution leaves the domain of the flow after t={t:.9g}"
+        if detail == b.D_EVAL:
+            t = fail_t
+    elif detail in (b.D_STEP_TOO_SMALL, b.D_STATE_NONFINITE):
+        why = (
+            "solver stopped: Required step size is less than spacing between numbers."
+            if detail == b.D_STEP_TOO_SMALL
+            else "the state became non-finite"
+        )
+        message = (
+            f"{why} (largest |state| {float(buf.of[b.F_PEAK]):.3g}; the solution may blow up "
+            "here, or try another --method or tighter tolerances)"
+        )
+    elif detail == b.D_NOT_ADVANCING:
+        message = (
+            "solver stopped advancing: its step size fell below the spacing of floating-point "
+            f"numbers at t={t:.9g} (largest |state| {float(buf.of[b.F_PEAK]):.3g}; the solution "
+            "may blow up here, or try another --method)"
+        )
+    elif detail == b.D_CRAWL:
+        message = _crawl_message(settings, t, buf)
+    elif detail == b.D_FLOW_START:
+        message = _flow_at_start(native, layout, model, buf, index, inputs)
+    elif cause == "t_end":
+        message = "reached t_end"
+    elif cause == "max_jumps":
+        message = f"reached max_jumps={settings.max_jumps}"
+    else:
+        message = "interrupted by the user"
+    return Termination(cause, t, j, message, zeno_time=zeno_time, location=mode.name)
+
+
+def _crawl_message(settings: Settings, t: float, buf: b.RunArrays) -> str:
+    """``StayIntegrator._crawled``'s words."""
+    from hybrid.simulation.stay import CRAWL_STEPS
+
+    pace, longest = float(buf.of[b.F_AUX0]), float(buf.of[b.F_AUX1])
+    remaining = (settings.t_end - t) / pace
+    return (
+        f"solver crawls: its last {CRAWL_STEPS} steps averaged {pace:.3g} (it took steps of "
+        f"{longest:.3g} before), so t_end is still {remaining:.2g} steps away (largest "
+        f"|state| {float(buf.of[b.F_PEAK]):.3g}); the solution may near a singularity here (a "
+        "derivative without bound) and chatter across it"
+    )
+
+
+def _flow_at_start(native: NativeModel, layout: Layout, model: Automaton | System,
+                   buf: b.RunArrays, index: int, inputs: Inputs) -> str:  # fmt: skip
+    """``StayIntegrator._start``'s words for a flow that fails or is not finite at the start."""
+    t = float(buf.of[b.F_FAIL_T])
+    described = describe_native_failure(native, layout, model, buf, inputs)
+    if described is not None:
+        return f"{described} (at t={t:.9g})"
+    x = np.array(buf.of[b.N_OUT_F : b.N_OUT_F + len(native.state_names)], dtype=float)
+    mode = native.modes[int(buf.oi[b.I_FAIL_MODE])]
+    derivative = _reference_mode(native, model, int(buf.oi[b.I_FAIL_MODE]), inputs)[1].rhs(t, x)
+    names = native.state_names
+    bad = next((k for k, v in enumerate(derivative) if not math.isfinite(v)), index)
+    return f"the flow of {mode.name} gives {names[bad]}' = {derivative[bad]} (at t={t:.9g})"
+
+
+def _reference_mode(native: NativeModel, model: Automaton | System, m: int,
+                    inputs: Inputs) -> tuple[Any, Any]:  # fmt: skip
+    """The reference engine's compiled model and its mode ``m`` (for the words of a failure)."""
+    from hybrid.simulation.compiled import CompiledModel
+    from hybrid.simulation.start import run_inputs
+
+    compiled = CompiledModel(model, run_inputs(model, inputs))
+    return compiled, compiled.mode(native.modes[m].key)
+
+
+def describe_native_failure(native: NativeModel, layout: Layout, model: Automaton | System,
+                            buf: b.RunArrays, inputs: Inputs = None) -> str | None:  # fmt: skip
+    """``<what> failed: <call(args)>: <error>``, found by the reference engine's functions.
+
+    None if the reference's function does not fail at that point (a value that
+    is not finite without an error).
+    """
+    from hybrid.simulation.failures import describe_failure
+
+    kind, index = int(buf.oi[b.I_FAIL_KIND]), int(buf.oi[b.I_FAIL_INDEX])
+    m = int(buf.oi[b.I_FAIL_MODE])
+    t = float(buf.of[b.F_FAIL_T])
+    x = np.array(buf.of[b.N_OUT_F : b.N_OUT_F + len(native.state_names)], dtype=float)
+    compiled, mode = _reference_mode(native, model, m, inputs)
+    _, call = _reference_function(kind, index, m, mode, layout)
+    call(t, x)
+    for failure in (compiled.failure, compiled.flow_failure):
+        if failure.error is not None:
+            return str(describe_failure(compiled, failure))
+    return None
+
+
+def _reference_function(kind: int, index: int, m: int, mode: Any, layout: Layout,
+                        native: NativeModel | None = None) -> Sequence[Any]:  # fmt: skip
+    """``(what, the reference's function)`` that failed (``mode`` None: the words only)."""
+    names = native.modes[m] if native is not None else mode
+    if kind in (b.F_GUARD, b.F_RESET):
+        k = layout.transitions[index][1]
+        name = names.transitions[k].view.name if native is not None else mode.transitions[k].name
+        what = f"the {'guard' if kind == b.F_GUARD else 'reset'} of {name}"
+        if mode is None:
+            return what, None
+        tr = mode.transitions[k]
+        return what, tr.rho if kind == b.F_GUARD else tr.reset
+    if kind == b.F_INVARIANT:
+        inv = index - layout.invariant_first[m]
+        name = names.invariants[inv][0] if native is not None else mode.invariants[inv].name
+        return f"the invariant of {name}", None if mode is None else mode.invariants[inv].rho
+    if kind == b.F_SIGNALS:
+        return f"the signals of {names.name}", None if mode is None else mode.outputs
+    return f"the flow of {names.name}", None if mode is None else mode.rhs
 
 
 class DenseSegment:

@@ -30,14 +30,13 @@ from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
-from hybrid.simulation.native.assemble import run_from
+from hybrid.simulation.native.assemble import Layout, run_from
 from hybrid.simulation.native.cache import load_generated, require_numba, seal
 from hybrid.simulation.native.features import METHOD
 from hybrid.simulation.native.interruptible import run_in_worker
 from hybrid.simulation.native.kernel_text import kernel_module
 from hybrid.simulation.native.kernel_types import PIECES
 from hybrid.simulation.native.loop import lay_out_work
-from hybrid.simulation.native.names import Layout
 from hybrid.simulation.native.shares import compiling_beside
 from hybrid.simulation.native.source import generate
 from hybrid.simulation.native.structure import NativeModel

@@ -32,7 +32,7 @@ from typing import Any
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
-from hybrid.simulation.margins import watched_requirements
+from hybrid.simulation.monitor import watched_requirements
 
 __all__ = ["METHOD", "refusal", "refuse_requirements", "refuse_unsupported", "unheld_inputs"]
 

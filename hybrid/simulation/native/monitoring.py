@@ -36,8 +36,7 @@ import numpy as np
 from hybrid.simulation.compiled import CompiledMode, CompiledModel
 from hybrid.simulation.dense import StepCurve, polynomial_curve
 from hybrid.simulation.monitor import Monitor
-from hybrid.simulation.native.assemble import DenseSegment
-from hybrid.simulation.native.names import Layout
+from hybrid.simulation.native.assemble import DenseSegment, Layout
 from hybrid.simulation.result import RequirementResult, Run
 
 __all__ = ["replay"]

@@ -108,7 +108,7 @@ def record_jump(tab: Ints, jps: Array2, oi: Ints, t: float, j: int, m: int, tr: 
     """Store a jump of global transition ``tr`` from mode ``m`` (enabled flags from ``wi``).
 
     ``J_KEY`` packs the transition and the flags (as
-    :meth:`~hybrid.simulation.native.names.Layout.jump_keys` does) up to
+    :meth:`~hybrid.simulation.native.assemble.Layout.jump_keys` does) up to
     ``PACKED_WIDTH`` flag columns, so the assembler reads one number per jump.
     """
     n = oi[I_JUMPS]

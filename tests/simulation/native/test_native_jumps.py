@@ -9,7 +9,7 @@ import pytest
 from support import SPECS
 
 import hybrid
-from hybrid.simulation.native.jumps import JumpRecords
+from hybrid.simulation.native.assemble import JumpRecords
 from hybrid.simulation.result import Jump
 
 BALL = hybrid.load(SPECS / "bouncing_ball.yaml", parameters={"e": 0.9})
