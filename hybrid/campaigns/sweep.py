@@ -252,6 +252,7 @@ def _finish(
     _check_inputs(model, names, inputs or {})
     if run_timeout is not None and not (run_timeout > 0):
         raise UsageError(f"run_timeout must be > 0 seconds, got {run_timeout}")
+    _check_out(out)  # before auto's choice, which runs the first point
     plan, executor = settle(model, points, RunPlan(  # auto resolved; compiled: in process
         t_end=float(t_end),
         solver=dict(solver),
@@ -263,6 +264,16 @@ def _finish(
     return run_campaign(
         model, payload, points, names, plan, executor, out, resume, progress, handle_sigint
     )
+
+
+def _check_out(out: str | Path | None) -> None:
+    """A results file the table can be written to: .csv or .parquet, in a folder that exists."""
+    if out is None:
+        return
+    if Path(out).suffix.lower() not in (".csv", ".parquet"):
+        raise UsageError(f"results go to a .csv or .parquet file, got '{out}'")
+    if not Path(out).resolve().parent.is_dir():
+        raise UsageError(f"the folder of '{out}' does not exist")
 
 
 def run_campaign(
@@ -286,12 +297,9 @@ def run_campaign(
         *requirement_columns(model),
         *(s.column for s in plan.summaries),
     ]
-    if out is not None and Path(out).suffix.lower() not in (".csv", ".parquet"):
-        raise UsageError(f"results go to a .csv or .parquet file, got '{out}'")
+    _check_out(out)
     store = None
     if out is not None:
-        if not Path(out).resolve().parent.is_dir():
-            raise UsageError(f"the folder of '{out}' does not exist")
         fingerprint = _fingerprint(payload.digest, plan, columns, points)
         store = ChunkStore(out, fingerprint, resume=resume)
     rows: dict[int, dict[str, Any]] = dict(store.done) if store is not None else {}

@@ -24,6 +24,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+from hybrid.cli.compile import announce_compile
 from hybrid.cli.exits import EXIT_FINDINGS, EXIT_OK
 from hybrid.cli.settings import settings_from
 from hybrid.errors import UsageError
@@ -133,6 +134,8 @@ def run_sweep(args: argparse.Namespace) -> int:
     interrupts = Interrupts(notify=_notifier(line))
     with interrupts.installed():
         model = load(args.file)
+        if args.backend == "compiled":
+            announce_compile(args.file, model)
         table = sweep(
             model,
             settings=settings_from(args),
@@ -211,6 +214,8 @@ def run_falsify(args: argparse.Namespace) -> int:
     interrupts = Interrupts(notify=_notifier(line))
     with interrupts.installed():
         model = load(args.file)
+        if args.backend == "compiled":
+            announce_compile(args.file, model)
         result = falsify(
             model,
             args.requirement,

@@ -17,13 +17,27 @@ from typing import Any
 
 from hybrid.cli.exits import EXIT_OK
 
-__all__ = ["add_compile_command", "run_compile"]
+__all__ = ["add_compile_command", "announce_compile", "run_compile"]
 
 
 def add_compile_command(sub: Any) -> None:
     """Add ``hybrid compile`` to the subcommands."""
     p = sub.add_parser("compile", help="compile models for the compiled backend ahead of runs")
     p.add_argument("files", nargs="+", metavar="FILE", help="spec or system files")
+
+
+def announce_compile(file: str, model: Any) -> None:
+    """Before a compiled run: a note naming what it compiles first and about how long that
+    takes (:func:`~hybrid.simulation.native.choice.compile_notice`); nothing when cached."""
+    from hybrid.errors import HybridError
+    from hybrid.simulation.native.choice import compile_notice
+
+    try:
+        notice = compile_notice(model)
+    except (HybridError, ImportError):  # numba missing, or a model it refuses: the run says so
+        return
+    if notice is not None:
+        print(f"{file}: note: {notice}", file=sys.stderr, flush=True)
 
 
 def run_compile(files: list[str]) -> int:

@@ -126,10 +126,10 @@ def build_parser() -> argparse.ArgumentParser:
     add_settings_flags(p, _positive, _count)
     p.add_argument(
         "--backend",
-        default=BACKENDS[0],
+        default=None,
         choices=(*BACKENDS, "auto"),
-        help="scipy (reference), compiled (numba, the 'fast' extra) or auto (compiled when "
-        "the model is in the compiled cache, else scipy; docs/backends.md)",
+        help="scipy (reference, the default), compiled (numba, the 'fast' extra) or auto "
+        "(compiled when the model is loaded already, else scipy; docs/backends.md)",
     )
     p.add_argument(
         "--param",

@@ -16,6 +16,7 @@ import warnings
 from collections.abc import Callable
 from pathlib import Path
 
+from hybrid.cli.compile import announce_compile
 from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_OK
 from hybrid.cli.settings import settings_from
 from hybrid.compose import System, as_system
@@ -62,6 +63,8 @@ def run_simulate(args: argparse.Namespace) -> int:
             print(f"{args.file}: note: backend auto: {chosen.backend} ({chosen.reason})",
                   file=sys.stderr)  # fmt: skip
             backend = chosen.backend
+        if backend == "compiled":  # a first run compiles: say what, and for how long
+            announce_compile(args.file, model)
         run = simulate(
             model,
             settings=settings_from(args),

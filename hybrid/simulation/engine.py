@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from hybrid.compose import System
+from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.progress import Reporter, Tracker
@@ -171,6 +171,7 @@ def simulate(
     start = describe_start(model, inputs, initial, initial_location, t_start)
     if isinstance(model, Automaton) and (initial or initial_location):
         model = model.with_initial(initial_location, initial)
+    model = as_system(model)  # the one model type below this entry point
     tracker = None
     if progress is not None:
         tracker = Tracker("simulate", total=t_end, unit="s", start=t_start, report=progress)
@@ -197,7 +198,7 @@ def simulate(
 
 
 def _simulate_scipy(
-    model: Automaton | System,
+    model: System,
     settings: Settings,
     initial: Mapping[str, float] | None,
     inputs: Mapping[str, Callable[[float], float]] | None,
@@ -210,7 +211,7 @@ def _simulate_scipy(
     # a solution that blows up overflows inside the solver's linear algebra; the run
     # sees the non-finite state and ends with a message, so numpy's warnings are noise
     with sigint_watch(handle_sigint) as interrupts, np.errstate(all="ignore"):
-        if isinstance(model, System) and len(groups := _groups(model)) > 1:
+        if len(groups := _groups(model)) > 1:
             # components that share no label and read no signal of each other: simulated
             # apart and merged in hybrid time, never as a product
             parts: list[tuple[Run, CompiledModel]] = []
@@ -236,7 +237,7 @@ def _simulate_scipy(
 
 
 def _simulate_compiled(
-    model: Automaton | System,
+    model: System,
     settings: Settings,
     initial: Mapping[str, float] | None,
     inputs: Mapping[str, Callable[[float], float]] | None,
@@ -276,9 +277,7 @@ def _one_run_backend(
     return choose(model, 1, method=settings.method, inputs=bool(inputs)).backend
 
 
-def _has_requirements(model: Automaton | System) -> bool:
-    if isinstance(model, Automaton):
-        return bool(model.requirements)
+def _has_requirements(model: System) -> bool:
     return bool(model.requirements) or any(c.automaton.requirements for c in model.components)
 
 
@@ -333,7 +332,7 @@ _CACHE_SIZE = 8
 
 
 def _compiled(
-    model: Automaton | System, inputs: Mapping[str, Callable[[float], float]] | None
+    model: System, inputs: Mapping[str, Callable[[float], float]] | None
 ) -> CompiledModel:
     """The compiled model of ``model``, reused across runs of the same model in a thread.
 
@@ -362,10 +361,10 @@ def _compiled(
 
 
 def _initial_vector(
-    model: Automaton | System, compiled: CompiledModel, initial: Mapping[str, float] | None
+    model: System, compiled: CompiledModel, initial: Mapping[str, float] | None
 ) -> list[float]:
     x0 = model.initial_vector()
-    if isinstance(model, System) and initial:
+    if initial:
         for name, value in initial.items():
             if name not in compiled.state_names:
                 raise UsageError(f"initial value for unknown state variable '{name}'")

@@ -116,7 +116,7 @@ def test_a_failing_run_is_a_row_and_the_campaign_goes_on(monkeypatch: pytest.Mon
 
     monkeypatch.setattr(runs_module, "simulate", flaky)
     ball = hybrid.load("specs/bouncing_ball.yaml")
-    table = hybrid.sweep(ball, t_end=1.0, grid={"e": [0.5, 0.7, 0.9]}, workers=0)
+    table = hybrid.sweep(ball, t_end=1.0, grid={"e": [0.5, 0.7, 0.9]}, workers=0, backend="scipy")
     assert [row["cause"] for row in table.rows] == ["t_end", "error", "t_end"]
     assert table.rows[1]["message"] == "internal error: RuntimeError: boom"
     assert table.rows[1]["t"] is None and len(table.failed()) == 1

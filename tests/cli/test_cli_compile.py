@@ -47,6 +47,7 @@ def test_the_compile_notice_names_what_a_first_run_compiles(
     from hybrid.simulation.native.structure import NativeModel
 
     monkeypatch.setenv(cache.CACHE_ENV, str(tmp_path))  # an empty cache
+    monkeypatch.setattr(cache, "_LOADED", {})  # and nothing loaded in this process
     model = hybrid.load(SPECS / "thermostat.yaml")
     notice = compile_notice(model)
     assert notice is not None
