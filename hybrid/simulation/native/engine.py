@@ -32,7 +32,7 @@ from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import Layout, run_from
 from hybrid.simulation.native.cache import load_generated, require_numba, seal
-from hybrid.simulation.native.features import METHOD
+from hybrid.simulation.native.features import check_supported
 from hybrid.simulation.native.interruptible import run_in_worker
 from hybrid.simulation.native.kernel_text import kernel_module
 from hybrid.simulation.native.kernel_types import PIECES
@@ -251,21 +251,6 @@ def config(settings: Settings) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     return np.array(floats, dtype=np.float64), np.array(ints, dtype=np.int64)
 
 
-def check_supported(settings: Settings, inputs: Mapping[str, Any] | None) -> None:
-    """Refuse what the compiled backend does not do, naming it (never run otherwise)."""
-    require_numba()
-    if settings.method != METHOD:
-        raise UsageError(
-            f"the compiled backend integrates with RK45 (Dormand–Prince 5(4)); method "
-            f"'{settings.method}' needs backend='scipy'"
-        )
-    if inputs:
-        raise UsageError(
-            "the compiled backend cannot call external inputs given as Python functions "
-            "(inputs=...); use backend='scipy'"
-        )
-
-
 def simulate_compiled(
     model: Automaton | System,
     settings: Settings,
@@ -289,6 +274,7 @@ def simulate_compiled(
             and _same_config(last[1], settings)):  # fmt: skip
         compiled, p, x0, m0, cfg = last[2:]  # settings equal to those checked then
     else:
+        require_numba()
         check_supported(settings, inputs)
         with immediate("compiling the model (nothing was run)"):
             compiled = compiled_native(model)

@@ -1,7 +1,13 @@
 """What the compiled backend refuses: constructs whose semantics it does not implement (yet).
 
 Every refusal is one :class:`~hybrid.errors.UsageError` that names the
-construct and where it is, and suggests ``backend='scipy'``, which runs it.
+construct and where it is, and suggests ``backend='scipy'``, which runs it. The
+list, all here: a method other than RK45 and inputs given as Python functions
+(:func:`check_supported`), a free input without a ``range``
+(:func:`refuse_unsupported`), more than :data:`MAX_MODES` modes
+(:func:`too_many_modes`), a library function without a compiled form
+(:func:`no_compiled_form`), and requirements in an ensemble
+(:func:`refuse_requirements`); :func:`refusal` says any of the first three in words.
 Everything not refused here runs as the scipy backend runs it (the agreement
 tests of ``tests/simulation/native`` show each construct).
 
@@ -27,6 +33,7 @@ backend holds it (a slot of the run's parameter vector,
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 from hybrid.compose import System, as_system
@@ -34,10 +41,56 @@ from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.simulation.monitor import watched_requirements
 
-__all__ = ["METHOD", "refusal", "refuse_requirements", "refuse_unsupported", "unheld_inputs"]
+__all__ = [
+    "MAX_MODES",
+    "METHOD",
+    "check_supported",
+    "no_compiled_form",
+    "refusal",
+    "refuse_requirements",
+    "refuse_unsupported",
+    "too_many_modes",
+    "unheld_inputs",
+]
 
 METHOD = "RK45"
 """The one integration method of the compiled backend (Dormand–Prince 5(4))."""
+
+MAX_MODES = 4096
+"""Most modes the compiled backend generates code for (reachable through the transition
+graph, guards ignored): a larger product is the scipy backend's, which compiles the modes a
+run meets."""
+
+
+def check_supported(settings: Any, inputs: Mapping[str, Any] | None) -> None:
+    """Refuse the settings and inputs the compiled backend does not take, naming them."""
+    if settings.method != METHOD:
+        raise UsageError(
+            f"the compiled backend integrates with RK45 (Dormand–Prince 5(4)); method "
+            f"'{settings.method}' needs backend='scipy'"
+        )
+    if inputs:
+        raise UsageError(
+            "the compiled backend cannot call external inputs given as Python functions "
+            "(inputs=...); use backend='scipy'"
+        )
+
+
+def too_many_modes(name: str) -> UsageError:
+    """The refusal of a model with more than :data:`MAX_MODES` modes."""
+    return UsageError(
+        f"the compiled backend generates code for at most {MAX_MODES} modes; "
+        f"{name} has more (use backend='scipy')"
+    )
+
+
+def no_compiled_form(name: str, function: str) -> UsageError:
+    """The refusal of a model calling a library function that registers no compiled form."""
+    return UsageError(
+        f"the compiled backend cannot run {name}: library function "
+        f"'{function}' has no compiled form (its library registers none; see "
+        "docs/backends.md), so use backend='scipy'"
+    )
 
 
 def unheld_inputs(system: System) -> list[str]:

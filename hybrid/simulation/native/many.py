@@ -31,15 +31,15 @@ from hybrid.simulation.bounds import BoundExcursion, bound_excursions, warn_ense
 from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import run_from
+from hybrid.simulation.native.cache import require_numba
 from hybrid.simulation.native.engine import (
     CompiledNative,
-    check_supported,
     compiled_native,
     config,
     run_arrays,
     simulate_compiled,
 )
-from hybrid.simulation.native.features import refuse_requirements
+from hybrid.simulation.native.features import check_supported, refuse_requirements
 from hybrid.simulation.native.interruptible import run_in_worker
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings, merged
@@ -273,6 +273,7 @@ def simulate_many(
     n = sizes.pop() if sizes else 1
     system = as_system(model)
     refuse_requirements(system)
+    require_numba()
     check_supported(settings, None)  # a method other than RK45, given in settings
     with immediate("compiling the model (nothing was run)"):
         compiled = compiled_native(model)

@@ -11,7 +11,7 @@ set to that value for each run.
 
 Modes: every location of a plain automaton (so ``initial_location`` is a
 run-time choice too); for a system, the modes reachable from its initial mode
-through the transition graph (guards ignored), at most :data:`MAX_MODES`.
+through the transition graph (guards ignored), at most :data:`~hybrid.simulation.native.features.MAX_MODES`.
 
 Guards keep the reference's equality rule (docs/semantics.md, "Equality
 guards"): the atoms of each guard are :func:`hybrid.expr.rho.levels`' (the same
@@ -40,18 +40,21 @@ from dataclasses import dataclass, replace
 from types import MappingProxyType
 
 from hybrid.compose import Component, System, as_system
-from hybrid.errors import UsageError
 from hybrid.expr import ir
 from hybrid.expr.functions import BUILTINS, Function
 from hybrid.expr.rho import _rewrite, guard_to_rho, levels
 from hybrid.model import Automaton, Location
 from hybrid.modes import Mode, TransitionView, mode_of, transitions_of
-from hybrid.simulation.native.features import refuse_unsupported
+from hybrid.simulation.native.features import (
+    MAX_MODES,
+    no_compiled_form,
+    refuse_unsupported,
+    too_many_modes,
+)
 
 __all__ = [
     "COMPILED_FORM",
     "LEVEL_SIDE",
-    "MAX_MODES",
     "NativeMode",
     "NativeModel",
     "NativeTransition",
@@ -61,8 +64,6 @@ __all__ = [
     "snap_name",
 ]
 
-MAX_MODES = 4096
-"""Modes of a system the compiled backend generates code for; more is refused."""
 
 COMPILED_FORM = "hybrid_compiled"
 """The attribute of a library function that holds its numba-compilable implementation."""
@@ -186,10 +187,7 @@ class NativeModel:
             for tr in transitions_of(system, key, bind=False):
                 if tr.target not in seen:
                     if len(keys) >= MAX_MODES:
-                        raise UsageError(
-                            f"the compiled backend generates code for at most {MAX_MODES} modes; "
-                            f"{system.name} has more (use backend='scipy')"
-                        )
+                        raise too_many_modes(system.name)
                     seen.add(tr.target)
                     keys.append(tr.target)
         return keys
@@ -230,11 +228,7 @@ class NativeModel:
         for name in sorted(used):
             function = self.system.functions[name]
             if getattr(function.fn, COMPILED_FORM, None) is None:
-                raise UsageError(
-                    f"the compiled backend cannot run {self.system.name}: library function "
-                    f"'{name}' has no compiled form (its library registers none; see "
-                    "docs/backends.md), so use backend='scipy'"
-                )
+                raise no_compiled_form(self.system.name, name)
             functions[name] = function
         return functions
 
