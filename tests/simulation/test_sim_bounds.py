@@ -24,16 +24,21 @@ EXPECTED = [
 ]
 
 
-def _simulate(text: str, t_end: float) -> tuple[hybrid.Run, list[warnings.WarningMessage]]:
+def _simulate(
+    text: str, t_end: float, backend: str
+) -> tuple[hybrid.Run, list[warnings.WarningMessage]]:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        run = hybrid.simulate(hybrid.load_text(text), t_end=t_end, dt=0.1)
+        run = hybrid.simulate(
+            hybrid.load_text(text), t_end=t_end, dt=0.1, backend=backend, handle_sigint=False
+        )
     return run, [w for w in caught if issubclass(w.category, hybrid.BoundsWarning)]
 
 
-def test_a_run_that_leaves_its_bounds_warns_once_per_variable() -> None:
-    run, caught = _simulate(LEAKY_SPEC, 10.0)
-    assert run.termination.cause == "t_end" and [jump.t for jump in run.jumps] == [2.0]
+def test_a_run_that_leaves_its_bounds_warns_once_per_variable(backend: str) -> None:
+    run, caught = _simulate(LEAKY_SPEC, 10.0, backend)
+    assert run.termination.cause == "t_end"
+    assert [jump.t for jump in run.jumps] == pytest.approx([2.0], abs=1e-12)  # c = t reaches 2
     assert [str(w.message) for w in caught] == [message for *_, message in EXPECTED]
     assert [(e.variable, e.j) for e in run.out_of_bounds] == [(n, j) for n, _, j, _, _ in EXPECTED]
     assert [e.t for e in run.out_of_bounds] == pytest.approx([t for _, t, *_ in EXPECTED])
@@ -41,16 +46,16 @@ def test_a_run_that_leaves_its_bounds_warns_once_per_variable() -> None:
     assert caught[0].filename == __file__  # points at the caller's line
 
 
-def test_a_run_within_its_bounds_says_nothing() -> None:
-    run, caught = _simulate(LEAKY_SPEC, 2.9)  # h reaches 2.95, v -0.725
+def test_a_run_within_its_bounds_says_nothing(backend: str) -> None:
+    run, caught = _simulate(LEAKY_SPEC, 2.9, backend)  # h reaches 2.95, v -0.725
     assert caught == [] and run.out_of_bounds == ()
-    tank, caught = _simulate((REPO / "docs" / "examples" / "tank.yaml").read_text(), 12.0)
+    tank, caught = _simulate((REPO / "docs" / "examples" / "tank.yaml").read_text(), 12.0, backend)
     assert caught == [] and tank.out_of_bounds == () and len(tank.jumps) == 3
 
 
-def test_a_reset_that_lands_outside_is_caught_at_the_jump() -> None:
+def test_a_reset_that_lands_outside_is_caught_at_the_jump(backend: str) -> None:
     text = LEAKY_SPEC.replace("guard: c >= 2}", "guard: c >= 2, reset: {h: 4}}")
-    run, caught = _simulate(text, 2.5)
+    run, caught = _simulate(text, 2.5, backend)
     (excursion,) = run.out_of_bounds
     assert (excursion.variable, excursion.t, excursion.j, excursion.value) == ("h", 2.0, 1, 4.0)
     assert len(caught) == 1
