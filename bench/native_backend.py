@@ -214,7 +214,8 @@ if getattr(model, "components", None):  # the engines compared, without the (Pyt
     from dataclasses import replace
     model = replace(model, requirements=(), components=tuple(
         replace(c, automaton=replace(c.automaton, requirements=())) for c in model.components))
-compiled_native(model)
+from hybrid.compose import as_system
+compiled_native(as_system(model))
 t4 = time.perf_counter()
 hybrid.simulate(model, t_end=1.0, backend="compiled", handle_sigint=False)
 t5 = time.perf_counter()
@@ -227,7 +228,8 @@ import time
 import hybrid
 import numba
 from hybrid.simulation.native.engine import compiled_native
-model = hybrid.load({spec!r})
+from hybrid.compose import as_system
+model = as_system(hybrid.load({spec!r}))
 t0 = time.perf_counter()
 compiled_native(model)
 print(time.perf_counter() - t0)

@@ -42,6 +42,7 @@ def announce_compile(file: str, model: Any) -> None:
 
 def run_compile(files: list[str]) -> int:
     """Compile (or load from the cache) each file's model, the kernels once; say which."""
+    from hybrid.compose import as_system
     from hybrid.reader.loader import load
     from hybrid.simulation.interrupts import immediate
     from hybrid.simulation.native.cache import require_numba
@@ -50,7 +51,7 @@ def run_compile(files: list[str]) -> int:
 
     require_numba()
     for path in files:
-        model = load(path)
+        model = as_system(load(path))
         model_state, kernel_state, _ = cached(model)
         start = time.perf_counter()
         with immediate("compiling the model (nothing was kept)"):

@@ -21,7 +21,8 @@ Examples
 --------
 >>> import hybrid, numpy as np
 >>> from hybrid.simulation.compiled import CompiledModel
->>> compiled = CompiledModel(hybrid.load("specs/bouncing_ball.yaml"))
+>>> from hybrid.compose import as_system
+>>> compiled = CompiledModel(as_system(hybrid.load("specs/bouncing_ball.yaml")))
 >>> mode = compiled.mode(compiled.initial_key)
 >>> chosen, enabled, armed = enabled_at_entry(mode, 0.0, np.array([0.0, -3.0]))
 >>> chosen.name, armed

@@ -30,7 +30,8 @@ Examples
 --------
 >>> import hybrid
 >>> ball = hybrid.load("specs/bouncing_ball.yaml")
->>> compiled = CompiledModel(ball)
+>>> from hybrid.compose import as_system
+>>> compiled = CompiledModel(as_system(ball))
 >>> mode = compiled.mode(compiled.initial_key)
 >>> import numpy as np
 >>> [float(v) for v in mode.rhs(0.0, np.array([10.0, 0.0]))]
@@ -45,12 +46,11 @@ from collections.abc import Callable, Mapping
 from dataclasses import replace
 from typing import Any
 
-from hybrid.compose import System, as_system
+from hybrid.compose import System
 from hybrid.errors import UsageError
 from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext, EvalFailure, Stash, compile_function, reads_library
 from hybrid.expr.rho import guard_to_rho, level_key, levels
-from hybrid.model import Automaton
 from hybrid.modes import Binder, Mode, ModeView, TransitionView, mode_of
 from hybrid.simulation.forms import CompiledCondition, CompiledMode, CompiledTransition, Fn, Source
 from hybrid.simulation.parts import Parts, signal_outputs, uses_parts
@@ -85,10 +85,10 @@ class CompiledModel:
 
     def __init__(
         self,
-        model: Automaton | System,
+        model: System,
         inputs: Mapping[str, Callable[[float], float]] | None = None,
     ) -> None:
-        self.system = as_system(model)
+        self.system = model
         self.failure = EvalFailure()
         self.flow_failure: EvalFailure = LatestFailure()
         self.inputs = dict(inputs or {})

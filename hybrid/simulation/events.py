@@ -34,7 +34,8 @@ Examples
 --------
 >>> import hybrid, numpy as np
 >>> from hybrid.simulation.compiled import CompiledModel
->>> compiled = CompiledModel(hybrid.load("specs/bouncing_ball.yaml"))
+>>> from hybrid.compose import as_system
+>>> compiled = CompiledModel(as_system(hybrid.load("specs/bouncing_ball.yaml")))
 >>> mode = compiled.mode(compiled.initial_key)
 >>> watch = Watch(mode, [True], 0.0, np.array([10.0, 0.0]), 1e-9, {})
 >>> float(watch.value(0.0, np.array([10.0, 0.0])))   # min(max(h, v), h): 10 m above the floor

@@ -12,7 +12,8 @@ Examples
 >>> import hybrid
 >>> from hybrid.simulation.compiled import CompiledModel
 >>> m = hybrid.load_text("automaton: a\\nstate: {x: {initial: -1}}\\nlocations: {l: {flow: {x: sqrt(x)}}}\\n")
->>> compiled = CompiledModel(m)
+>>> from hybrid.compose import as_system
+>>> compiled = CompiledModel(as_system(m))
 >>> import numpy as np
 >>> _ = compiled.mode(compiled.initial_key).rhs(0.0, np.array([-1.0]))
 >>> describe_failure(compiled, compiled.flow_failure)

@@ -69,7 +69,8 @@ Examples
 ... locations: {cooling: {flow: {x: -0.1*x}}}
 ... requirements: [{name: warm, always: "x >= 15"}]
 ... ''')
->>> compiled = CompiledModel(heater)
+>>> from hybrid.compose import as_system
+>>> compiled = CompiledModel(as_system(heater))
 >>> table = MarginTable(compiled, watched_requirements(compiled.system))
 >>> [(k, float(fn(0.0, np.array([20.0])))) for k, fn in table.of(compiled.mode(compiled.initial_key))]
 [(0, 5.0)]

@@ -40,6 +40,7 @@ def test_compile_refuses_an_invalid_file_with_its_position(tmp_path: Path) -> No
 def test_the_compile_notice_names_what_a_first_run_compiles(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    from hybrid.compose import as_system
     from hybrid.simulation.native import cache
     from hybrid.simulation.native.choice import KERNEL_COMPILE_S, compile_notice
     from hybrid.simulation.native.kernel_text import Generated, kernel_module
@@ -62,5 +63,5 @@ def test_the_compile_notice_names_what_a_first_run_compiles(
 
     seal(kernel_module())
     assert compile_notice(model) == "compiling the model (about 1 s); later runs load them from the cache"
-    seal(generate(NativeModel(model)))
+    seal(generate(NativeModel(as_system(model))))
     assert compile_notice(model) is None

@@ -49,7 +49,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hybrid.compose import System
-from hybrid.model import Automaton
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Jump, Run, Termination
@@ -282,7 +281,7 @@ Inputs = Mapping[str, Callable[[float], float]] | None
 def termination_of(
     native: NativeModel,
     layout: Layout,
-    model: Automaton | System,
+    model: System,
     settings: Settings,
     buf: b.RunArrays,
     inputs: Inputs = None,
@@ -313,7 +312,7 @@ _LAST_END: list[tuple[NativeModel, tuple[Any, ...], Termination] | None] = [None
 record."""
 
 
-def _termination(native: NativeModel, layout: Layout, model: Automaton | System,
+def _termination(native: NativeModel, layout: Layout, model: System,
                  settings: Settings, buf: b.RunArrays, inputs: Inputs, oi: list[int],
                  of: list[float]) -> Termination:  # fmt: skip
     """:func:`termination_of` from ``buf``'s counts and numbers read as ``oi`` and ``of``."""
@@ -405,7 +404,7 @@ def _crawl_message(settings: Settings, t: float, buf: b.RunArrays) -> str:
     )
 
 
-def _flow_at_start(native: NativeModel, layout: Layout, model: Automaton | System,
+def _flow_at_start(native: NativeModel, layout: Layout, model: System,
                    buf: b.RunArrays, index: int, inputs: Inputs) -> str:  # fmt: skip
     """``StayIntegrator._start``'s words for a flow that fails or is not finite at the start."""
     t = float(buf.of[b.F_FAIL_T])
@@ -420,7 +419,7 @@ def _flow_at_start(native: NativeModel, layout: Layout, model: Automaton | Syste
     return f"the flow of {mode.name} gives {names[bad]}' = {derivative[bad]} (at t={t:.9g})"
 
 
-def _reference_mode(native: NativeModel, model: Automaton | System, m: int,
+def _reference_mode(native: NativeModel, model: System, m: int,
                     inputs: Inputs) -> tuple[Any, Any]:  # fmt: skip
     """The reference engine's compiled model and its mode ``m`` (for the words of a failure)."""
     from hybrid.simulation.compiled import CompiledModel
@@ -430,7 +429,7 @@ def _reference_mode(native: NativeModel, model: Automaton | System, m: int,
     return compiled, compiled.mode(native.modes[m].key)
 
 
-def describe_native_failure(native: NativeModel, layout: Layout, model: Automaton | System,
+def describe_native_failure(native: NativeModel, layout: Layout, model: System,
                             buf: b.RunArrays, inputs: Inputs = None) -> str | None:  # fmt: skip
     """``<what> failed: <call(args)>: <error>``, found by the reference engine's functions.
 
@@ -524,7 +523,7 @@ def _segments(buf: b.RunArrays, d: int) -> list[tuple[int, float, float, Any]]:
 def run_from(
     native: NativeModel,
     layout: Layout,
-    model: Automaton | System,
+    model: System,
     settings: Settings,
     buf: b.RunArrays,
     inputs: Inputs = None,

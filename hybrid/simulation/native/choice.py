@@ -62,13 +62,14 @@ def cached(model: Any) -> tuple[str, str, float]:
 
     Generates the model's source (no numba import).
     """
+    from hybrid.compose import as_system
     from hybrid.simulation.native.cache import _LOADED, cache_key, cache_root
     from hybrid.simulation.native.kernel_text import kernel_module
     from hybrid.simulation.native.source import generate
     from hybrid.simulation.native.structure import NativeModel
 
     version = _numba_version()
-    generated = generate(NativeModel(model))
+    generated = generate(NativeModel(as_system(model)))  # a user's model: either type
     keys = [cache_key(generated, version), cache_key(kernel_module(), version)]
     found = [
         "loaded" if key in _LOADED else "cached" if _sealed(cache_root() / key) else "missing"

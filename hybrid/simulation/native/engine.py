@@ -54,7 +54,7 @@ __all__ = [
 _CACHE_SIZE = 16
 _CACHE: dict[tuple[Any, ...], tuple[tuple[Any, ...], CompiledNative]] = {}
 _CACHE_LOCK = threading.Lock()
-_LAST: list[tuple[Automaton | System, CompiledNative] | None] = [None]
+_LAST: list[tuple[System, CompiledNative] | None] = [None]
 """The model of the last :func:`compiled_native` call and its answer."""
 
 
@@ -96,7 +96,7 @@ def kernel(parallel: bool = False, wait: bool = True) -> ModuleType:
 class CompiledNative:
     """A model structure, generated and loaded: what every run of it shares."""
 
-    def __init__(self, model: Automaton | System) -> None:
+    def __init__(self, model: System) -> None:
         self.native = NativeModel(model)
         self.layout = Layout.of(self.native)
         self.generated = generate(self.native)
@@ -177,7 +177,7 @@ class CompiledNative:
             self._scratch.sizes = (points, jumps, steps)
         return arrays
 
-    def initial_mode(self, model: Automaton | System) -> int:
+    def initial_mode(self, model: System) -> int:
         if isinstance(model, Automaton):  # as_system's view without building it
             return self.native.index[(model.initial_location,)]
         return self.native.index[model.initial_mode]
@@ -194,29 +194,23 @@ def _entry_point(dispatcher: Any) -> Callable[..., None]:
     return entry
 
 
-def _structure_key(model: Automaton | System) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+def _structure_key(model: System) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
     """``(key, objects)``: what identifies a model's structure, parameter and initial values aside.
 
     ``with_parameters`` and ``with_initial`` keep the locations, edges and
     signals objects, so the models of a sweep share one entry. The key holds
     their ids; the cache holds the objects, so no other object can take an id.
     """
-    if isinstance(model, Automaton):  # as_system(model)'s key, without building the system
-        objects: tuple[tuple[Any, ...], ...] = ((model.locations, model.edges, model.signals),)
-        names: tuple[tuple[str, str], ...] = ((model.name, model.name),)
-        single = True
-    else:
-        objects = tuple(
-            (c.automaton.locations, c.automaton.edges, c.automaton.signals)
-            for c in model.components
-        )
-        names = tuple((c.name, c.automaton.name) for c in model.components)
-        single = model.single
+    objects = tuple(
+        (c.automaton.locations, c.automaton.edges, c.automaton.signals) for c in model.components
+    )
+    names = tuple((c.name, c.automaton.name) for c in model.components)
+    single = model.single
     key = (model.name, single, names, tuple(id(o) for trio in objects for o in trio))
     return key, objects
 
 
-def compiled_native(model: Automaton | System) -> CompiledNative:
+def compiled_native(model: System) -> CompiledNative:
     """The :class:`CompiledNative` of ``model``'s structure (generated once per process)."""
     last = _LAST[0]  # the model of the last call, first: a run repeated costs no key
     if last is not None and last[0] is model:
@@ -252,7 +246,7 @@ def config(settings: Settings) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
 
 
 def simulate_compiled(
-    model: Automaton | System,
+    model: System,
     settings: Settings,
     *,
     initial: Mapping[str, float] | None = None,
@@ -375,7 +369,7 @@ def _ticker(
 
 
 def initial_vector(
-    model: Automaton | System, state_names: tuple[str, ...], initial: Mapping[str, float] | None
+    model: System, state_names: tuple[str, ...], initial: Mapping[str, float] | None
 ) -> list[float]:
     """The initial state; for a system, ``initial`` overrides some values (as the engine does)."""
     x0 = model.initial_vector()

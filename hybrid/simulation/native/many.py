@@ -95,7 +95,7 @@ class Ensemble(Sequence[Run]):
     every run stayed within them.
     """
 
-    def __init__(self, model: Automaton | System, compiled: CompiledNative, settings: Settings,
+    def __init__(self, model: System, compiled: CompiledNative, settings: Settings,
                  params: NDArray[np.float64], parameters: dict[str, NDArray[np.float64]],
                  initial: dict[str, NDArray[np.float64]]) -> None:  # fmt: skip
         self.model, self.compiled, self.settings = model, compiled, settings
@@ -182,7 +182,7 @@ class Ensemble(Sequence[Run]):
     def __iter__(self) -> Iterator[Run]:
         return (self[k] for k in range(len(self)))
 
-    def model_of(self, i: int) -> Automaton | System:
+    def model_of(self, i: int) -> System:
         """The model with run ``i``'s parameter values."""
         names = self.compiled.native.slot_names  # the held inputs' slots after them
         values = self.params[i].tolist()[: len(names)]
@@ -271,7 +271,7 @@ def simulate_many(
     if len(sizes) > 1:
         raise UsageError(f"parameters and initial have different numbers of rows {sorted(sizes)}")
     n = sizes.pop() if sizes else 1
-    system = as_system(model)
+    model = system = as_system(model)  # the one model type below this entry point
     refuse_requirements(system)
     require_numba()
     check_supported(settings, None)  # a method other than RK45, given in settings
@@ -351,7 +351,7 @@ def _kept(arrays: b.RunArrays) -> b.RunArrays:
                        np.zeros((rows, 0)), np.zeros((rows, 0), dtype=np.int64))  # fmt: skip
 
 
-def _run_excursions(model: Automaton | System, settings: Settings, names: Sequence[str],
+def _run_excursions(model: System, settings: Settings, names: Sequence[str],
                     t: NDArray[np.float64], j: NDArray[np.int64],
                     states: NDArray[np.float64]) -> tuple[BoundExcursion, ...]:  # fmt: skip
     """Where one run's stored points leave the declared bounds (as :func:`hybrid.simulate`)."""
@@ -390,13 +390,10 @@ def _chunk_excursions(ensemble: Ensemble, arrays: b.RunArrays, lo: int) -> None:
             ensemble.out_of_bounds[lo + r] = found
 
 
-def _alone(model: Automaton | System, ensemble: Ensemble, settings: Settings, i: int,
+def _alone(model: System, ensemble: Ensemble, settings: Settings, i: int,
            x0: NDArray[np.float64]) -> Run:  # fmt: skip
     """Run ``i`` on its own (it outgrew its row in the chunk)."""
     one = ensemble.model_of(i)
     names = ensemble.compiled.native.state_names
     start = dict(zip(names, x0.tolist(), strict=True))
-    if isinstance(one, Automaton):
-        one = one.with_initial(None, start)
-        return simulate_compiled(one, settings, handle_sigint=False)
     return simulate_compiled(one, settings, initial=start, handle_sigint=False)

@@ -16,7 +16,8 @@ Examples
 --------
 >>> import hybrid
 >>> from hybrid.simulation.native.structure import NativeModel
->>> generated = generate(NativeModel(hybrid.load("specs/bouncing_ball.yaml")))
+>>> from hybrid.compose import as_system
+>>> generated = generate(NativeModel(as_system(hybrid.load("specs/bouncing_ball.yaml"))))
 >>> "out[1] = -p_0" in generated.source, generated.tab[:6].tolist()
 (True, [2, 1, 1, 1, 1, 2])
 """

@@ -25,7 +25,8 @@ the level) or ``+1`` set by the compiled loop in slots after the parameters
 Examples
 --------
 >>> import hybrid
->>> model = NativeModel(hybrid.load("specs/bouncing_ball.yaml"))
+>>> from hybrid.compose import as_system
+>>> model = NativeModel(as_system(hybrid.load("specs/bouncing_ball.yaml")))
 >>> model.slot_names, [m.name for m in model.modes]
 (('g', 'e'), ['falling'])
 >>> from hybrid.expr.printer import expression_text
@@ -39,7 +40,7 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
 
-from hybrid.compose import Component, System, as_system
+from hybrid.compose import Component, System
 from hybrid.expr import ir
 from hybrid.expr.functions import BUILTINS, Function
 from hybrid.expr.rho import _rewrite, guard_to_rho, levels
@@ -152,8 +153,8 @@ class NativeMode:
 class NativeModel:
     """The modes of ``model`` with parameter slots, and the slots' current values."""
 
-    def __init__(self, model: Automaton | System) -> None:
-        self.system = as_system(model)
+    def __init__(self, model: System) -> None:
+        self.system = model
         refuse_unsupported(self.system)
         slots: dict[tuple[int, str], int] = {}
         labels: list[str] = []

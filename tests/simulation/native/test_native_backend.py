@@ -12,6 +12,7 @@ from scipy.integrate._ivp.rk import RK45
 from support import REPO, SPECS, assert_no_traceback, read_csv, read_json, run_cli
 
 import hybrid
+from hybrid.compose import as_system
 from hybrid.errors import UsageError
 from hybrid.simulation.native import buffers, integrator, stay
 from hybrid.simulation.native.cache import CACHE_ENV
@@ -170,8 +171,8 @@ def test_small_models_compile_as_one_function_large_ones_apart() -> None:
     def op_lines(source: str) -> int:  # the per-operation functions, before `model` itself
         return len(source[source.index("def model_rhs") : source.index("def model(")].splitlines())
 
-    small = generate(NativeModel(hybrid.load(REPO / "specs" / "thermostat.yaml")))
-    large = generate(NativeModel(hybrid.load(REPO / "specs" / "uvms_mission_2.yaml")))
+    small = generate(NativeModel(as_system(hybrid.load(REPO / "specs" / "thermostat.yaml"))))
+    large = generate(NativeModel(as_system(hybrid.load(REPO / "specs" / "uvms_mission_2.yaml"))))
     assert op_lines(small.source) < INLINE_LINES < op_lines(large.source)
     assert "inline='always'" in small.source and "inline=" not in large.source
     # the estimate that plans the first compile grows with the model (measured 0.5 s and 35 s)

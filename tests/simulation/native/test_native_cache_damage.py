@@ -21,6 +21,7 @@ import pytest
 from support import SPECS, assert_no_traceback, read_json, run_cli
 
 import hybrid
+from hybrid.compose import as_system
 from hybrid.simulation.native.cache import CACHE_ENV, MANIFEST
 
 pytest.importorskip("numba")
@@ -44,7 +45,7 @@ def compiled_folders(ball: hybrid.Automaton) -> tuple[Path, Path]:
     from hybrid.simulation.native.engine import compiled_native
 
     hybrid.simulate(ball, t_end=1.0, backend="compiled")
-    compiled = compiled_native(ball)
+    compiled = compiled_native(as_system(ball))
     kernel_file, model_file = compiled.kernel.__file__, compiled.module.__file__
     assert kernel_file and model_file
     return Path(kernel_file).parent, Path(model_file).parent

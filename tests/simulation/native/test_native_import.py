@@ -15,6 +15,7 @@ import pytest
 from support import REPO
 
 import hybrid
+from hybrid.compose import as_system
 from hybrid.simulation.native.kernel_text import kernel_module
 from hybrid.simulation.native.source import generate
 from hybrid.simulation.native.structure import NativeModel
@@ -43,7 +44,7 @@ def test_importing_the_generated_kernel_and_model_compiles_nothing(
 
     monkeypatch.setattr(subprocess, "Popen", no_process)
     model = hybrid.load(REPO / "specs" / "thermostat.yaml")
-    generated = _import_only(tmp_path / "hybrid_native_probe_model.py", generate(NativeModel(model)).source)
+    generated = _import_only(tmp_path / "hybrid_native_probe_model.py", generate(NativeModel(as_system(model))).source)
     kernel = _import_only(tmp_path / "hybrid_native_probe_kernel.py", kernel_module().source)
     # still the plain Python functions: numba's dispatchers have py_func, a cfunc an address
     assert not hasattr(generated.model, "address") and not hasattr(generated.model, "py_func")

@@ -260,7 +260,7 @@ def test_the_loops_packed_key_is_the_key_of_its_transition_and_flags(n: int) -> 
     from hybrid.simulation.settings import Settings
 
     model = _fanned(n)
-    compiled = compiled_native(model)
+    compiled = compiled_native(as_system(model))
     settings = Settings(t_end=2.0, max_jumps=1)
     p = np.array(compiled.native.parameter_vector(model))
     x0 = np.array(model.initial_vector())

@@ -14,7 +14,7 @@ import pytest
 from support import SPECS
 
 import hybrid
-from hybrid.compose import compose
+from hybrid.compose import as_system, compose
 
 pytest.importorskip("numba")
 
@@ -76,7 +76,7 @@ def test_parameters_and_initial_values_do_not_recompile(thermostat: hybrid.Autom
     from hybrid.simulation.native.engine import compiled_native
 
     warmer = thermostat.with_parameters({"T_high": 24.0})
-    assert compiled_native(warmer) is compiled_native(thermostat)
+    assert compiled_native(as_system(warmer)) is compiled_native(as_system(thermostat))
     agree(warmer, 60.0, initial={"T": 19.0})
 
 
