@@ -43,9 +43,11 @@ class BackendNote(Note):
 
 
 def resolve_backend(model: Any, points: Sequence[dict[str, float]], plan: RunPlan,
-                    runs: int | None = None) -> RunPlan:  # fmt: skip
+                    runs: int | None = None, announce: bool = True) -> RunPlan:  # fmt: skip
     """``plan`` with ``backend="auto"`` resolved (others as they are); ``runs``: how many
-    the campaign makes (default: one per point)."""
+    the campaign makes (default: one per point); ``announce``: warn the choice (a
+    :class:`BackendNote`; off when ``auto`` is the default nobody asked for: the table's
+    metadata still says which ran)."""
     if plan.backend != "auto":
         return plan
     from hybrid.simulation.native.choice import choose
@@ -60,12 +62,13 @@ def resolve_backend(model: Any, points: Sequence[dict[str, float]], plan: RunPla
     choice = choose(model, len(points) if runs is None else runs,
                     method=str(plan.solver.get("method", "RK45")), inputs=held,
                     run_s=run_s if points else None)  # fmt: skip
-    warnings.warn(BackendNote(f"backend auto: {choice.backend} ({choice.reason})"), stacklevel=2)
+    if announce:
+        warnings.warn(BackendNote(f"backend auto: {choice.backend} ({choice.reason})"), stacklevel=2)
     return replace(plan, backend=choice.backend, requested="auto")
 
 
 def settle(model: Any, points: Sequence[dict[str, float]], plan: RunPlan, executor: Executor,
-           runs: int | None = None) -> tuple[RunPlan, Executor]:  # fmt: skip
+           runs: int | None = None, announce: bool = True) -> tuple[RunPlan, Executor]:  # fmt: skip
     """The plan (``auto`` resolved, :func:`resolve_backend`) and the executor that runs it.
 
     A compiled campaign on local worker processes runs in this process
@@ -74,7 +77,7 @@ def settle(model: Any, points: Sequence[dict[str, float]], plan: RunPlan, execut
     compiled code first (a sweep of 1,000 thermostat points took 2.9 s on two
     warm workers, 0.24 s of CPU here). A Dask scheduler is kept as it is.
     """
-    plan = resolve_backend(model, points, plan, runs)
+    plan = resolve_backend(model, points, plan, runs, announce)
     if plan.backend == "compiled" and isinstance(executor, LocalPool):
         return plan, InProcess()
     return plan, executor

@@ -184,6 +184,7 @@ def falsify(
     (True, True, True)
     """
     chosen, solver = campaign_settings("falsify", settings, t_end, solver)
+    announce = bool(backend or chosen.backend)  # auto asked for: say what it chose
     t_end, backend = chosen.t_end, backend or chosen.backend or "auto"
     if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
         raise UsageError(f"budget must be a whole number >= 1, got {budget!r}")
@@ -229,7 +230,7 @@ def falsify(
     executor = executor_for(workers, scheduler)
     search = _Search(system, requirement, axes, plan, budget, seed, sampler, global_share, starts)
     middle = search.values_of([0.5] * len(axes))  # what auto times one scipy run of
-    search.plan, executor = settle(system, [middle], plan, executor, runs=budget)
+    search.plan, executor = settle(system, [middle], plan, executor, runs=budget, announce=announce)
     with sigint_watch(handle_sigint) as interrupts, executor:
         executor.start(pack(model), search.plan)
         search.run(executor, lambda: interrupts.requested, progress)

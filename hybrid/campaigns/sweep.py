@@ -197,6 +197,7 @@ def sweep(
     [(0.5, 't_end', 1), (0.9, 't_end', 1)]
     """
     chosen, solver = campaign_settings("sweep", settings, t_end, solver)
+    announce = bool(backend or chosen.backend)  # auto asked for: say what it chose
     t_end, backend = chosen.t_end, backend or chosen.backend or "auto"
     if parameters:
         model = model.with_parameters(dict(parameters))
@@ -208,7 +209,7 @@ def sweep(
         check_names(system, names)
         return _finish(system, pack(model), t_end, listed, names, solver, summaries, inputs, run_timeout,
                        backend, executor_for(workers, scheduler, batch), out, resume, progress,
-                       handle_sigint)  # fmt: skip
+                       handle_sigint, announce)  # fmt: skip
     on_grid = grid_axes(system, grid)
     if samples is not None:
         gridded = {a.name for a in on_grid}
@@ -225,7 +226,7 @@ def sweep(
     made = combine(grid_points(on_grid), sampled)
     executor = executor_for(workers, scheduler, batch)
     return _finish(system, pack(model), t_end, made, names, solver, summaries, inputs, run_timeout, backend,
-                   executor, out, resume, progress, handle_sigint)  # fmt: skip
+                   executor, out, resume, progress, handle_sigint, announce)  # fmt: skip
 
 
 def _finish(
@@ -244,6 +245,7 @@ def _finish(
     resume: bool,
     progress: Progress,
     handle_sigint: bool,
+    announce: bool = True,
 ) -> SweepTable:
     """Check the run settings, then run the campaign of ``points``."""
     wanted = [Summary.parse(s) for s in summaries]
@@ -260,7 +262,7 @@ def _finish(
         inputs=tuple(sorted((inputs or {}).items())),
         timeout=run_timeout,
         backend=backend,
-    ), executor)
+    ), executor, announce=announce)
     return run_campaign(
         model, payload, points, names, plan, executor, out, resume, progress, handle_sigint
     )

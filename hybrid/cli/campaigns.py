@@ -153,7 +153,7 @@ def run_sweep(args: argparse.Namespace) -> int:
             out=args.out,
             resume=args.resume,
             progress=line if line is not None else False,
-            backend=args.backend,
+            backend=args.backend or "auto",  # the default, said on the command line
         )
     if line is not None:
         line.clear()
@@ -230,7 +230,7 @@ def run_falsify(args: argparse.Namespace) -> int:
             scheduler=args.scheduler,
             run_timeout=args.run_timeout,
             progress=line if line is not None else False,
-            backend=args.backend,
+            backend=args.backend or "auto",  # the default, said on the command line
         )
     if line is not None:
         line.clear()

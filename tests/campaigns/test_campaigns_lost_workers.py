@@ -39,7 +39,7 @@ SUMMARIES = ["last:x"]
 
 def _reference() -> hybrid.SweepTable:
     return hybrid.sweep(hybrid.load_text(WAVE), t_end=T_END, grid={"w": W}, workers=0,
-                        summaries=SUMMARIES, max_step=0.002)  # fmt: skip
+                        summaries=SUMMARIES, max_step=0.002, backend="scipy")  # fmt: skip
 
 
 def _check_closed_form(table: hybrid.SweepTable) -> None:
@@ -69,7 +69,7 @@ def test_a_dask_worker_killed_mid_sweep_loses_no_run() -> None:
 
         table = hybrid.sweep(hybrid.load_text(WAVE), t_end=T_END, grid={"w": W},
                              scheduler=client, batch=1, summaries=SUMMARIES, max_step=0.002,
-                             progress=progress)  # fmt: skip
+                             progress=progress, backend="scipy")  # slow: killed mid-sweep  # fmt: skip
     assert killed, "the sweep ended before a worker could be killed"
     assert table.complete and not table.failed()
     assert table.rows == reference.rows
@@ -100,7 +100,7 @@ def _losing_sweep(monkeypatch: pytest.MonkeyPatch, lose: list[int], **kwargs: An
     executor = Losing(lose)
     monkeypatch.setattr("hybrid.campaigns.sweep.executor_for", lambda *a, **k: executor)
     table = sweep(hybrid.load_text(WAVE), T_END, grid={"w": W}, summaries=SUMMARIES,
-                  max_step=0.002, **kwargs)  # fmt: skip
+                  max_step=0.002, backend="scipy", **kwargs)  # fmt: skip
     return table, executor
 
 

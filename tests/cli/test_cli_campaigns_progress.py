@@ -27,7 +27,7 @@ requirements:
   - {name: bounded, always: "x <= 2"}
 """
 # x = sin(w t) / w: above 0.2 for w < 5 (4 of the 20 runs of w = 1..20 violate `small`)
-RUN = ["--t-end", "5", "--max-step", "0.01", "--workers", "0"]
+RUN = ["--t-end", "5", "--max-step", "0.01", "--workers", "0", "--backend", "scipy"]  # slow enough to draw
 
 
 class FakeTerminal(io.StringIO):
