@@ -39,7 +39,7 @@ from hybrid.campaigns.runs import (
     simulate_quietly,
 )
 from hybrid.campaigns.space import SAMPLERS, Axis, ranges_axes, unit_samples
-from hybrid.campaigns.sweep import campaign_settings, executor_for, hard_limit
+from hybrid.campaigns.sweep import campaign_backend, campaign_settings, executor_for, hard_limit
 from hybrid.campaigns.targets import Constant, check_names, split
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
@@ -184,8 +184,7 @@ def falsify(
     (True, True, True)
     """
     chosen, solver = campaign_settings("falsify", settings, t_end, solver)
-    announce = bool(backend or chosen.backend)  # auto asked for: say what it chose
-    t_end, backend = chosen.t_end, backend or chosen.backend or "auto"
+    t_end, (backend, announce) = chosen.t_end, campaign_backend(backend, chosen)
     if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
         raise UsageError(f"budget must be a whole number >= 1, got {budget!r}")
     if not 0.0 < global_share <= 1.0:

@@ -89,6 +89,22 @@ def campaign_settings(
     return chosen, {k: v for k, v in options.items() if v != DEFAULTS[k]}
 
 
+def campaign_backend(backend: str | None, chosen: Settings) -> tuple[str, bool]:
+    """The backend of a campaign's runs, and whether it was asked for.
+
+    The keyword wins, then the settings' backend; neither gives ``"auto"``, the
+    default, whose choice is then not announced (the table's metadata says it).
+
+    Examples
+    --------
+    >>> s = Settings(t_end=1.0)
+    >>> campaign_backend(None, s), campaign_backend("auto", s)
+    (('auto', False), ('auto', True))
+    """
+    asked = backend or chosen.backend
+    return asked or "auto", asked is not None
+
+
 def sweep(
     model: Automaton | System,
     t_end: float | None = None,
@@ -197,8 +213,7 @@ def sweep(
     [(0.5, 't_end', 1), (0.9, 't_end', 1)]
     """
     chosen, solver = campaign_settings("sweep", settings, t_end, solver)
-    announce = bool(backend or chosen.backend)  # auto asked for: say what it chose
-    t_end, backend = chosen.t_end, backend or chosen.backend or "auto"
+    t_end, (backend, announce) = chosen.t_end, campaign_backend(backend, chosen)
     if parameters:
         model = model.with_parameters(dict(parameters))
     system = as_system(model)  # the one model type below; the user's model goes to the workers
