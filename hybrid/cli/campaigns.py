@@ -58,10 +58,9 @@ def add_campaign_commands(
     p.add_argument("--summary", action="append", default=[], metavar="KIND:NAME",
                    help="a column per run: max:x, min:x, last:x, mean:x, jumps:EDGE, jump_t:K")  # fmt: skip
     _common(p, types)
-    from hybrid.simulation.settings import BACKENDS
+    from hybrid.simulation.settings import CHOICES  # auto: hybrid.campaigns.choosing
 
-    campaign_backends = (*BACKENDS, "auto")  # auto: hybrid.campaigns.choosing
-    p.add_argument("--backend", default=None, choices=campaign_backends,
+    p.add_argument("--backend", default="auto", choices=CHOICES,
                    help="scipy (reference), compiled (numba: one ensemble call per batch) or "
                    "auto (the default: compiled when cached or when it pays; docs/backends.md)")  # fmt: skip
     p.add_argument("--out", required=True, help="results file (.csv or .parquet)")
@@ -79,7 +78,7 @@ def add_campaign_commands(
     p.add_argument("--seed", type=int, default=0, help="seed of the global phase (default 0)")
     p.add_argument("--sampler", choices=SAMPLERS, default="lhs", help="the global design")
     _common(p, types)
-    p.add_argument("--backend", default=None, choices=campaign_backends,
+    p.add_argument("--backend", default="auto", choices=CHOICES,
                    help="scipy (reference), compiled (numba; requirements are monitored over "
                    "its steps) or auto (the default: compiled when cached or when it pays; "
                    "docs/backends.md)")  # fmt: skip
@@ -153,7 +152,7 @@ def run_sweep(args: argparse.Namespace) -> int:
             out=args.out,
             resume=args.resume,
             progress=line if line is not None else False,
-            backend=args.backend or "auto",  # the default, said on the command line
+            backend=args.backend,
         )
     if line is not None:
         line.clear()
@@ -230,7 +229,7 @@ def run_falsify(args: argparse.Namespace) -> int:
             scheduler=args.scheduler,
             run_timeout=args.run_timeout,
             progress=line if line is not None else False,
-            backend=args.backend or "auto",  # the default, said on the command line
+            backend=args.backend,
         )
     if line is not None:
         line.clear()

@@ -80,7 +80,7 @@ def build_parser() -> argparse.ArgumentParser:
     from hybrid.cli.settings import add_settings_flags
     from hybrid.export.diagrams import DIAGRAM_FORMATS
     from hybrid.export.pictures import RENDERED_FORMATS
-    from hybrid.simulation.settings import BACKENDS
+    from hybrid.simulation.settings import CHOICES
 
     parser = _Parser(
         prog="hybrid",
@@ -127,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--backend",
         default=None,
-        choices=(*BACKENDS, "auto"),
+        choices=CHOICES,
         help="scipy (reference, the default), compiled (numba, the 'fast' extra) or auto "
         "(compiled when the model is loaded already, else scipy; docs/backends.md)",
     )
