@@ -271,8 +271,8 @@ def simulate_many(
     if len(sizes) > 1:
         raise UsageError(f"parameters and initial have different numbers of rows {sorted(sizes)}")
     n = sizes.pop() if sizes else 1
-    model = system = as_system(model)  # the one model type below this entry point
-    refuse_requirements(system)
+    model = as_system(model)  # the one model type below this entry point
+    refuse_requirements(model)
     require_numba()
     check_supported(settings, None)  # a method other than RK45, given in settings
     with immediate("compiling the model (nothing was run)"):
@@ -280,7 +280,7 @@ def simulate_many(
     native = compiled.native
     params = np.tile(np.array(native.parameter_vector(model), dtype=float), (n, 1))
     for key, column in params_table.items():
-        params[:, _slot(system, compiled, key)] = column
+        params[:, _slot(model, compiled, key)] = column
     x0s = np.tile(np.array(model.initial_vector(), dtype=float), (n, 1))
     for name, column in starts.items():
         if name not in native.state_names:
