@@ -40,6 +40,7 @@ from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.simulation.monitor import watched_requirements
+from hybrid.simulation.settings import Settings
 
 __all__ = [
     "MAX_MODES",
@@ -62,7 +63,7 @@ graph, guards ignored): a larger product is the scipy backend's, which compiles 
 run meets."""
 
 
-def check_supported(settings: Any, inputs: Mapping[str, Any] | None) -> None:
+def check_supported(settings: Settings, inputs: Mapping[str, Any] | None) -> None:
     """Refuse the settings and inputs the compiled backend does not take, naming them."""
     if settings.method != METHOD:
         raise UsageError(
