@@ -22,6 +22,13 @@ itself); :func:`snapped` replaces atom ``i`` by a constant (true
 when the point is at the level). The simulator watches the oriented form and
 decides the snapped one (docs/semantics.md, "Equality guards").
 
+**On the band.** A point an event search found is on a boundary only up to
+rounding, so a guard that *sits* there (rho within the band of 0 and not
+moving) is not decided by the sign of a rounding error: :func:`within_band`
+writes the guard with each comparison whose two sides differ by at most a
+width decided as on its boundary (``<=``, ``>=``, ``==`` hold; ``<``, ``>``,
+``!=`` do not). With width 0 it is the guard itself.
+
 Examples
 --------
 >>> from hybrid.expr.parse import Scope, parse_expression
@@ -34,6 +41,9 @@ Examples
 ['1.0 - x']
 >>> to_source(oriented_rho(e, (-1,)), {"x": "x", "v": "v"})
 '_max(x - 1.0, -v)'
+>>> w = ir.Var("w", ir.PARAM)
+>>> to_source(within_band(g, w), {"h": "h", "v": "v", "w": "w"})
+'h <= w and v < -w'
 """
 
 from __future__ import annotations
@@ -50,6 +60,7 @@ __all__ = [
     "oriented_rho",
     "snapped",
     "structural_key",
+    "within_band",
 ]
 
 
@@ -205,6 +216,40 @@ def snapped(node: ir.Expr, at_level: Sequence[bool]) -> ir.Expr:
         return ir.BoolConst(bool(at_level[index]), col)
 
     return _rewrite(node, constant, True, [0])
+
+
+def within_band(node: ir.Expr, width: ir.Expr) -> ir.Expr:
+    """The guard with each comparison ``a op b`` decided as on its boundary where
+    ``|a - b| <= width``: ``a - b <= width`` for ``<=``, ``a - b < -width`` for
+    ``<``, ``|a - b| <= width`` for ``==`` (and the mirror images).
+
+    A comparison that cannot change (two numbers, one expression twice) stays as
+    it is, as in :func:`guard_to_rho`. ``width`` is an expression the caller binds
+    (the band at the point decided).
+    """
+    if isinstance(node, ir.Not):
+        return ir.Not(within_band(node.operand, width), node.col)
+    if isinstance(node, ir.BoolOp):
+        return ir.BoolOp(node.op, tuple(within_band(v, width) for v in node.values), node.col)
+    if not isinstance(node, ir.Cmp):
+        return node
+    links = [
+        _widened(op, node.operands[i], node.operands[i + 1], width, node.col)
+        for i, op in enumerate(node.ops)
+    ]
+    return links[0] if len(links) == 1 else ir.BoolOp("and", tuple(links), node.col)
+
+
+def _widened(op: str, a: ir.Expr, b: ir.Expr, width: ir.Expr, col: int) -> ir.Expr:
+    if _constant(op, a, b) is not None:
+        return ir.Cmp((op,), (a, b), col)
+    difference = _sub(a, b, col)
+    if op in ("==", "!="):
+        size = ir.Call("abs", (difference,), col)
+        return ir.Cmp(("<=" if op == "==" else ">",), (size, width), col)
+    # holds on the boundary: the far edge of the band; does not: the near edge
+    edge = width if op in ("<=", ">") else ir.Unary("-", width, col)
+    return ir.Cmp((op,), (difference, edge), col)
 
 
 def _opposite(difference: ir.Expr) -> ir.Expr:

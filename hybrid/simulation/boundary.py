@@ -5,8 +5,10 @@ A condition is decided by the sign of its ``rho`` (``<= 0`` holds) away from
 its boundary. Within a band of the boundary (``rho`` within :func:`band` of
 0) the slope of ``rho`` along the flow decides: falling means the guard is
 starting to hold; rising means it is being left and the guard is *disarmed*
-until it has been strictly false (docs/semantics.md); flat means its boolean
-form decides. Where rho is not 0 but the point the slope test steps to has a
+until it has been strictly false (docs/semantics.md); flat means it *sits* on
+its boundary, and its boolean form decides with each comparison within the
+band decided as on its boundary (non-strict holds, strict does not), not by
+the sign of a rounding error. Where rho is not 0 but the point the slope test steps to has a
 rho of exactly 0 (rho comes down to 0 and stays there: a flat zero), the
 boolean form decides at that point. Among enabled transitions the highest priority fires, ties by
 file order.
@@ -39,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from hybrid.simulation.compiled import CompiledMode, CompiledTransition
+from hybrid.simulation.forms import Sitting
 
 Fn = Callable[[float, Any], Any]
 
@@ -76,6 +79,7 @@ def slope(fn: Callable[[float, Any], float], mode: CompiledMode, t: float, x: np
 def holds_now(
     rho: Fn,
     holds: Fn,
+    sitting: Callable[[], Sitting],
     mode: CompiledMode,
     t: float,
     x: np.ndarray,
@@ -83,7 +87,8 @@ def holds_now(
     width: float,
     looked: list[tuple[float, float, np.ndarray]] | None = None,
 ) -> tuple[bool, bool]:
-    """``(enabled now, armed)`` for a guard given by its ``rho`` and boolean ``holds``.
+    """``(enabled now, armed)`` for a guard given by its ``rho`` and boolean ``holds``
+    forms; ``sitting()`` gives its form within the band (compiled when first needed).
 
     ``looked`` keeps :func:`ahead`'s point for the next guard decided at the
     same ``(mode, t, x)``: it is the same for every guard there.
@@ -112,7 +117,7 @@ def holds_now(
         return True, True
     if rate > width:
         return False, False  # on the boundary, moving away: disarm until strictly false
-    return bool(holds(t, x)), False
+    return sitting()(t, x, width), False
 
 
 def enabled_at_entry(
@@ -143,7 +148,7 @@ def enabled_at_entry(
         if tr.rho(t, x) > width and (reached is None or not tr.levels):
             armed.append(True)  # strictly false: holds_now's first answer, without its call
             continue
-        now, is_armed = holds_now(tr.rho, tr.holds, mode, t, x, True, width, looked)
+        now, is_armed = holds_now(tr.rho, tr.holds, tr.sitting, mode, t, x, True, width, looked)
         if not now and tr.levels and reached is not None:
             then = [abs(d(t, reached)) <= width_then for d in tr.levels]
             at_level = tuple(
@@ -151,8 +156,8 @@ def enabled_at_entry(
                 for d, was, key in zip(tr.levels, then, tr.level_keys, strict=True)
             )
             if any(at_level):
-                rho, holds = tr.snapped(at_level)
-                now = holds_now(rho, holds, mode, t, x, True, width, looked)[0]
+                rho, holds, sitting = tr.snapped(at_level)
+                now = holds_now(rho, holds, sitting, mode, t, x, True, width, looked)[0]
         armed.append(is_armed)
         if now:
             enabled.append(tr)
@@ -174,12 +179,12 @@ def enabled_at_event(
     for i, tr in enumerate(mode.transitions):
         if armed(i):
             at_level = tuple(abs(d(t, x)) <= width for d in tr.levels)
-            rho, holds = tr.snapped(at_level)
+            rho, holds, sitting = tr.snapped(at_level)
         elif tr.rho(t, x) <= width:
-            rho, holds = tr.rho, tr.holds
+            rho, holds, sitting = tr.rho, tr.holds, tr.sitting
         else:
             continue
-        if holds_now(rho, holds, mode, t, x, True, width, looked)[0]:
+        if holds_now(rho, holds, sitting, mode, t, x, True, width, looked)[0]:
             enabled.append(tr)
     return enabled
 
@@ -193,7 +198,7 @@ def invariant_left_at(mode: CompiledMode, t: float, x: np.ndarray) -> str | None
             return inv.name
         if value >= -width:
             rate = slope(inv.rho, mode, t, x)
-            if rate > width or (abs(rate) <= width and not inv.holds(t, x)):
+            if rate > width or (abs(rate) <= width and not inv.sitting()(t, x, width)):
                 return inv.name
     return None
 

@@ -52,7 +52,15 @@ from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext, EvalFailure, Stash, compile_function, reads_library
 from hybrid.expr.rho import guard_to_rho, level_key, levels
 from hybrid.modes import Binder, Mode, ModeView, TransitionView, mode_of
-from hybrid.simulation.forms import CompiledCondition, CompiledMode, CompiledTransition, Fn, Source
+from hybrid.simulation.forms import (
+    CompiledCondition,
+    CompiledMode,
+    CompiledTransition,
+    Fn,
+    Sitting,
+    Source,
+    sitting_form,
+)
 from hybrid.simulation.parts import Parts, signal_outputs, uses_parts
 
 __all__ = [
@@ -193,6 +201,24 @@ class CompiledModel:
         self._mode_sources[(mode, found[0][1])] = source
         return found[1]
 
+    def _widen(
+        self, name: str, what: str, ctx: CodeContext, mode: Mode
+    ) -> Callable[[ir.Expr], Sitting]:
+        """Compiles a condition decided within a band (its sitting form) when first needed."""
+        count = [0]
+
+        def widen(expr: ir.Expr) -> Sitting:
+            count[0] += 1
+            full = f"{name}_{count[0]}"
+            source = Source(what, (expr,), ctx)
+            self.sources[full] = source
+            self._mode_sources[(mode, full)] = source
+            return sitting_form(
+                expr, ctx, lambda e, c: compile_function(full, [e], c, shape="scalar")
+            )
+
+        return widen
+
     def _reset(
         self, name: str, tr: TransitionView, ctx: CodeContext, what: str, mode: Mode
     ) -> Fn:
@@ -309,6 +335,8 @@ class CompiledModel:
                     self._function(
                         f"invb_{tag}_{i}", role, what, [expr], ctx, key, shape="scalar"
                     ),
+                    widen=self._widen(f"invw_{tag}_{i}", what, ctx, key),
+                    expr=expr,
                 )
             )
         transitions = []
@@ -354,6 +382,8 @@ class CompiledModel:
                     ),
                     level_keys=tuple(level_key(d, owners) for d in differences),
                     variant=variant if differences else None,
+                    widen=self._widen(f"gw_{tag}_{i}", what, ctx, key),
+                    expr=tr.guard,
                 )
             )
         return CompiledMode(

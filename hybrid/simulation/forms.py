@@ -17,23 +17,80 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext
-from hybrid.expr.rho import guard_to_rho, oriented_rho, snapped
+from hybrid.expr.rho import guard_to_rho, oriented_rho, snapped, within_band
 from hybrid.modes import Mode, TransitionView
 
-__all__ = ["CompiledCondition", "CompiledMode", "CompiledTransition", "Fn", "Source"]
+__all__ = [
+    "CompiledCondition",
+    "CompiledMode",
+    "CompiledTransition",
+    "Fn",
+    "Sitting",
+    "Source",
+    "sitting_form",
+]
 
 Fn = Callable[[float, Any], Any]
+Sitting = Callable[[float, Any, float], bool]
+"""``(t, x, width)``: the condition with each comparison within ``width`` of its boundary
+decided as on it (:func:`hybrid.expr.rho.within_band`)."""
+
+
+def sitting_form(
+    expr: ir.Expr, ctx: CodeContext, compile_scalar: Callable[[ir.Expr, CodeContext], Fn]
+) -> Sitting:
+    """``expr`` decided within a band, compiled by ``compile_scalar`` (the width read as a
+    state after the others, under a name none of ``ctx``'s takes).
+
+    >>> from hybrid.expr.codegen import compile_function
+    >>> x = ir.Var("x", ir.STATE)
+    >>> sit = sitting_form(ir.Cmp(("<=",), (x, ir.Num(1.0))), CodeContext(states=["x"]),
+    ...                    lambda e, c: compile_function("sit", [e], c, shape="scalar"))
+    >>> sit(0.0, np.array([1.0 + 1e-15]), 1e-10), sit(0.0, np.array([1.0 + 1e-15]), 0.0)
+    (True, False)
+    """
+    taken = {*ctx.states, *ctx.signals, *ctx.inputs, *ctx.params, *ctx.functions}
+    name = "band"
+    while name in taken:
+        name += "_"
+    wide = CodeContext(**{**vars(ctx), "states": (*ctx.states, name)})
+    fn = compile_scalar(within_band(expr, ir.Var(name, ir.STATE)), wide)
+
+    def sitting(t: float, x: Any, width: float) -> bool:
+        return bool(fn(t, np.append(x, width)))
+
+    return sitting
 
 
 @dataclass
 class CompiledCondition:
-    """A guard or invariant: ``rho(t, x) <= 0`` iff ``holds(t, x)`` (off the boundary)."""
+    """A guard or invariant: ``rho(t, x) <= 0`` iff ``holds(t, x)`` (off the boundary).
+
+    ``widen`` compiles a form of it decided within a band (:data:`Sitting`), on
+    first use; without it, :meth:`sitting` is ``holds`` (rounding decides).
+    """
 
     name: str
     rho: Fn
     holds: Fn
+    widen: Callable[[ir.Expr], Sitting] | None = field(default=None, kw_only=True)
+    expr: ir.Expr | None = field(default=None, kw_only=True)
+    """The condition, for ``widen``."""
+    _sitting: Sitting | None = field(default=None, init=False, repr=False)
+
+    def sitting(self) -> Sitting:
+        """The condition decided within a band (``(t, x, width) -> bool``)."""
+        if self._sitting is None:
+            if self.widen is None or self.expr is None:
+                holds = self.holds
+                self._sitting = lambda t, x, width: bool(holds(t, x))
+            else:
+                self._sitting = self.widen(self.expr)
+        return self._sitting
 
 
 @dataclass
@@ -49,7 +106,9 @@ class CompiledTransition(CompiledCondition):
     move: tuple[int, str] | None = None
     """Of a mode's part (:mod:`~hybrid.simulation.parts`): the component's new location."""
     _oriented: dict[tuple[int, ...], Fn] = field(default_factory=dict)
-    _snapped: dict[tuple[bool, ...], tuple[Fn, Fn]] = field(default_factory=dict)
+    _snapped: dict[tuple[bool, ...], tuple[Fn, Fn, Callable[[], Sitting]]] = field(
+        default_factory=dict
+    )
 
     def oriented(self, signs: tuple[int, ...]) -> Fn:
         """Rho with level atom ``i`` read as ``signs[i] * (a - b) <= 0`` (``a == b`` for a 0).
@@ -66,21 +125,37 @@ class CompiledTransition(CompiledCondition):
             self._oriented[signs] = fn
         return fn
 
-    def snapped(self, at_level: tuple[bool, ...]) -> tuple[Fn, Fn]:
-        """``(rho, holds)`` of the guard with level atom ``i`` replaced by ``at_level[i]``."""
+    def snapped(self, at_level: tuple[bool, ...]) -> tuple[Fn, Fn, Callable[[], Sitting]]:
+        """``(rho, holds, sitting)`` of the guard with level atom ``i`` replaced by
+        ``at_level[i]`` (``sitting()`` as :meth:`sitting`)."""
         if not self.levels:
-            return self.rho, self.holds
-        pair = self._snapped.get(at_level)
-        if pair is None:
+            return self.rho, self.holds, self.sitting
+        found = self._snapped.get(at_level)
+        if found is None:
             assert self.variant is not None
             tag = "".join("y" if a else "n" for a in at_level)
             guard = snapped(self.view.guard, at_level)
-            pair = (
+            found = (
                 self.variant(tag, guard_to_rho(guard), "rho"),
                 self.variant(tag, guard, "holds"),
+                _lazy(self.widen, guard, self.sitting),
             )
-            self._snapped[at_level] = pair
-        return pair
+            self._snapped[at_level] = found
+        return found
+
+
+def _lazy(
+    widen: Callable[[ir.Expr], Sitting] | None, expr: ir.Expr, otherwise: Callable[[], Sitting]
+) -> Callable[[], Sitting]:
+    """``widen(expr)``, compiled on the first call (``otherwise()`` without ``widen``)."""
+    kept: list[Sitting] = []
+
+    def sitting() -> Sitting:
+        if not kept:
+            kept.append(widen(expr) if widen is not None else otherwise())
+        return kept[0]
+
+    return sitting
 
 
 @dataclass

@@ -33,7 +33,7 @@ True
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -47,7 +47,9 @@ from hybrid.simulation.forms import (
     CompiledMode,
     CompiledTransition,
     Fn,
+    Sitting,
     Source,
+    sitting_form,
 )
 
 if TYPE_CHECKING:
@@ -244,6 +246,8 @@ class Parts:
                     where,
                     self._scalar("inv", what, expr, ctx, key),
                     self._scalar("invb", what, expr, ctx, key),
+                    widen=self._widen(what, ctx, key),
+                    expr=expr,
                 )
             )
         transitions: list[CompiledTransition] = []
@@ -269,6 +273,8 @@ class Parts:
                     level_keys=tuple(level_key(d, [i]) for d in differences),
                     variant=variant if differences else None,
                     move=(i, edge.target),
+                    widen=self._widen(what, ctx, key),
+                    expr=view.guard,
                 )
             )
         urgent = system.qualified(i, loc_name) if loc.urgent else None
@@ -295,6 +301,18 @@ class Parts:
             found = (expr, compile_function(name, [value], ctx, shape="scalar"))
             self._conditions[cache] = found
         return found[1]
+
+    def _widen(self, what: str, ctx: CodeContext, key: Mode) -> Callable[[ir.Expr], Sitting]:
+        """Compiles a condition decided within a band (its sitting form) when first needed."""
+
+        def widen(expr: ir.Expr) -> Sitting:
+            name = self._name("sit")
+            self._what[name] = (what, (expr,), ctx, key)
+            return sitting_form(
+                expr, ctx, lambda e, c: compile_function(name, [e], c, shape="scalar")
+            )
+
+        return widen
 
     def _reset(self, tr: str, reset: Mapping[str, ir.Expr], ctx: CodeContext, key: Mode) -> Fn:
         """The reset, compiled when it first fires (most transitions never do).

@@ -6,7 +6,11 @@ Function by function (docs/semantics.md, "Deciding a guard at a point"):
   (the point the slope test looks at); :func:`slope` is ``boundary.slope``;
 - :func:`holds_now` is ``boundary.holds_now`` (band, slope test, boolean form;
   a rho that is not 0 but is exactly 0 at the point ahead, a flat zero, is
-  decided by the boolean form there);
+  decided by the boolean form there; a guard that sits on its boundary, by its
+  form within the band). The boolean forms are generated within the band
+  (:func:`hybrid.expr.rho.within_band`), its width read from the band slot of
+  the parameter vector (:func:`truth_within`): the band where a guard sits,
+  0 for the exact form;
 - :func:`enabled_at_entry` is ``boundary.enabled_at_entry``: at the instant the
   last stay stopped (its state kept in ``W_REACHED``), a guard that does not
   hold is decided again with its equality atoms snapped (at their level both
@@ -86,6 +90,7 @@ __all__ = [
     "note_failure",
     "slope",
     "step_ahead",
+    "truth_within",
     "value_checked",
 ]
 
@@ -151,9 +156,19 @@ def slope(
     return (later - value_checked(fns, f, kind, index, m, t, x, wf, wi)) / h
 
 
+def truth_within(
+    fns: Fns, f: int, t: float, x: Array, width: float, tab: Ints, wf: Array, wi: Ints,
+) -> bool:  # fmt: skip
+    """Boolean form ``f`` at ``(t, x)``, each comparison within ``width`` of its boundary
+    decided as on it (``width`` 0: the form itself)."""
+    wf[wi[W_PE] + tab[T_N_PARAMS] + 2 * tab[T_MAX_LV]] = width
+    x_c = at(x, 0)
+    return fns(OP_TRUTH, f, t, x_c, at(wf, wi[W_PE]), x_c) != 0.0
+
+
 def holds_now(
-    fns: Fns, rho_f: int, bool_f: int, kind: int, index: int, m: int, t: float, x: Array,
-    armed: bool, width: float, wf: Array, wi: Ints,
+    fns: Fns, tab: Ints, rho_f: int, bool_f: int, kind: int, index: int, m: int, t: float,
+    x: Array, armed: bool, width: float, wf: Array, wi: Ints,
 ) -> tuple[bool, bool]:  # fmt: skip
     """``(enabled now, armed)`` for a condition given by its rho and boolean forms."""
     value = value_checked(fns, rho_f, kind, index, m, t, x, wf, wi)
@@ -169,16 +184,14 @@ def holds_now(
     if further == 0.0 and value != 0.0:
         # rho comes down to exactly 0 (a flat zero: `max(h, v, 0)`, `x - x > 0 and ...`):
         # its slope says nothing about the guard; the boolean form where the flow goes does
-        a_c = at(ahead, 0)
-        now = fns(OP_TRUTH, bool_f, t + h, a_c, at(wf, wi[W_PE]), a_c) != 0.0
+        now = truth_within(fns, bool_f, t + h, ahead, 0.0, tab, wf, wi)
         return now, now
     rate = (further - value) / h
     if rate < -width:
         return True, True
     if rate > width:
         return False, False  # on the boundary, moving away: disarm until strictly false
-    x_c = at(x, 0)
-    return fns(OP_TRUTH, bool_f, t, x_c, at(wf, wi[W_PE]), x_c) != 0.0, False
+    return truth_within(fns, bool_f, t, x, width, tab, wf, wi), False
 
 
 def choose(tab: Ints, m: int, wi: Ints) -> int:
@@ -227,7 +240,7 @@ def enabled_at_entry(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
     for k in range(n_tr):
         tr = first + k
         rho_f, bool_f = tab[tab[T_TR_RHO] + tr], tab[tab[T_TR_BOOL] + tr]
-        now, armed = holds_now(fns, rho_f, bool_f, F_GUARD, tr, m, t, x, True, width, wf, wi)
+        now, armed = holds_now(fns, tab, rho_f, bool_f, F_GUARD, tr, m, t, x, True, width, wf, wi)
         lv_from, lv_to = tab[tab[T_TR_LV] + tr] - lv0, tab[tab[T_TR_LV] + tr + 1] - lv0
         if not now and same_instant and lv_to > lv_from:
             # the levels of the mode's guards where the stay stopped, then here
@@ -249,7 +262,7 @@ def enabled_at_entry(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
                     wf[snaps + a] = 1.0
             if any_level:
                 rho_f, bool_f = tab[tab[T_TR_SRHO] + tr], tab[tab[T_TR_SBOOL] + tr]
-                now = holds_now(fns, rho_f, bool_f, F_GUARD, tr, m, t, x, True, width, wf, wi)[0]
+                now = holds_now(fns, tab, rho_f, bool_f, F_GUARD, tr, m, t, x, True, width, wf, wi)[0]
         wi[wi[W_TRARMED] + k] = 1 if armed else 0
         wi[wi[W_ENABLED] + k] = 1 if now else 0
     return choose(tab, m, wi)
@@ -288,7 +301,7 @@ def enabled_at_event(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array,
             if not rho <= width:
                 continue
             rho_f, bool_f = tab[tab[T_TR_RHO] + tr], tab[tab[T_TR_BOOL] + tr]
-        if holds_now(fns, rho_f, bool_f, F_GUARD, tr, m, t, x, True, width, wf, wi)[0]:
+        if holds_now(fns, tab, rho_f, bool_f, F_GUARD, tr, m, t, x, True, width, wf, wi)[0]:
             wi[wi[W_ENABLED] + k] = 1
     return choose(tab, m, wi)
 
@@ -306,8 +319,9 @@ def invariant_left_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array
             return k
         if value >= -width:
             rate = slope(fns, rho_f, F_INVARIANT, inv, m, t, x, wf, wi)
-            x_c = at(x, 0)
-            truth = fns(OP_TRUTH, tab[tab[T_INV_BOOL] + inv], t, x_c, at(wf, wi[W_PE]), x_c)
-            if rate > width or (abs(rate) <= width and truth == 0.0):
+            if rate > width or (
+                abs(rate) <= width
+                and not truth_within(fns, tab[tab[T_INV_BOOL] + inv], t, x, width, tab, wf, wi)
+            ):
                 return k
     return -1

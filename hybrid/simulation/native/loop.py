@@ -150,7 +150,7 @@ def lay_out_work(tab: Ints, wi: Ints) -> tuple[int, int]:
     loop allocates nothing, so it needs no reference counting (numba's runtime).
     """
     d, max_tr, max_lv, max_inv = tab[T_N_STATES], tab[T_MAX_TR], tab[T_MAX_LV], tab[T_MAX_INV]
-    n_pe = tab[T_N_PARAMS] + 2 * max_lv + 1
+    n_pe = tab[T_N_PARAMS] + 2 * max_lv + 1  # parameters, level signs, snaps, the band
     sizes = (
         (W_K, 7 * d), (W_Y, d), (W_F, d), (W_YNEW, d), (W_YTMP, d), (W_XS, d), (W_Q, 4 * d),
         (W_RATE, d), (W_AHEAD, d), (W_XNEW, d), (W_TERMS, max_tr + max_inv),

@@ -31,12 +31,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hybrid.expr import ir
-from hybrid.expr.rho import guard_to_rho, level_key
+from hybrid.expr.rho import guard_to_rho, level_key, within_band
 from hybrid.simulation.native.buffers import T_MODE_TR, TAB_HEADER, TABLES
 from hybrid.simulation.native.kernel_text import JIT, Generated, kernel_source
 from hybrid.simulation.native.library import importable
 from hybrid.simulation.native.printer import body_lines
 from hybrid.simulation.native.structure import (
+    BAND_NAME,
     COMPILED_FORM,
     NativeMode,
     NativeModel,
@@ -113,6 +114,8 @@ def generate(model: NativeModel) -> Generated:
     names.update({slot_name(k): f"p[{k}]" for k in range(n_params)})
     names.update({sign_name(a): f"p[{n_params + a}]" for a in range(max_lv)})
     names.update({snap_name(a): f"p[{n_params + max_lv + a}]" for a in range(max_lv)})
+    names[BAND_NAME] = f"p[{n_params + 2 * max_lv}]"
+    band = ir.Var(BAND_NAME, ir.PARAM)
     for mode in modes:
         names.update({s: f"s_{s}" for s in mode.signals})
     forms = _Forms()
@@ -139,11 +142,11 @@ def generate(model: NativeModel) -> Generated:
             tables["TR_TARGET"].append(model.index[tr.view.target])
             tables["TR_PRIORITY"].append(tr.view.priority)
             tables["TR_RHO"].append(forms.value(mode, rho))
-            tables["TR_BOOL"].append(forms.truth(mode, tr.guard))
+            tables["TR_BOOL"].append(forms.truth(mode, within_band(tr.guard, band)))
             if tr.levels:
                 snapped = tr.snapped(first)
                 tables["TR_SRHO"].append(forms.value(mode, guard_to_rho(snapped)))
-                tables["TR_SBOOL"].append(forms.truth(mode, snapped))
+                tables["TR_SBOOL"].append(forms.truth(mode, within_band(snapped, band)))
             else:
                 tables["TR_SRHO"].append(tables["TR_RHO"][-1])
                 tables["TR_SBOOL"].append(tables["TR_BOOL"][-1])
@@ -166,7 +169,7 @@ def generate(model: NativeModel) -> Generated:
         levels += len(differences)
         for _, expr in mode.invariants:
             tables["INV_RHO"].append(forms.value(mode, guard_to_rho(expr)))
-            tables["INV_BOOL"].append(forms.truth(mode, expr))
+            tables["INV_BOOL"].append(forms.truth(mode, within_band(expr, band)))
         terms = oriented + [guard_to_rho(expr) for _, expr in mode.invariants]
         pre, items = body_lines(terms, mode.signals, names)
         watch_cases.append(pre + [f"out[{k}] = {v}" for k, v in enumerate(items)])
@@ -188,7 +191,7 @@ def generate(model: NativeModel) -> Generated:
     sizes = [len(states), len(model.columns), max_tr, max_lv, max_inv, n_params]
     header, library_modules = _header(model)
     mathlib, helpers = kernel_source(("mathlib",))
-    n_pe = n_params + 2 * max_lv + 1
+    n_pe = n_params + 2 * max_lv + 1  # parameters, level signs, snaps, the band
     out_size = max(1, len(states), len(model.columns), max_tr + max_inv, max_tr + max_lv)
     body = {
         "model_rhs": rhs_cases,

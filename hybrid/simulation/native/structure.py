@@ -99,6 +99,11 @@ def snap_name(a: int) -> str:
     return f"#z{a}"
 
 
+BAND_NAME = "#w"
+"""The IR name of the band slot: the width a boolean form is decided within
+(:func:`hybrid.expr.rho.within_band`; the kernel sets it before each call)."""
+
+
 @dataclass(frozen=True)
 class NativeTransition:
     """An outgoing transition: the reference view (names, target), its guard and levels.
