@@ -3,6 +3,9 @@
 ``python -m bench [--quick]``: --quick uses fewer repeats (for a smoke run).
 ``HYBRID_BENCH_HYLAA=PYTHON``: an interpreter with Hylaa installed, run beside
 reach on the ARCH-COMP Building instances (bench/reach_building.py; not with --quick).
+``HYBRID_BENCH_DIFFRAX=PYTHON``: an interpreter with jax and diffrax, whose ``vmap``
+ensemble of the thermostat is timed beside ``simulate_many`` (bench/diffrax_peer.py;
+also when this interpreter imports diffrax; not with --quick).
 """
 
 from __future__ import annotations
@@ -48,6 +51,12 @@ def main(argv: list[str] | None = None) -> int:
         for result in module.run(**kwargs):
             print(result.line(), json.dumps(result.extra))
             report["comparisons"].append(result.as_dict())
+    from bench import diffrax_peer
+
+    peer = None if quick else diffrax_peer.run()
+    if peer is not None:
+        print(peer.line(), json.dumps(peer.extra))
+        report["comparisons"].append(peer.as_dict())
     from bench import product_exploration
 
     # before the scaling runs, so that its peak resident memory is its own
