@@ -164,7 +164,7 @@ def step_curve(solver: OdeSolver, x0: np.ndarray | None = None) -> StepCurve:
     """The curve of ``solver``'s last accepted step (``x0``: the state at its start, if known)."""
     t0, t1 = float(solver.t_old), float(solver.t)
     x1 = solver.y.copy()
-    if type(solver) in (RK45, RK23):
+    if isinstance(solver, (RK45, RK23)):
         start = solver.y_old.copy() if x0 is None else x0
         return _PolynomialCurve(t0, t1, start, x1, solver.K.T.dot(solver.P))
     dense = solver.dense_output()
