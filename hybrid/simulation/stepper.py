@@ -76,9 +76,14 @@ class _Stepped:
     def _stepped_setup(self, fun: Callable[..., Any], float_time: bool) -> None:
         self._rhs = fun
         self._float_time = float_time
-        n_stages = len(self.C)
-        # the stage rows of A and the times of the stages, as scipy's loop reads them
-        self._stages = [(s, self.A[s][:s], float(self.C[s])) for s in range(1, n_stages)]
+        K = self.K  # written in place at every step: its views are made once
+        # per stage: the rows of K so far (transposed), its row of A and its time, as
+        # scipy's rk_step reads them (np.dot of the same views of the same arrays)
+        self._stages = [
+            (s, K[:s].T, self.A[s][:s], float(self.C[s])) for s in range(1, len(self.C))
+        ]
+        self._k_body = K[:-1].T
+        self._k_all = K.T
 
     def _step_impl(self) -> tuple[bool, str | None]:
         t = float(self.t)
@@ -94,8 +99,8 @@ class _Stepped:
         elif h_abs < min_step:
             h_abs = min_step
         fun, K, B, E = self._rhs, self.K, self.B, self.E
-        stages = self._stages
-        wrap = _identity if self._float_time else _float64
+        stages, k_body, k_all = self._stages, self._k_body, self._k_all
+        as_float = self._float_time
         step_accepted = False
         step_rejected = False
         while not step_accepted:
@@ -109,14 +114,19 @@ class _Stepped:
             h_abs = abs(h)
             # rk_step
             K[0] = self.f
-            for s, a, c in stages:
-                dy = np.dot(K[:s].T, a) * h
-                K[s] = fun(wrap(t + c * h), y + dy)
-            y_new = y + h * np.dot(K[:-1].T, B)
-            K[-1] = fun(wrap(t + h), y_new)
+            if as_float:
+                for s, k_s, a, c in stages:
+                    K[s] = fun(t + c * h, y + np.dot(k_s, a) * h)
+                y_new = y + h * np.dot(k_body, B)
+                K[-1] = fun(t + h, y_new)
+            else:
+                for s, k_s, a, c in stages:
+                    K[s] = fun(_float64(t + c * h), y + np.dot(k_s, a) * h)
+                y_new = y + h * np.dot(k_body, B)
+                K[-1] = fun(_float64(t + h), y_new)
             # the error norm (scipy's norm: np.linalg.norm is sqrt(x . x) for a real vector)
             scale = atol + np.maximum(np.abs(y), np.abs(y_new)) * rtol
-            err = np.dot(K.T, E) * h / scale
+            err = np.dot(k_all, E) * h / scale
             error_norm = math.sqrt(float(err.dot(err))) / err.size**0.5
             if error_norm < 1:
                 if error_norm == 0:
@@ -137,10 +147,6 @@ class _Stepped:
         self.h_abs = h_abs
         self.f = K[-1].copy()
         return True, None
-
-
-def _identity(t: float) -> float:
-    return t
 
 
 class SteppedRK45(_Stepped, RK45):  # type: ignore[misc]  # scipy is untyped
