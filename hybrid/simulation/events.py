@@ -126,6 +126,18 @@ def joint_watch_factory(terms: tuple[Term, ...]) -> JointFactory:
     return factory
 
 
+_PLAIN: dict[tuple[Term, ...], Factory] = {}
+"""The watch factory of each pattern of terms, as :data:`_JOINT` (made once per process)."""
+
+
+def _plain(terms: tuple[Term, ...]) -> Factory:
+    """:func:`watch_factory` of ``terms``, made once per pattern (not once per run)."""
+    found = _PLAIN.get(terms)
+    if found is None:
+        found = _PLAIN[terms] = watch_factory(terms)
+    return found
+
+
 def _joint(terms: tuple[Term, ...]) -> JointFactory:
     """:func:`joint_watch_factory` of ``terms``, made once per pattern."""
     found = _JOINT.get(terms)
@@ -218,7 +230,7 @@ class Watch:
         key = tuple(terms)
         factory = self.factories.get(key)
         if factory is None and fns:
-            factory = self.factories[key] = watch_factory(key)
+            factory = self.factories[key] = _plain(key)
         self.value = factory(fns, self.width) if factory is not None and fns else None
         mode = self.mode
         if (
