@@ -30,7 +30,14 @@ from hybrid.expr.functions import BUILTINS, Function
 from hybrid.expr.generated import define
 from hybrid.expr.printer import SourcePrinter
 
-__all__ = ["CodeContext", "EvalFailure", "Stash", "compile_function", "reads_library"]
+__all__ = [
+    "CodeContext",
+    "EvalFailure",
+    "Stash",
+    "compile_function",
+    "reads_items",
+    "reads_library",
+]
 
 _ERRORS = (ArithmeticError, ValueError, TypeError)
 
@@ -156,6 +163,24 @@ def _state_uses(
     return uses
 
 
+def _tiny(exprs: Sequence[ir.Expr], definitions: Sequence[ir.Expr], ctx: CodeContext) -> bool:
+    """True if a function of ``exprs`` reads ``x[i]`` directly (numpy scalars, not floats)."""
+    uses = _state_uses(exprs, definitions, ctx.states)
+    tiny = all(n <= 1 for n in uses.values()) and sum(uses.values()) <= 3
+    return tiny and _float_safe([*exprs, *definitions])
+
+
+def reads_items(outputs: Sequence[ir.Expr], ctx: CodeContext) -> bool:
+    """True if :func:`compile_function` of ``outputs`` (shape ``scalar``, ``list`` or
+    ``tuple``) reads the state's items ``x[i]`` directly: its values are then numpy scalars.
+    """
+    used: set[str] = set()
+    for e in outputs:
+        used |= ir.names_in(e)
+    order = evaluation_order(used, ctx.signals)
+    return bool(ctx.states) and _tiny(list(outputs), [ctx.signals[s] for s in order], ctx)
+
+
 def compile_function(
     name: str,
     outputs: Sequence[ir.Expr],
@@ -211,14 +236,13 @@ def compile_function(
         stash = share = None
     if stash is not None:
         body.append("t = _float(t)")
-    uses = _state_uses(exprs, definitions, ctx.states)
-    tiny = all(n <= 1 for n in uses.values()) and sum(uses.values()) <= 3
+    tiny = _tiny(exprs, definitions, ctx)
     if part:
         # the caller converted the state once: take the variables read, as floats
         # (an input bound to another component's state variable reads it too)
         read = set().union(*(ir.names_in(e) for e in (*exprs, *definitions)))
         body.extend(f"{names[s]} = x[{i}]" for i, s in enumerate(ctx.states) if s in read)
-    elif reset_of is None and tiny and _float_safe([*exprs, *definitions]):
+    elif reset_of is None and tiny:
         # a tiny function: index the array directly (faster than converting it)
         for i, s in enumerate(ctx.states):
             names[s] = f"x[{i}]"

@@ -49,7 +49,14 @@ from typing import Any
 from hybrid.compose import System
 from hybrid.errors import UsageError
 from hybrid.expr import ir
-from hybrid.expr.codegen import CodeContext, EvalFailure, Stash, compile_function, reads_library
+from hybrid.expr.codegen import (
+    CodeContext,
+    EvalFailure,
+    Stash,
+    compile_function,
+    reads_items,
+    reads_library,
+)
 from hybrid.expr.rho import guard_to_rho, level_key, levels
 from hybrid.modes import Binder, Mode, ModeView, TransitionView, mode_of
 from hybrid.simulation.forms import (
@@ -99,6 +106,8 @@ class CompiledModel:
         self.system = model
         self.failure = EvalFailure()
         self.flow_failure: EvalFailure = LatestFailure()
+        self.terms_failure = EvalFailure()
+        """Where a mode's ``terms`` record failures (read and cleared by the watch)."""
         self.inputs = dict(inputs or {})
         external = self._external_inputs()
         missing = [n for n in external if n not in self.inputs]
@@ -386,8 +395,34 @@ class CompiledModel:
                     expr=tr.guard,
                 )
             )
+        terms = None
+        rhos = [self._rho(tr.guard) for tr in view.transitions]
+        rhos += [self._rho(expr) for _, expr in view.invariants]
+        if len(rhos) >= 2 and not any(reads_items([e], ctx) for e in rhos):
+            # the watch's terms in one call; only where each term's own function reads
+            # floats too (a function of few state items reads numpy scalars: same values,
+            # but numpy's arithmetic does not raise where a float's does)
+            terms = self._function(
+                f"terms_{tag}",
+                "watch terms",
+                f"the guards and invariants of {view.name}",
+                rhos,
+                replace(ctx, failure=self.terms_failure),
+                key,
+                shape="tuple",
+                share=share,
+            )
         return CompiledMode(
-            view.key, view.name, rhs, outputs, invariants, transitions, view.urgent, flow
+            view.key,
+            view.name,
+            rhs,
+            outputs,
+            invariants,
+            transitions,
+            view.urgent,
+            flow,
+            terms,
+            self.terms_failure if terms is not None else None,
         )
 
 

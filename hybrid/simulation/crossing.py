@@ -129,6 +129,7 @@ def first_event(
     rows = [*curve.parts(m), curve.x1] if m > 1 else [curve.x1]
     times = [t0 + h * k / m for k in range(1, m)]
     times.append(t1)
+    curve.samples = (m, times, rows)  # the monitor's samples of the step too
     if arm is None or not watch.pending:
         fn = watch.value
         if fn is None:

@@ -50,10 +50,22 @@ def _fractions(m: int) -> np.ndarray:
     return found
 
 
+_EXPONENTS: dict[int, np.ndarray] = {}
+
+
+def _exponents(n: int) -> np.ndarray:
+    """``1, 2, ..., n`` as floats (read only; made once per ``n``)."""
+    found = _EXPONENTS.get(n)
+    if found is None:
+        found = _EXPONENTS[n] = np.arange(1, n + 1, dtype=float)
+        found.flags.writeable = False
+    return found
+
+
 class StepCurve:
     """The state over one accepted step ``[t0, t1]``: ``at(t)`` and ``many(ts)`` (rows)."""
 
-    __slots__ = ("split", "t0", "t1", "x0", "x1")
+    __slots__ = ("samples", "split", "t0", "t1", "x0", "x1")
 
     def __init__(self, t0: float, t1: float, x0: np.ndarray, x1: np.ndarray) -> None:
         self.t0 = t0
@@ -62,6 +74,9 @@ class StepCurve:
         self.x1 = x1
         self.split: tuple[int, np.ndarray] | None = None
         """The last :meth:`parts` asked for: the search and the monitor both cut the step so."""
+        self.samples: tuple[int, list[float], list[np.ndarray]] | None = None
+        """The search's samples of the whole step cut in ``m`` parts: ``(m, times, states)``,
+        the step end included (read only; the monitor takes the same samples)."""
 
     def at(self, t: float) -> np.ndarray:
         """The state at ``t`` (exactly ``x1`` at ``t1``, ``x0`` at ``t0``)."""
@@ -100,7 +115,7 @@ class _PolynomialCurve(StepCurve):
         super().__init__(t0, t1, x0, x1)
         self.h = t1 - t0
         self.q = q
-        self.powers = np.arange(1, q.shape[1] + 1, dtype=float)
+        self.powers = _exponents(q.shape[1])
 
     def at(self, t: float) -> np.ndarray:
         if t == self.t1:
@@ -164,7 +179,7 @@ def step_curve(solver: OdeSolver, x0: np.ndarray | None = None) -> StepCurve:
     """The curve of ``solver``'s last accepted step (``x0``: the state at its start, if known)."""
     t0, t1 = float(solver.t_old), float(solver.t)
     x1 = solver.y.copy()
-    if type(solver) in (RK45, RK23):
+    if isinstance(solver, (RK45, RK23)):
         start = solver.y_old.copy() if x0 is None else x0
         return _PolynomialCurve(t0, t1, start, x1, solver.K.T.dot(solver.P))
     dense = solver.dense_output()

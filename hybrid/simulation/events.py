@@ -57,7 +57,7 @@ from hybrid.expr.generated import define
 from hybrid.simulation import boundary
 from hybrid.simulation.compiled import CompiledMode, CompiledTransition
 
-__all__ = ["Watch", "orientation", "watch_factory"]
+__all__ = ["Watch", "joint_watch_factory", "orientation", "watch_factory"]
 
 Fn = Callable[[float, Any], Any]
 Factory = Callable[[Sequence[Fn], float], Fn]
@@ -85,6 +85,65 @@ def watch_factory(terms: tuple[Term, ...]) -> Factory:
     lines += ["        return v", "    return watch"]
     factory: Factory = define("make", "\n".join(lines) + "\n", {"_inf": math.inf})
     return factory
+
+
+JointFactory = Callable[[Fn, Any, Fn, float], Fn]
+
+_JOINT: dict[tuple[Term, ...], JointFactory] = {}
+"""The joint watch factory of each pattern of terms (a few per process; no user text)."""
+
+
+def joint_watch_factory(terms: tuple[Term, ...]) -> JointFactory:
+    """Source-built ``make(values, failure, each, b0)``: the watch of :func:`watch_factory`
+    from ``values(t, x)``, the tuple of every term's function's value at once.
+
+    The values are the terms' own (the same expressions compiled together, their
+    shared signals computed once), combined in the same order with the same
+    arithmetic, so the watch is the same number. Where ``values`` fails (it
+    records the failure in ``failure``, or raises), the watch is ``each(t, x)``,
+    the terms one by one, which record the failure as they always do.
+    """
+    lines = [
+        "def make(_values, _failure, _each, _b0):",
+        "    def watch(t, x):",
+        "        try:",
+        "            _v = _values(t, x)",
+        "        except Exception:",
+        "            return _each(t, x)",
+        "        if _failure.error is not None:",
+        "            _failure.clear()",
+        "            return _each(t, x)",
+        "        v = _inf",
+    ]
+    for i, (sign, shifted) in enumerate(terms):
+        lines += [
+            f"        w = {'-' if sign < 0 else ''}_v[{i}]{' + _b0' if shifted else ''}",
+            "        if w < v:",
+            "            v = w",
+        ]
+    lines += ["        return v", "    return watch"]
+    factory: JointFactory = define("make", "\n".join(lines) + "\n", {"_inf": math.inf})
+    return factory
+
+
+_PLAIN: dict[tuple[Term, ...], Factory] = {}
+"""The watch factory of each pattern of terms, as :data:`_JOINT` (made once per process)."""
+
+
+def _plain(terms: tuple[Term, ...]) -> Factory:
+    """:func:`watch_factory` of ``terms``, made once per pattern (not once per run)."""
+    found = _PLAIN.get(terms)
+    if found is None:
+        found = _PLAIN[terms] = watch_factory(terms)
+    return found
+
+
+def _joint(terms: tuple[Term, ...]) -> JointFactory:
+    """:func:`joint_watch_factory` of ``terms``, made once per pattern."""
+    found = _JOINT.get(terms)
+    if found is None:
+        found = _JOINT[terms] = joint_watch_factory(terms)
+    return found
 
 
 def orientation(
@@ -171,8 +230,20 @@ class Watch:
         key = tuple(terms)
         factory = self.factories.get(key)
         if factory is None and fns:
-            factory = self.factories[key] = watch_factory(key)
+            factory = self.factories[key] = _plain(key)
         self.value = factory(fns, self.width) if factory is not None and fns else None
+        mode = self.mode
+        if (
+            self.value is not None
+            and mode.terms is not None
+            and all(
+                not tr.levels or side is None
+                for tr, side in zip(mode.transitions, self.signs, strict=True)
+            )
+        ):
+            # every term is its plain rho: take them all from one call of the mode's terms
+            joint = _joint(key)
+            self.value = joint(mode.terms, mode.terms_failure, self.value, self.width)
         self.pending = (
             None in self.signs
             or not all(self.inv_armed)

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from hybrid.expr import ir
-from hybrid.expr.codegen import CodeContext
+from hybrid.expr.codegen import CodeContext, EvalFailure
 from hybrid.expr.rho import guard_to_rho, oriented_rho, snapped, within_band
 from hybrid.modes import Mode, TransitionView
 
@@ -171,6 +171,12 @@ class CompiledMode:
     flow: Fn | None = None
     """What the solver steps, if not ``rhs``: ``rhs`` keeping its signals for the watch
     and the outputs at the step's end (:class:`~hybrid.expr.codegen.Stash`)."""
+    terms: Fn | None = None
+    """Every transition's ``rho`` then every invariant's ``rho``, in one function (a tuple):
+    the signals they share computed once (:class:`~hybrid.simulation.events.Watch`). It
+    records failures in ``terms_failure``, never the model's: on a failure the watch
+    evaluates the functions one by one instead, which record it as they always did."""
+    terms_failure: EvalFailure | None = None
 
 
 @dataclass(frozen=True)

@@ -626,6 +626,9 @@ def _grid(curve: StepCurve, a: float, b: float, spacing: float) -> tuple[list[fl
     """The samples after ``a`` up to ``b`` (included) of the part ``[a, b]`` of ``curve``'s step."""
     m = parts(b - a, spacing)
     if a == curve.t0 and b == curve.t1:
+        samples = curve.samples
+        if samples is not None and samples[0] == m:  # the search's: the same times and states
+            return samples[1], samples[2]
         times = [a + (b - a) * k / m for k in range(1, m)]
         rows: list[Any] = list(curve.parts(m)) if m > 1 else []
     else:

@@ -45,6 +45,7 @@ from hybrid.simulation.failures import describe_failure
 from hybrid.simulation.interrupts import Interrupts
 from hybrid.simulation.recorder import Recorder
 from hybrid.simulation.settings import Settings
+from hybrid.simulation.stepper import stepped
 
 __all__ = [
     "CRAWL_DROP",
@@ -110,6 +111,7 @@ class StayIntegrator:
         self.interrupts = interrupts
         self.tick = tick
         self.solver_class = SOLVERS[settings.method]
+        self.stepped_class = stepped(self.solver_class)
         self.spacing = (settings.t_end - settings.t_start) / HORIZON_SAMPLES
         self.last_step: float | None = None
 
@@ -210,8 +212,14 @@ class StayIntegrator:
                 f"the flow of {mode.name} gives {bad}' = {value} (at t={t0:.9g})",
             )
         settings = self.settings
+        kwargs: dict[str, Any] = {}
+        solver_class = self.solver_class
+        if self.stepped_class is not None and x0.dtype == np.float64:
+            # the same steps, bit for bit, without scipy's per-step wrapping (stepper)
+            solver_class = self.stepped_class
+            kwargs["float_time"] = mode.flow is not None
         try:
-            return self.solver_class(
+            return solver_class(
                 mode.rhs if mode.flow is None else mode.flow,
                 t0,
                 x0,
@@ -220,6 +228,7 @@ class StayIntegrator:
                 atol=settings.atol,
                 max_step=settings.max_step,
                 first_step=self._first_step(t0),
+                **kwargs,
             )
         except _SOLVER_ERRORS as exc:
             return self._gave_up(mode, t0, x0, f"solver could not start: {exc}")
