@@ -121,14 +121,18 @@ def _start_key(
     initial_location: str | None,
     t_start: float,
 ) -> tuple[Any, ...] | None:
-    """The cache key of a start, or None for overrides that are not plain numbers and names.
+    """The cache key of a start without inputs, or None for overrides that are not plain
+    numbers and names.
 
     Values are keyed by their type and exact bits (``float.hex``): ``-0.0`` and
-    ``0.0``, equal as numbers, start differently.
+    ``0.0``, equal as numbers, start differently. ``t_start`` is not in it: only
+    the inputs (not cached) are read at ``t_start``.
     """
+    if not initial and (initial_location is None or initial_location.__class__ is str):
+        return (id(model), (), initial_location)
     try:
         values = tuple((k, v.__class__, float(v).hex()) for k, v in (initial or {}).items())
-        key = (id(model), values, initial_location, t_start.__class__, float(t_start).hex())
+        key = (id(model), values, initial_location)
         hash(key)
     except (TypeError, ValueError, OverflowError):
         return None
