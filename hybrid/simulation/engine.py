@@ -294,7 +294,17 @@ def _one_run_backend(
 
 
 def _has_requirements(model: System) -> bool:
-    return bool(model.requirements) or any(c.automaton.requirements for c in model.components)
+    """Whether the system or a component declares a requirement (the last model without: kept)."""
+    if _PLAIN[0] is model:
+        return False
+    if model.requirements or any(c.automaton.requirements for c in model.components):
+        return True
+    _PLAIN[0] = model  # frozen: it never gains one
+    return False
+
+
+_PLAIN: list[System | None] = [None]
+"""The last model :func:`_has_requirements` found without requirements."""
 
 
 def _groups(model: System) -> list[tuple[int, ...]]:

@@ -332,8 +332,7 @@ def merged_values(
     """
     objects = (settings, t_end, names, *values)
     key = tuple(map(id, objects))
-    with _MEMO_LOCK:
-        hit = _MEMO.get(key)
+    hit = _MEMO.get(key)  # one lookup needs no lock; the updates below hold it
     if hit is not None:
         return hit[1]
     found = merged(settings, t_end, **dict(zip(names, values, strict=True)))

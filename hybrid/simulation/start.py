@@ -101,8 +101,7 @@ def describe_start(
     key = None if inputs else _start_key(model, initial, initial_location, t_start)
     if key is None:
         return _describe_start(model, inputs, initial, initial_location, t_start)
-    with _STARTS_LOCK:
-        hit = _STARTS.get(key)
+    hit = _STARTS.get(key)  # one lookup needs no lock; the updates below hold it
     if hit is None or hit[0] is not model:
         start = _describe_start(model, inputs, initial, initial_location, t_start)
         with _STARTS_LOCK:
