@@ -540,7 +540,7 @@ def run_from(
         signal_names=tuple(native.columns),
         t=pts[:, b.P_T].copy(),
         j=pts[:, b.P_J].astype(np.int64),
-        location=layout.mode_names[pts[:, b.P_M].astype(np.int64)],
+        location=layout.mode_names.take(pts[:, b.P_M].astype(np.int64)),  # take: fancy's result, sooner
         states=pts[:, b.P_X : b.P_X + d].copy(),
         signals=pts[:, b.P_X + d :].copy(),
         jumps=JumpRecords(layout, buf.jps[: oi[b.I_JUMPS]].copy(), d),
