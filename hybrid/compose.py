@@ -326,10 +326,9 @@ def as_system(model: Automaton | System) -> System:
     """
     if isinstance(model, System):
         return model
-    with _SYSTEMS_LOCK:
-        hit = _SYSTEMS.get(id(model))
-        if hit is not None and hit[0] is model:
-            return hit[1]
+    hit = _SYSTEMS.get(id(model))  # one lookup needs no lock; the updates below hold it
+    if hit is not None and hit[0] is model:
+        return hit[1]
     system = System(
         model.name,
         (Component(model.name, model, model.position),),

@@ -82,6 +82,36 @@ class BoundExcursion:
 
 _FMIN, _FMAX = np.fmin.reduce, np.fmax.reduce
 
+_Check = tuple[int, StateVar, float, float]
+"""A bounded variable's column, the variable, and the values beyond which a point is out."""
+_PLAN: list[tuple[Any, ...] | None] = [None]
+"""``(declared, names, rtol, atol, checks)`` of the last :func:`_checks` kept (tuples only)."""
+
+
+def _checks(declared: Sequence[StateVar], names: Sequence[str], rtol: float,
+            atol: float) -> list[_Check]:  # fmt: skip
+    """The bounded variables of ``declared`` among ``names``: column, variable, limits.
+
+    The answer for the same tuples (the very objects: a model's are frozen) and
+    tolerances as the last call's is that call's (a loop of runs asks again
+    and again).
+    """
+    last = _PLAN[0]
+    if last is not None and last[0] is declared and last[1] is names and last[2] == rtol \
+            and last[3] == atol:  # fmt: skip
+        checks: list[_Check] = last[4]
+        return checks
+    checks = []
+    for var in declared:
+        if (math.isinf(var.lower) and math.isinf(var.upper)) or var.name not in names:
+            continue
+        low = var.lower - (atol + rtol * abs(var.lower))
+        high = var.upper + (atol + rtol * abs(var.upper))
+        checks.append((names.index(var.name), var, low, high))
+    if declared.__class__ is tuple and names.__class__ is tuple:
+        _PLAN[0] = (declared, names, rtol, atol, checks)  # one tuple, replaced at once
+    return checks
+
 
 def bound_excursions(
     declared: Sequence[StateVar],
@@ -98,14 +128,13 @@ def bound_excursions(
     A non-finite value is not an excursion: the run ends ``nonfinite`` and says so.
     """
     found: list[BoundExcursion] = []
-    for var in declared:
-        if (math.isinf(var.lower) and math.isinf(var.upper)) or var.name not in names:
+    for k, var, low, high in _checks(declared, names, rtol, atol):
+        column = states[:, k]
+        # its extremes (NaN left out) within: no point beyond (half the cost); an infinite
+        # side cannot be passed, so its extreme is not looked for
+        if column.size == 0 or not ((low != -math.inf and _FMIN(column) < low)
+                                    or (high != math.inf and _FMAX(column) > high)):  # fmt: skip
             continue
-        column = states[:, names.index(var.name)]
-        low = var.lower - (atol + rtol * abs(var.lower))
-        high = var.upper + (atol + rtol * abs(var.upper))
-        if column.size == 0 or not (_FMIN(column) < low or _FMAX(column) > high):
-            continue  # its extremes (NaN left out) within: no point beyond (half the cost)
         below = column < low
         above = column > high
         beyond = np.flatnonzero((below | above) & np.isfinite(column))

@@ -14,6 +14,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable, Mapping
 from dataclasses import replace
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -35,10 +36,14 @@ from hybrid.simulation.monitor import (
     with_group_requirements,
 )
 from hybrid.simulation.result import Run
-from hybrid.simulation.settings import Settings, finite_number, merged
+from hybrid.simulation.settings import Settings, finite_number, merged_values
 from hybrid.simulation.start import describe_start, run_inputs
 
 __all__ = ["simulate"]
+
+_OPTIONS = ("t_start", "max_jumps", "rtol", "atol", "max_step", "method", "dt", "dense", "zeno",
+            "max_jumps_per_instant", "backend")  # fmt: skip
+"""The options :func:`simulate` passes to :func:`~hybrid.simulation.settings.merged_values`."""
 
 
 def simulate(
@@ -144,27 +149,20 @@ def simulate(
     >>> same.jumps[0].t == run.jumps[0].t
     True
     """
-    settings = merged(
+    settings = merged_values(
         settings,
         t_end,
-        t_start=t_start,
-        max_jumps=max_jumps,
-        rtol=rtol,
-        atol=atol,
-        max_step=max_step,
-        method=method,
-        dt=dt,
-        dense=dense,
-        zeno=zeno,
-        max_jumps_per_instant=max_jumps_per_instant,
-        backend=backend,
-    )
+        _OPTIONS,
+        (t_start, max_jumps, rtol, atol, max_step, method, dt, dense, zeno,
+         max_jumps_per_instant, backend),
+    )  # fmt: skip
     t_start, t_end = settings.t_start, settings.t_end
-    parameters = _numbers("parameter", parameters)
+    parameters = _numbers("parameter", parameters) if parameters else None
     if settings.backend != "compiled" and settings.backend != "scipy":  # not given, or auto
         settings = replace(settings, backend=_one_run_backend(model, settings, inputs))
-    initial = _numbers("initial value of", initial)
-    _check_inputs(inputs)
+    initial = _numbers("initial value of", initial) if initial else None
+    if inputs is not None:
+        _check_inputs(inputs)
     model = model.with_parameters(parameters) if parameters else model
     if isinstance(model, System) and initial_location:
         raise UsageError("initial_location applies to an automaton; set it per component")
@@ -175,7 +173,7 @@ def simulate(
     tracker = None
     if progress is not None:
         tracker = Tracker("simulate", total=t_end, unit="s", start=t_start, report=progress)
-    progressed = _updater(tracker)
+    progressed = None if tracker is None else _updater(tracker)
     if settings.backend == "compiled":
         run = _simulate_compiled(model, settings, initial, inputs, handle_sigint, progressed)
     else:
@@ -190,10 +188,10 @@ def simulate(
         rtol=settings.rtol,
         atol=settings.atol,
     )
-    warn_excursions(run.out_of_bounds)
-    termination = run.termination
+    if run.out_of_bounds:
+        warn_excursions(run.out_of_bounds)
     if tracker is not None:
-        tracker.finish(termination.t, jumps=len(run.jumps), points=len(run))
+        tracker.finish(run.termination.t, jumps=len(run.jumps), points=len(run))
     return run
 
 
@@ -245,24 +243,42 @@ def _simulate_compiled(
     progress: Callable[[float, int, int], None] | None,
 ) -> Run:
     """A run on the compiled backend; requirements monitored over its steps afterwards."""
-    from hybrid.simulation.native.engine import compiled_native, simulate_compiled
-
+    native = _NATIVE[0] if _NATIVE else _native_engine()
     # the scipy backend's compiled form only for a model with requirements (its monitor):
     # a run without any pays nothing for them
-    reference = _compiled(model, None) if _has_requirements(model) else None
-    monitor = None if reference is None else _monitor(reference, settings)
+    if not _has_requirements(model):
+        only: Run = native.simulate_compiled(
+            model, settings, initial=initial, inputs=inputs, handle_sigint=handle_sigint,
+            progress=progress,
+        )  # fmt: skip
+        return only
+    reference = _compiled(model, None)
+    monitor = _monitor(reference, settings)
     kept = settings if monitor is None or settings.dense else replace(settings, dense=True)
-    run = simulate_compiled(
+    run: Run = native.simulate_compiled(
         model, kept, initial=initial, inputs=inputs, handle_sigint=handle_sigint, progress=progress
     )
-    if monitor is not None and reference is not None:  # shown every step's curve
+    if monitor is not None:  # shown every step's curve
         from hybrid.simulation.native.monitoring import replay
 
-        run.requirements = replay(monitor, reference, compiled_native(model).layout, run)
+        run.requirements = replay(monitor, reference, native.compiled_native(model).layout, run)
     if kept is not settings:
         run.segments = []
         run.settings["dense"] = False
     return run
+
+
+_NATIVE: list[ModuleType] = []
+""":mod:`hybrid.simulation.native.engine` once imported (an import statement costs a short run's
+tenth)."""
+
+
+def _native_engine() -> ModuleType:
+    """:mod:`hybrid.simulation.native.engine`, imported on the first compiled run."""
+    from hybrid.simulation.native import engine
+
+    _NATIVE[:] = [engine]
+    return engine
 
 
 def _one_run_backend(
@@ -278,7 +294,17 @@ def _one_run_backend(
 
 
 def _has_requirements(model: System) -> bool:
-    return bool(model.requirements) or any(c.automaton.requirements for c in model.components)
+    """Whether the system or a component declares a requirement (the last model without: kept)."""
+    if _PLAIN[0] is model:
+        return False
+    if model.requirements or any(c.automaton.requirements for c in model.components):
+        return True
+    _PLAIN[0] = model  # frozen: it never gains one
+    return False
+
+
+_PLAIN: list[System | None] = [None]
+"""The last model :func:`_has_requirements` found without requirements."""
 
 
 def _groups(model: System) -> list[tuple[int, ...]]:

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import threading
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
@@ -46,6 +47,7 @@ __all__ = [
     "Settings",
     "finite_number",
     "merged",
+    "merged_values",
 ]
 
 METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
@@ -294,3 +296,51 @@ def merged(settings: Settings | None, t_end: Any = None, **options: Any) -> Sett
     if t_end is not None:
         given["t_end"] = t_end
     return replace(settings, **given) if given else settings
+
+
+_MEMO: dict[tuple[int, ...], tuple[tuple[Any, ...], Settings]] = {}
+_MEMO_SIZE = 64
+_MEMO_LOCK = threading.Lock()
+_IMMUTABLE = (float, int, bool, str, type(None))
+"""The classes of the values a remembered call may hold: immutable, compared by identity."""
+
+
+def merged_values(
+    settings: Settings | None, t_end: Any, names: tuple[str, ...], values: tuple[Any, ...]
+) -> Settings:
+    """``merged(settings, t_end, **dict(zip(names, values)))``, remembered by the objects given.
+
+    A loop of runs passes the same objects every time (constants, a held
+    ``Settings``): the answer for the same objects (each the very object of an
+    earlier call: ``is``, not ``==``) is that call's :class:`Settings` again (it
+    is frozen), found without building or checking one. Keyed by identity,
+    ``0.0`` and ``-0.0``, ``1``, ``1.0`` and ``True`` never stand for each
+    other; only floats, ints, bools, strings and ``None`` (immutable) and a
+    ``Settings`` or ``None`` as ``settings`` are remembered, and the memo holds
+    each object it keys by (no other object can take its id).
+
+    Examples
+    --------
+    >>> rtol, names = 1e-9, ("rtol", "dt")
+    >>> a = merged_values(None, 10.0, names, (rtol, None))
+    >>> merged_values(None, 10.0, names, (rtol, None)).rtol, a.t_end
+    (1e-09, 10.0)
+    >>> merged_values(None, 10.0, names, (-0.0, None))
+    Traceback (most recent call last):
+    ...
+    hybrid.errors.UsageError: rtol must be at least 2.22e-14 (100 machine epsilons) and below 1, got -0.0
+    """
+    objects = (settings, t_end, names, *values)
+    key = tuple(map(id, objects))
+    hit = _MEMO.get(key)  # one lookup needs no lock; the updates below hold it
+    if hit is not None:
+        return hit[1]
+    found = merged(settings, t_end, **dict(zip(names, values, strict=True)))
+    if (settings is None or settings.__class__ is Settings) and all(
+        v.__class__ in _IMMUTABLE for v in (t_end, *values)
+    ) and names.__class__ is tuple and all(n.__class__ is str for n in names):
+        with _MEMO_LOCK:
+            if len(_MEMO) >= _MEMO_SIZE:
+                _MEMO.pop(next(iter(_MEMO)))
+            _MEMO[key] = (objects, found)  # holds the objects: their ids stay theirs
+    return found

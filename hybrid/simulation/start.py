@@ -101,8 +101,7 @@ def describe_start(
     key = None if inputs else _start_key(model, initial, initial_location, t_start)
     if key is None:
         return _describe_start(model, inputs, initial, initial_location, t_start)
-    with _STARTS_LOCK:
-        hit = _STARTS.get(key)
+    hit = _STARTS.get(key)  # one lookup needs no lock; the updates below hold it
     if hit is None or hit[0] is not model:
         start = _describe_start(model, inputs, initial, initial_location, t_start)
         with _STARTS_LOCK:
@@ -121,14 +120,18 @@ def _start_key(
     initial_location: str | None,
     t_start: float,
 ) -> tuple[Any, ...] | None:
-    """The cache key of a start, or None for overrides that are not plain numbers and names.
+    """The cache key of a start without inputs, or None for overrides that are not plain
+    numbers and names.
 
     Values are keyed by their type and exact bits (``float.hex``): ``-0.0`` and
-    ``0.0``, equal as numbers, start differently.
+    ``0.0``, equal as numbers, start differently. ``t_start`` is not in it: only
+    the inputs (not cached) are read at ``t_start``.
     """
+    if not initial and (initial_location is None or initial_location.__class__ is str):
+        return (id(model), (), initial_location)
     try:
         values = tuple((k, v.__class__, float(v).hex()) for k, v in (initial or {}).items())
-        key = (id(model), values, initial_location, t_start.__class__, float(t_start).hex())
+        key = (id(model), values, initial_location)
         hash(key)
     except (TypeError, ValueError, OverflowError):
         return None

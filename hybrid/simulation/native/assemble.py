@@ -285,14 +285,16 @@ def termination_of(
     settings: Settings,
     buf: b.RunArrays,
     inputs: Inputs = None,
+    read: tuple[list[int], list[float]] | None = None,
 ) -> Termination:
     """How the run in ``buf`` ended, worded as the reference engine words it.
 
     A plain end (``t_end``, ``max_jumps``, ``interrupted``) where the last run
     of the same model ended is that run's record again (it is frozen): a
-    repeated run builds none.
+    repeated run builds none. ``read``: ``buf.oi`` and ``buf.of`` as lists, if
+    the caller has read them.
     """
-    oi, of = buf.oi.tolist(), buf.of.tolist()  # Python numbers, read at once
+    oi, of = (buf.oi.tolist(), buf.of.tolist()) if read is None else read  # read at once
     detail = oi[b.I_DETAIL]
     if detail == b.D_NONE:
         t = of[b.F_T]
@@ -500,8 +502,8 @@ def settings_record(settings: Settings) -> dict[str, Any]:
     return record
 
 
-def _segments(buf: b.RunArrays, d: int) -> list[tuple[int, float, float, Any]]:
-    n = int(buf.oi[b.I_STORED_STEPS])
+def _segments(buf: b.RunArrays, d: int, n: int) -> list[tuple[int, float, float, Any]]:
+    """The interpolants of the ``n`` steps stored in ``buf``, one per stay."""
     if n == 0:
         return []
     sts = buf.sts[:n]
@@ -529,8 +531,8 @@ def run_from(
     inputs: Inputs = None,
 ) -> Run:
     """The :class:`Run` recorded in ``buf`` (one run's arrays) for ``model``."""
-    n = int(buf.oi[b.I_POINTS])
-    d = len(native.state_names)
+    oi, of = buf.oi.tolist(), buf.of.tolist()  # the counts and numbers, read at once
+    n, d = oi[b.I_POINTS], len(native.state_names)
     pts = buf.pts[:n]
     return Run(
         model=model.name,
@@ -538,11 +540,11 @@ def run_from(
         signal_names=tuple(native.columns),
         t=pts[:, b.P_T].copy(),
         j=pts[:, b.P_J].astype(np.int64),
-        location=layout.mode_names[pts[:, b.P_M].astype(np.int64)],
+        location=layout.mode_names.take(pts[:, b.P_M].astype(np.int64)),  # take: fancy's result, sooner
         states=pts[:, b.P_X : b.P_X + d].copy(),
         signals=pts[:, b.P_X + d :].copy(),
-        jumps=jump_records(layout, buf),
-        termination=termination_of(native, layout, model, settings, buf, inputs),
+        jumps=JumpRecords(layout, buf.jps[: oi[b.I_JUMPS]].copy(), d),
+        termination=termination_of(native, layout, model, settings, buf, inputs, (oi, of)),
         settings=settings_record(settings),
-        segments=_segments(buf, d),
+        segments=_segments(buf, d, oi[b.I_STORED_STEPS]) if oi[b.I_STORED_STEPS] else [],
     )

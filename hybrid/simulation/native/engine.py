@@ -33,7 +33,7 @@ from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import Layout, run_from
 from hybrid.simulation.native.cache import load_generated, require_numba, seal
 from hybrid.simulation.native.features import check_supported
-from hybrid.simulation.native.interruptible import run_in_worker
+from hybrid.simulation.native.interruptible import run_here, run_in_worker
 from hybrid.simulation.native.kernel_text import kernel_module
 from hybrid.simulation.native.kernel_types import PIECES
 from hybrid.simulation.native.loop import lay_out_work
@@ -340,8 +340,9 @@ def run_arrays(
                 compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, flag)
 
             run_in_worker(call, handle_sigint, tick=_ticker(arrays, reached, progress))
-        elif watched:
-            run_in_worker(partial(compiled.run_one, p, x0, settings.t_start, m0, cfg, arrays), True)
+        elif watched:  # what run_in_worker does then, without its checks
+            run_here(partial(compiled.run_one, p, x0, settings.t_start, m0, cfg, arrays),
+                     np.zeros(1, dtype=np.int64))  # fmt: skip
         else:  # what run_in_worker does then, without its closure and thread check
             compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, np.zeros(1, dtype=np.int64))
         if not arrays.oi[b.I_OVERFLOW]:

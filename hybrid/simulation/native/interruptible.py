@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 
 from hybrid.simulation.interrupts import _ACTIVE, note_interrupt, sigint_watch
 
-__all__ = ["TICK", "run_in_worker"]
+__all__ = ["TICK", "run_here", "run_in_worker"]
 
 TICK = 0.05
 """Seconds between the waiting thread's looks at Ctrl-C and at the run's progress."""
@@ -54,7 +54,7 @@ def run_in_worker(
     """Run ``call(flag)``; with ``handle_sigint`` a first Ctrl-C sets ``flag``. True if it did.
 
     With ``handle_sigint`` in the main thread and no ``tick``, ``call`` runs
-    here while the watcher thread turns Ctrl-C into the flag (:func:`_run_here`).
+    here while the watcher thread turns Ctrl-C into the flag (:func:`run_here`).
     With ``tick`` in the main thread, ``call`` runs on the
     process's worker thread (:func:`_worker_jobs`) while the main thread waits,
     turning Ctrl-C into the flag (see the module's docstring) and calling
@@ -72,7 +72,7 @@ def run_in_worker(
         call(flag)
         return False
     if tick is None:
-        return _run_here(call, flag)
+        return run_here(call, flag)
     done: _Done = queue.SimpleQueue()
     with sigint_watch(handle_sigint) as interrupted:
         _worker_jobs().put((call, flag, done))
@@ -97,8 +97,12 @@ def run_in_worker(
     return bool(flag[0])
 
 
-def _run_here(call: Callable[[NDArray[np.int64]], None], flag: NDArray[np.int64]) -> bool:
+def run_here(call: Callable[[NDArray[np.int64]], None], flag: NDArray[np.int64]) -> bool:
     """``call(flag)`` in the main thread, a Ctrl-C meanwhile setting ``flag`` (the watcher).
+
+    What :func:`run_in_worker` does with ``handle_sigint`` in the main thread and
+    no ``tick``; a caller that knows it is there calls it directly. True if a
+    Ctrl-C came.
 
     Inside a command's :class:`~hybrid.simulation.interrupts.Interrupts` its
     handler sees each Ctrl-C as the loop returns; outside one a handler of
@@ -162,6 +166,9 @@ _WATCHER: list[tuple[int, int, int]] = []
 
 def _watcher() -> int:
     """The write end of the pipe whose bytes the watcher thread turns into the run's flag."""
+    started = _WATCHER[0] if _WATCHER else None  # without the lock: one tuple, set at once
+    if started is not None:  # this process's: a fork's child clears it (_reset_after_fork)
+        return started[2]
     with _WORKER_LOCK:
         if _WATCHER and _WATCHER[0][0] == os.getpid():
             return _WATCHER[0][2]

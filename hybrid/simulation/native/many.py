@@ -359,6 +359,9 @@ def _run_excursions(model: System, settings: Settings, names: Sequence[str],
                             atol=settings.atol)  # fmt: skip
 
 
+_FMIN, _FMAX = np.fmin.reduce, np.fmax.reduce
+
+
 def _chunk_excursions(ensemble: Ensemble, arrays: b.RunArrays, lo: int) -> None:
     """Record the runs of a chunk (from run ``lo``) whose stored points leave the bounds.
 
@@ -372,14 +375,23 @@ def _chunk_excursions(ensemble: Ensemble, arrays: b.RunArrays, lo: int) -> None:
         return
     counts = arrays.oi[:, b.I_POINTS] * (arrays.oi[:, b.I_OVERFLOW] == 0)  # overflowed: run alone
     used = int(counts.max()) if counts.size else 0  # the rows past every run's points: unread
-    valid = np.arange(used) < counts[:, None]
-    beyond = np.zeros(valid.shape[0], dtype=bool)
+    limits = []
     for var in bounded:
         x = arrays.pts[:, :used, b.P_X + names.index(var.name)]
+        low = var.lower - (settings.atol + settings.rtol * abs(var.lower))
+        high = var.upper + (settings.atol + settings.rtol * abs(var.upper))
+        # the block's extremes (NaN left out) within, the unused tails too: no run's point
+        # beyond (a tail beyond only sends the chunk to the exact look below)
+        if x.size and ((low != -math.inf and _FMIN(x, axis=None) < low)
+                       or (high != math.inf and _FMAX(x, axis=None) > high)):  # fmt: skip
+            limits.append((x, low, high))
+    if not limits:
+        return
+    valid = np.arange(used) < counts[:, None]
+    beyond = np.zeros(valid.shape[0], dtype=bool)
+    for x, low, high in limits:
         with np.errstate(invalid="ignore"):  # the unused tail of a row holds anything
-            out = (x < var.lower - (settings.atol + settings.rtol * abs(var.lower))) | (
-                x > var.upper + (settings.atol + settings.rtol * abs(var.upper))
-            )
+            out = (x < low) | (x > high)
         beyond |= np.any(out & valid, axis=1)
     d = len(names)
     for r in np.flatnonzero(beyond).tolist():
