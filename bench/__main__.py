@@ -88,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
     print("compiled backend, compile times", report["native_compile"])
     from bench import backend_choice
 
-    report["backend_choice"] = backend_choice.run(2 if quick else 3)
+    report["backend_choice"] = backend_choice.run(2 if quick else 5)
     print("backend choice", json.dumps(report["backend_choice"]))
     report["peers"] = peers.run()
     print("peers", report["peers"])
