@@ -31,15 +31,16 @@ state: {x: {initial: 0.0}}
 locations: {on: {flow: {x: cos(w*t)}}}
 requirements: [{name: small, always: "x <= 0.2"}]
 """
-# 1250 steps a run (max_step 0.004 over 5 s): 100 to 200 ms; 24 runs on one worker
-# take 2.5 s or more, well beyond the first chunk (written a second after the first
-# row), so the test has time to stop the campaign half-way (with 500 steps a run, a
-# fast moment of the machine finished the campaign before it could). x = sin(w t) / w
-# goes above 0.2 for w < 5: some runs violate the requirement (exit 1).
+# 1250 steps a run (max_step 0.004 over 5 s): 60 to 200 ms (the engine's own RK step
+# made them cheaper); 48 runs on one worker take 3 s or more, well beyond the first
+# chunk (written a second after the first row), so the test has time to stop the
+# campaign half-way (with 24 runs of 68 ms, a fast moment of a CI machine finished the
+# campaign before its first chunk). x = sin(w t) / w goes above 0.2 for w < 5: some
+# runs violate the requirement (exit 1).
 MAX_STEP = 0.004
-ARGS = ["--t-end", "5", "--grid", "w=1:24:24", "--max-step", str(MAX_STEP), "--workers", "1"]
+ARGS = ["--t-end", "5", "--grid", "w=1:48:48", "--max-step", str(MAX_STEP), "--workers", "1"]
 ARGS += ["--quiet", "--backend", "scipy"]  # slow on purpose: auto may pick the fast one
-RUNS = 24
+RUNS = 48
 
 
 def _start(spec: Path, out: Path, *extra: str) -> subprocess.Popen[str]:
