@@ -69,8 +69,9 @@ def test_a_short_sweep_with_an_empty_cache_runs_on_scipy_and_says_so(tmp_path: P
                                 summaries=("jump_t:1",), backend="auto", handle_sigint=False)  # fmt: skip
     said = [str(n.message) for n in notes if issubclass(n.category, BackendNote)]
     assert len(said) == 1 and said[0].startswith("backend auto: scipy (2 runs would save")
+    # named: the default (auto) runs compiled in a process with the compiled code loaded
     scipy = hybrid.sweep(THERMO, 50.0, grid={"T_high": [21.0, 22.0]}, workers=0,
-                         summaries=("jump_t:1",), handle_sigint=False)  # fmt: skip
+                         summaries=("jump_t:1",), handle_sigint=False, backend="scipy")  # fmt: skip
     assert auto.rows == scipy.rows
 
 
