@@ -222,9 +222,7 @@ class CompiledModel:
             source = Source(what, (expr,), ctx)
             self.sources[full] = source
             self._mode_sources[(mode, full)] = source
-            return sitting_form(
-                expr, ctx, lambda e, c: compile_function(full, [e], c, shape="scalar")
-            )
+            return sitting_form(full, expr, ctx)
 
         return widen
 

@@ -13,6 +13,7 @@ Examples
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -20,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from hybrid.expr import ir
-from hybrid.expr.codegen import CodeContext, EvalFailure
+from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
 from hybrid.expr.rho import guard_to_rho, oriented_rho, snapped, within_band
 from hybrid.modes import Mode, TransitionView
 
@@ -40,25 +41,21 @@ Sitting = Callable[[float, Any, float], bool]
 decided as on it (:func:`hybrid.expr.rho.within_band`)."""
 
 
-def sitting_form(
-    expr: ir.Expr, ctx: CodeContext, compile_scalar: Callable[[ir.Expr, CodeContext], Fn]
-) -> Sitting:
-    """``expr`` decided within a band, compiled by ``compile_scalar`` (the width read as a
-    state after the others, under a name none of ``ctx``'s takes).
+def sitting_form(name: str, expr: ir.Expr, ctx: CodeContext) -> Sitting:
+    """``expr`` decided within a band, compiled as ``name`` (the width read as a state after
+    the others, under a name none of ``ctx``'s takes).
 
-    >>> from hybrid.expr.codegen import compile_function
     >>> x = ir.Var("x", ir.STATE)
-    >>> sit = sitting_form(ir.Cmp(("<=",), (x, ir.Num(1.0))), CodeContext(states=["x"]),
-    ...                    lambda e, c: compile_function("sit", [e], c, shape="scalar"))
+    >>> sit = sitting_form("sit", ir.Cmp(("<=",), (x, ir.Num(1.0))), CodeContext(states=["x"]))
     >>> sit(0.0, np.array([1.0 + 1e-15]), 1e-10), sit(0.0, np.array([1.0 + 1e-15]), 0.0)
     (True, False)
     """
     taken = {*ctx.states, *ctx.signals, *ctx.inputs, *ctx.params, *ctx.functions}
-    name = "band"
-    while name in taken:
-        name += "_"
-    wide = CodeContext(**{**vars(ctx), "states": (*ctx.states, name)})
-    fn = compile_scalar(within_band(expr, ir.Var(name, ir.STATE)), wide)
+    band = "band"
+    while band in taken:
+        band += "_"
+    wide = CodeContext(**{**vars(ctx), "states": (*ctx.states, band)})
+    fn = compile_function(name, [within_band(expr, ir.Var(band, ir.STATE))], wide, shape="scalar")
 
     def sitting(t: float, x: Any, width: float) -> bool:
         return bool(fn(t, np.append(x, width)))
@@ -132,30 +129,16 @@ class CompiledTransition(CompiledCondition):
             return self.rho, self.holds, self.sitting
         found = self._snapped.get(at_level)
         if found is None:
-            assert self.variant is not None
+            assert self.variant is not None and self.widen is not None
             tag = "".join("y" if a else "n" for a in at_level)
             guard = snapped(self.view.guard, at_level)
             found = (
                 self.variant(tag, guard_to_rho(guard), "rho"),
                 self.variant(tag, guard, "holds"),
-                _lazy(self.widen, guard, self.sitting),
+                functools.cache(functools.partial(self.widen, guard)),  # compiled when first used
             )
             self._snapped[at_level] = found
         return found
-
-
-def _lazy(
-    widen: Callable[[ir.Expr], Sitting] | None, expr: ir.Expr, otherwise: Callable[[], Sitting]
-) -> Callable[[], Sitting]:
-    """``widen(expr)``, compiled on the first call (``otherwise()`` without ``widen``)."""
-    kept: list[Sitting] = []
-
-    def sitting() -> Sitting:
-        if not kept:
-            kept.append(widen(expr) if widen is not None else otherwise())
-        return kept[0]
-
-    return sitting
 
 
 @dataclass

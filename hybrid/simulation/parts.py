@@ -308,9 +308,7 @@ class Parts:
         def widen(expr: ir.Expr) -> Sitting:
             name = self._name("sit")
             self._what[name] = (what, (expr,), ctx, key)
-            return sitting_form(
-                expr, ctx, lambda e, c: compile_function(name, [e], c, shape="scalar")
-            )
+            return sitting_form(name, expr, ctx)
 
         return widen
 
