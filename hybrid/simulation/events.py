@@ -75,16 +75,22 @@ def watch_factory(terms: tuple[Term, ...]) -> Factory:
     """
     lines = ["def make(_fns, _b0):"]
     lines += [f"    _f{i} = _fns[{i}]" for i in range(len(terms))]
-    lines += ["    def watch(t, x):", "        v = _inf"]
+    lines += ["    def watch(t, x):", *_least(terms, "_f{}(t, x)"), "    return watch"]
+    factory: Factory = define("make", "\n".join(lines) + "\n", {"_inf": math.inf})
+    return factory
+
+
+def _least(terms: tuple[Term, ...], value: str) -> list[str]:
+    """The watch's body from its first value on: the least of the terms, each the value
+    ``value.format(i)`` signed and shifted, returned (the one arithmetic of both factories)."""
+    lines = ["        v = _inf"]
     for i, (sign, shifted) in enumerate(terms):
         lines += [
-            f"        w = {'-' if sign < 0 else ''}_f{i}(t, x){' + _b0' if shifted else ''}",
+            f"        w = {'-' if sign < 0 else ''}{value.format(i)}{' + _b0' if shifted else ''}",
             "        if w < v:",
             "            v = w",
         ]
-    lines += ["        return v", "    return watch"]
-    factory: Factory = define("make", "\n".join(lines) + "\n", {"_inf": math.inf})
-    return factory
+    return [*lines, "        return v"]
 
 
 JointFactory = Callable[[Fn, Any, Fn, float], Fn]
@@ -113,15 +119,9 @@ def joint_watch_factory(terms: tuple[Term, ...]) -> JointFactory:
         "        if _failure.error is not None:",
         "            _failure.clear()",
         "            return _each(t, x)",
-        "        v = _inf",
+        *_least(terms, "_v[{}]"),
+        "    return watch",
     ]
-    for i, (sign, shifted) in enumerate(terms):
-        lines += [
-            f"        w = {'-' if sign < 0 else ''}_v[{i}]{' + _b0' if shifted else ''}",
-            "        if w < v:",
-            "            v = w",
-        ]
-    lines += ["        return v", "    return watch"]
     factory: JointFactory = define("make", "\n".join(lines) + "\n", {"_inf": math.inf})
     return factory
 
