@@ -18,7 +18,6 @@ from __future__ import annotations
 import importlib.util
 import json
 import os
-import statistics
 import subprocess
 import sys
 import time
@@ -29,7 +28,7 @@ import numpy as np
 
 import hybrid
 from bench.diffrax_driver import ATOL, RTOL, SWITCHES, closed_form
-from bench.harness import Comparison
+from bench.harness import Comparison, paired
 
 __all__ = ["interpreter", "run"]
 
@@ -67,29 +66,26 @@ def run(n: int = 10_000, rounds: int = 3, python: str | None = None) -> Comparis
         return hybrid.simulate_many(thermo, parameters={"init.T": starts}, **kwargs)
 
     runs = ours()  # compiled and loaded, as diffrax's first call is not timed either
-    mine, theirs, ratios, reported = [], [], [], {}
+    mine: list[float] = []
+    theirs: list[float] = []
+    reported: dict[str, Any] = {}
     for _ in range(rounds):
         reported = _theirs(python, n, 3)
         begun = time.process_time()
         ours()
         mine.append((time.process_time() - begun) / n)
         theirs.append(float(reported["per_run_s"]))
-        ratios.append(mine[-1] / theirs[-1])
     truth = np.array([closed_form(float(s)) for s in starts])
     ours_error = max(
         float(np.max(np.abs(r.jump_times - t))) for r, t in zip(runs, truth, strict=True)
     )
-    return Comparison(
-        name=f"simulate_many / diffrax vmap ensemble: {n:,} thermostat runs, per run, rtol 1e-10",
-        contender="simulate_many (compiled)",
-        baseline=str(reported["tool"]),
-        ratio_median=statistics.median(ratios),
-        ratio_min=min(ratios),
-        ratio_max=max(ratios),
-        contender_median_s=statistics.median(mine),
-        baseline_median_s=statistics.median(theirs),
-        repeats=rounds,
-        extra={
+    return paired(
+        f"simulate_many / diffrax vmap ensemble: {n:,} thermostat runs, per run, rtol 1e-10",
+        "simulate_many (compiled)",
+        str(reported["tool"]),
+        mine,
+        theirs,
+        {
             "runs": n,
             "event_time_error_s": ours_error,
             "diffrax_event_time_error_s": float(reported["max_event_time_error_s"]),

@@ -69,7 +69,8 @@ def compare(
     for _ in range(warmup):
         contender[1]()
         baseline[1]()
-    ratios, c_times, b_times = [], [], []
+    c_times: list[float] = []
+    b_times: list[float] = []
     for r in range(repeats):
         if r % 2 == 0:
             b = timer(baseline[1], inner) / per
@@ -77,19 +78,32 @@ def compare(
         else:
             c = timer(contender[1], inner) / per
             b = timer(baseline[1], inner) / per
-        ratios.append(c / b)
         c_times.append(c)
         b_times.append(b)
+    return paired(name, contender[0], baseline[0], c_times, b_times)
+
+
+def paired(
+    name: str,
+    contender: str,
+    baseline: str,
+    c_times: list[float],
+    b_times: list[float],
+    extra: dict[str, Any] | None = None,
+) -> Comparison:
+    """The comparison of times taken in pairs: ratio ``i`` is ``c_times[i] / b_times[i]``."""
+    ratios = [c / b for c, b in zip(c_times, b_times, strict=True)]
     return Comparison(
         name=name,
-        contender=contender[0],
-        baseline=baseline[0],
+        contender=contender,
+        baseline=baseline,
         ratio_median=statistics.median(ratios),
         ratio_min=min(ratios),
         ratio_max=max(ratios),
         contender_median_s=statistics.median(c_times),
         baseline_median_s=statistics.median(b_times),
-        repeats=repeats,
+        repeats=len(ratios),
+        extra=extra or {},
     )
 
 

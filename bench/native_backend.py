@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 import hybrid
-from bench.harness import Comparison, compare, time_call
+from bench.harness import Comparison, compare, paired, time_call
 
 __all__ = ["compile_times", "run", "single_runs"]
 
@@ -175,19 +175,14 @@ def _ensemble(thermo: Any, n: int, repeats: int) -> Comparison:
     s_times = [time_call(serial) / sample.size for _ in range(repeats)]
     ensemble = compiled()
     materialize = time_call(lambda: list(ensemble)) / n
-    ratios = [c / s for c, s in zip(c_times, s_times, strict=True)]
     check = hybrid.simulate(thermo, initial={"T": float(starts[-1])}, **kwargs)
-    return Comparison(
-        name=f"compiled backend: ensemble of {n:,} thermostat runs, per run",
-        contender="simulate_many (summaries)",
-        baseline="serial loop of backend='scipy' runs",
-        ratio_median=statistics.median(ratios),
-        ratio_min=min(ratios),
-        ratio_max=max(ratios),
-        contender_median_s=statistics.median(c_times),
-        baseline_median_s=statistics.median(s_times),
-        repeats=repeats,
-        extra={
+    return paired(
+        f"compiled backend: ensemble of {n:,} thermostat runs, per run",
+        "simulate_many (summaries)",
+        "serial loop of backend='scipy' runs",
+        c_times,
+        s_times,
+        {
             "throughput_gain": statistics.median(s_times) / statistics.median(c_times),
             "threads": os.cpu_count(),
             "every_Run_built_per_run_s": materialize,
