@@ -153,14 +153,51 @@ def reads_library(outputs: Sequence[ir.Expr], ctx: CodeContext) -> bool:
 def _state_uses(
     exprs: Sequence[ir.Expr], definitions: Sequence[ir.Expr], states: Sequence[str]
 ) -> dict[str, int]:
-    """How often each state variable is read by the outputs and the signals they need."""
-    wanted = set(states)
-    uses = dict.fromkeys(states, 0)
+    """How often each state variable read by the outputs and the signals they need is read."""
+    wanted = _state_index(states)
+    uses: dict[str, int] = {}
     for root in (*exprs, *definitions):
         for node in ir.walk(root):
             if isinstance(node, ir.Var) and node.kind == ir.STATE and node.name in wanted:
-                uses[node.name] += 1
+                uses[node.name] = uses.get(node.name, 0) + 1
     return uses
+
+
+_INDEXES: dict[int, tuple[Sequence[str], int, dict[str, int]]] = {}
+
+
+def _state_index(states: Sequence[str]) -> dict[str, int]:
+    """Each state variable's position in ``states``, made once per sequence: a model's
+    many functions share one sequence, and reading it whole for each would cost a
+    system of many components the square of their number."""
+    found = _INDEXES.get(id(states))
+    if found is None or found[0] is not states or found[1] != len(states):
+        if len(_INDEXES) >= 64:
+            _INDEXES.clear()
+        found = (states, len(states), {s: i for i, s in enumerate(states)})
+        _INDEXES[id(states)] = found
+    return found[2]
+
+
+class _Names(dict[str, str]):
+    """The local name of each variable, made when first looked up: an input's, else a
+    signal's, else a state's (as ``CodeContext`` lists them, the later kind first)."""
+
+    def __init__(self, ctx: CodeContext, index: Mapping[str, int]) -> None:
+        super().__init__()
+        self._ctx, self._index = ctx, index
+
+    def __missing__(self, name: str) -> str:
+        if name in self._ctx.inputs:
+            local = f"u_{name}"
+        elif name in self._ctx.signals:
+            local = f"s_{name}"
+        elif name in self._index:
+            local = f"x_{name}"
+        else:
+            raise KeyError(name)
+        self[name] = local
+        return local
 
 
 def _tiny(exprs: Sequence[ir.Expr], definitions: Sequence[ir.Expr], ctx: CodeContext) -> bool:
@@ -214,9 +251,8 @@ def compile_function(
     exprs = list(outputs)
     if reset_of is not None:
         exprs = [e for e in reset_of if e is not None]
-    names: dict[str, str] = {s: f"x_{s}" for s in ctx.states}
-    names.update({s: f"s_{s}" for s in ctx.signals})
-    names.update({s: f"u_{s}" for s in ctx.inputs})
+    index = _state_index(ctx.states)
+    names = _Names(ctx, index)
     consts: list[float] = []
     printer = SourcePrinter(names, consts)
     for pname, value in ctx.params.items():
@@ -240,12 +276,13 @@ def compile_function(
     if part:
         # the caller converted the state once: take the variables read, as floats
         # (an input bound to another component's state variable reads it too)
-        read = set().union(*(ir.names_in(e) for e in (*exprs, *definitions)))
-        body.extend(f"{names[s]} = x[{i}]" for i, s in enumerate(ctx.states) if s in read)
+        read = sorted((s for s in all_used if s in index), key=index.__getitem__)
+        body.extend(f"{names[s]} = x[{index[s]}]" for s in read)
     elif reset_of is None and tiny:
         # a tiny function: index the array directly (faster than converting it)
-        for i, s in enumerate(ctx.states):
-            names[s] = f"x[{i}]"
+        for s in all_used:
+            if s in index:
+                names[s] = f"x[{index[s]}]"
     elif ctx.states:
         targets = ", ".join(names[s] for s in ctx.states)
         body.append(f"{targets}, = x.tolist()")
