@@ -44,16 +44,20 @@ from hybrid.simulation.compiled import CompiledMode, CompiledTransition
 from hybrid.simulation.forms import Sitting
 
 Fn = Callable[[float, Any], Any]
+Looked = Callable[[], tuple[float, float, np.ndarray]]
+"""What gives :func:`ahead`'s point ``(h, t + h, x + h x')`` (:func:`looking`)."""
 
 __all__ = [
     "ahead",
     "band",
     "choose",
     "chosen_by",
+    "decide_at_entry",
     "enabled_at_entry",
     "enabled_at_event",
     "holds_now",
     "invariant_left_at",
+    "looking",
     "slope",
 ]
 
@@ -76,6 +80,19 @@ def slope(fn: Callable[[float, Any], float], mode: CompiledMode, t: float, x: np
     return float((fn(t1, x1) - fn(t, x)) / h)
 
 
+def looking(mode: CompiledMode, t: float, x: np.ndarray) -> Looked:
+    """:func:`ahead`'s point at ``(mode, t, x)``, computed when first asked for: it is the
+    same for every guard decided there."""
+    point: list[tuple[float, float, np.ndarray]] = []
+
+    def look() -> tuple[float, float, np.ndarray]:
+        if not point:
+            point.append(ahead(mode, t, x))
+        return point[0]
+
+    return look
+
+
 def holds_now(
     rho: Fn,
     holds: Fn,
@@ -85,13 +102,13 @@ def holds_now(
     x: np.ndarray,
     armed: bool,
     width: float,
-    looked: list[tuple[float, float, np.ndarray]] | None = None,
+    looked: Looked | None = None,
 ) -> tuple[bool, bool]:
     """``(enabled now, armed)`` for a guard given by its ``rho`` and boolean ``holds``
     forms; ``sitting()`` gives its form within the band (compiled when first needed).
 
-    ``looked`` keeps :func:`ahead`'s point for the next guard decided at the
-    same ``(mode, t, x)``: it is the same for every guard there.
+    ``looked`` gives :func:`ahead`'s point (:func:`looking`), when it is known or
+    shared by several guards; without it the point is computed here.
     """
     value = rho(t, x)
     if value < -width:
@@ -100,12 +117,7 @@ def holds_now(
         return False, True
     if not armed:
         return False, False
-    if looked is None:
-        h, t1, x1 = ahead(mode, t, x)
-    else:
-        if not looked:
-            looked.append(ahead(mode, t, x))
-        h, t1, x1 = looked[0]
+    h, t1, x1 = ahead(mode, t, x) if looked is None else looked()
     further = rho(t1, x1)
     if further == 0.0 and value != 0.0:
         # rho comes down to exactly 0 (a flat zero: `max(h, v, 0)`, `x - x > 0 and ...`):
@@ -118,6 +130,33 @@ def holds_now(
     if rate > width:
         return False, False  # on the boundary, moving away: disarm until strictly false
     return sitting()(t, x, width), False
+
+
+def decide_at_entry(
+    tr: CompiledTransition,
+    mode: CompiledMode,
+    t: float,
+    x: np.ndarray,
+    width: float,
+    reached: np.ndarray | None,
+    width_then: float,
+    used: Collection[str],
+    looked: Looked,
+) -> tuple[bool, bool]:
+    """``(enabled, armed)`` of one transition where a stay starts (:func:`enabled_at_entry`)."""
+    if tr.rho(t, x) > width and (reached is None or not tr.levels):
+        return False, True  # strictly false: holds_now's first answer, without its call
+    now, is_armed = holds_now(tr.rho, tr.holds, tr.sitting, mode, t, x, True, width, looked)
+    if not now and tr.levels and reached is not None:
+        then = [abs(d(t, reached)) <= width_then for d in tr.levels]
+        at_level = tuple(
+            abs(d(t, x)) <= width and was and key not in used
+            for d, was, key in zip(tr.levels, then, tr.level_keys, strict=True)
+        )
+        if any(at_level):
+            rho, holds, sitting = tr.snapped(at_level)
+            now = holds_now(rho, holds, sitting, mode, t, x, True, width, looked)[0]
+    return now, is_armed
 
 
 def enabled_at_entry(
@@ -143,21 +182,9 @@ def enabled_at_entry(
     armed: list[bool] = []
     width = band(x)
     width_then = 0.0 if reached is None else band(reached)
-    looked: list[tuple[float, float, np.ndarray]] = []
+    looked = looking(mode, t, x)
     for tr in mode.transitions:
-        if tr.rho(t, x) > width and (reached is None or not tr.levels):
-            armed.append(True)  # strictly false: holds_now's first answer, without its call
-            continue
-        now, is_armed = holds_now(tr.rho, tr.holds, tr.sitting, mode, t, x, True, width, looked)
-        if not now and tr.levels and reached is not None:
-            then = [abs(d(t, reached)) <= width_then for d in tr.levels]
-            at_level = tuple(
-                abs(d(t, x)) <= width and was and key not in used
-                for d, was, key in zip(tr.levels, then, tr.level_keys, strict=True)
-            )
-            if any(at_level):
-                rho, holds, sitting = tr.snapped(at_level)
-                now = holds_now(rho, holds, sitting, mode, t, x, True, width, looked)[0]
+        now, is_armed = decide_at_entry(tr, mode, t, x, width, reached, width_then, used, looked)
         armed.append(is_armed)
         if now:
             enabled.append(tr)
@@ -175,7 +202,7 @@ def enabled_at_event(
     """
     width = band(x)
     enabled: list[CompiledTransition] = []
-    looked: list[tuple[float, float, np.ndarray]] = []
+    looked = looking(mode, t, x)
     for i, tr in enumerate(mode.transitions):
         if armed(i):
             at_level = tuple(abs(d(t, x)) <= width for d in tr.levels)
