@@ -160,7 +160,11 @@ class CompiledModel:
         if tr.move is None:
             return self.mode(tr.view.target)
         i, location = tr.move
-        return self.mode((*mode.key[:i], location, *mode.key[i + 1 :]))
+        key = (*mode.key[:i], location, *mode.key[i + 1 :])
+        found = self._modes.get(key)
+        if found is None and self.parts is not None:  # built from ``mode``'s parts
+            found = self._modes[key] = self.parts.mode(key, mode, i)
+        return found if found is not None else self.mode(key)
 
     def _rho(self, cond: ir.Expr) -> ir.Expr:
         """``guard_to_rho(cond)``, the same object each time ``cond`` is met again."""

@@ -26,10 +26,12 @@ from hybrid.expr.rho import guard_to_rho, oriented_rho, snapped, within_band
 from hybrid.modes import Mode, TransitionView
 
 __all__ = [
+    "Assembly",
     "CompiledCondition",
     "CompiledMode",
     "CompiledTransition",
     "Fn",
+    "Part",
     "Sitting",
     "Source",
     "sitting_form",
@@ -160,6 +162,30 @@ class CompiledMode:
     records failures in ``terms_failure``, never the model's: on a failure the watch
     evaluates the functions one by one instead, which record it as they always did."""
     terms_failure: EvalFailure | None = None
+    assembly: Assembly | None = None
+    """Of a mode built from its components' parts (:mod:`~hybrid.simulation.parts`)."""
+
+
+@dataclass
+class Part:
+    """One component in one location, the locations it reads fixed: compiled once
+    (:mod:`~hybrid.simulation.parts`)."""
+
+    flow: Fn
+    signals: Fn
+    invariants: list[CompiledCondition]
+    transitions: list[CompiledTransition]
+    urgent: str | None
+
+
+@dataclass(frozen=True)
+class Assembly:
+    """A mode built from parts: its parts in component order, and the names its joined
+    right-hand side and signal outputs record their failures under."""
+
+    parts: tuple[Part, ...]
+    flow_where: str
+    signals_where: str
 
 
 @dataclass(frozen=True)

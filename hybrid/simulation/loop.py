@@ -34,6 +34,7 @@ from hybrid.simulation.failures import describe_failure
 from hybrid.simulation.interrupts import Interrupts
 from hybrid.simulation.recorder import Recorder
 from hybrid.simulation.result import Termination
+from hybrid.simulation.same_instant import InstantMemo
 from hybrid.simulation.settings import Settings
 from hybrid.simulation.stay import StayIntegrator
 from hybrid.simulation.zeno import ZenoDetector
@@ -90,6 +91,12 @@ class EventLoop:
         reached: np.ndarray | None = None
         t_reached, used = math.nan, set[str]()
         max_per_instant = settings.max_jumps_per_instant
+        # a system built from parts carries the decisions of one instant from jump to jump
+        decide = (
+            boundary.enabled_at_entry
+            if compiled.parts is None
+            else InstantMemo(compiled).enabled_at_entry
+        )
 
         while True:
             if self._failed() is not None:
@@ -98,9 +105,7 @@ class EventLoop:
                 return Termination(
                     "interrupted", t, j, "interrupted by the user", location=mode.name
                 )
-            chosen, enabled, armed = boundary.enabled_at_entry(
-                mode, t, x, reached if t == t_reached else None, used
-            )
+            chosen, enabled, armed = decide(mode, t, x, reached if t == t_reached else None, used)
             if self._failed() is not None:
                 return self._eval_failure(t, j, mode)
             if chosen is None and mode.urgent:

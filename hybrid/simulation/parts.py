@@ -32,21 +32,25 @@ True
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from hybrid.compose import System
 from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
 from hybrid.expr.rho import guard_to_rho, level_key, levels
+from hybrid.model import Automaton
 from hybrid.modes import Binder, Mode, _single, mode_of
 from hybrid.simulation.forms import (
+    Assembly,
     CompiledCondition,
     CompiledMode,
     CompiledTransition,
     Fn,
+    Part,
     Sitting,
     Source,
     sitting_form,
@@ -73,17 +77,6 @@ def uses_parts(system: System) -> bool:
     return len(system.components) >= PARTS_FROM and not system.shared_labels
 
 
-@dataclass
-class Part:
-    """One component in one location, the locations it reads fixed: compiled once."""
-
-    flow: Fn
-    signals: Fn
-    invariants: list[CompiledCondition]
-    transitions: list[CompiledTransition]
-    urgent: str | None
-
-
 class Parts:
     """The parts of a compiled model's system and the modes assembled from them."""
 
@@ -94,6 +87,14 @@ class Parts:
         comps = self.system.components
         owner = {n: i for i, c in enumerate(comps) for n in c.automaton.signal_names}
         self.readers = [self._providers(i, owner) for i in range(len(comps))]
+        self.dependents = [
+            tuple(p for p, reads in enumerate(self.readers) if i in reads) for i in range(len(comps))
+        ]
+        """``dependents[i]``: the components whose part changes when ``i`` moves (``i`` too)."""
+        self.state_slices = _slices([len(c.automaton.states) for c in comps])
+        """Each component's entries of the state vector (its part's flow, in order)."""
+        self.column_slices = _slices([_column_count(c.automaton) for c in comps])
+        """Each component's signal columns (its part's signals, in order)."""
         # each component's locations as a system names them (``comp.loc``)
         self._named = [
             {loc: self.system.qualified(i, loc) for loc in c.automaton.locations}
@@ -134,25 +135,34 @@ class Parts:
 
     # --- modes --------------------------------------------------------------------------
 
-    def mode(self, key: Mode) -> CompiledMode:
-        """Mode ``key``: its components' parts side by side."""
+    def mode(self, key: Mode, near: CompiledMode | None = None, moved: int = -1) -> CompiledMode:
+        """Mode ``key``: its components' parts side by side.
 
-        parts = [
-            self._part(i, key, tuple(key[p] for p in reads)) for i, reads in enumerate(self.readers)
-        ]
+        ``near``: a mode that differs from ``key`` only in the location of component
+        ``moved``; the parts that do not read it are ``near``'s.
+        """
+        readers = self.readers
+        if near is not None and near.assembly is not None and moved >= 0:
+            parts = list(near.assembly.parts)
+            for i in self.dependents[moved]:
+                parts[i] = self._part(i, key, tuple(key[p] for p in readers[i]))
+        else:
+            parts = [self._part(i, key, tuple(key[p] for p in reads)) for i, reads in enumerate(readers)]
         flows = [p.flow for p in parts]
         outs = [p.signals for p in parts]
         n, m = len(self.compiled.state_names), len(self.compiled.columns)
         k = len(self._keys)
         self._keys.append(key)
+        flow_where, signals_where = f"{FLOW}_{k}", f"{SIGNALS}_{k}"
         return CompiledMode(
             key,
             self._mode_name(key),
-            _joined(flows, False, self.compiled.flow_failure, f"{FLOW}_{k}", n),
-            _joined(outs, True, self.compiled.failure, f"{SIGNALS}_{k}", m),
+            _joined(flows, False, self.compiled.flow_failure, flow_where, n),
+            _joined(outs, True, self.compiled.failure, signals_where, m),
             [c for p in parts for c in p.invariants],
             [tr for p in parts for tr in p.transitions],
             tuple(p.urgent for p in parts if p.urgent is not None),
+            assembly=Assembly(tuple(parts), flow_where, signals_where),
         )
 
     def _mode_name(self, key: Mode) -> str:
@@ -358,6 +368,18 @@ def signal_outputs(system: System) -> list[ir.Expr]:
             else:
                 found.append(ir.Var(name, ir.SIGNAL))
     return found
+
+
+def _slices(sizes: list[int]) -> list[slice]:
+    """Consecutive slices of the given sizes, from 0."""
+    ends = list(itertools.accumulate(sizes))
+    return [slice(end - size, end) for size, end in zip(sizes, ends, strict=True)]
+
+
+def _column_count(a: Automaton) -> int:
+    """How many signal columns automaton ``a`` has (a vector signal has one per entry)."""
+    sizes = a.vector_sizes
+    return sum(sizes.get(name, 1) for name in a.signal_names)
 
 
 def _signals_read(expr: ir.Expr, signals: Mapping[str, ir.Expr]) -> list[str]:

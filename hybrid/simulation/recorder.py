@@ -22,6 +22,7 @@ from hybrid.simulation.dense import StepCurve
 from hybrid.simulation.layout import run_layout
 from hybrid.simulation.monitor import Monitor
 from hybrid.simulation.result import Jump, Run, Termination
+from hybrid.simulation.same_instant import signals_after
 from hybrid.simulation.settings import Settings
 
 __all__ = ["Recorder", "StayRecord"]
@@ -177,9 +178,33 @@ class Recorder:
                 chosen_by,
             )
         )
-        self.points(target, j + 1, np.array([t]), after.reshape(1, -1))
+        row = self._carried_signals(mode, chosen, target, t, before, after)
+        if row is None:
+            self.points(target, j + 1, np.array([t]), after.reshape(1, -1))
+        else:
+            self.count += 1
+            self.chunks.append((target, j + 1, np.array([t]), after.reshape(1, -1), [row]))
         if self.monitor is not None:
             self.monitor.point(target, t, after)
+
+    def _carried_signals(
+        self,
+        mode: CompiledMode,
+        chosen: CompiledTransition,
+        target: CompiledMode,
+        t: float,
+        before: np.ndarray,
+        after: np.ndarray,
+    ) -> tuple[float, ...] | None:
+        """The signals after a jump that left the state as it was, from the point stored
+        before it (modes built from parts: :func:`~hybrid.simulation.same_instant.signals_after`)."""
+        if self.compiled.parts is None or not self.chunks:
+            return None
+        last, _, ts, xs, rows = self.chunks[-1]
+        point = before.tobytes()
+        if last is not mode or ts[-1] != t or xs[-1].tobytes() != point or after.tobytes() != point:
+            return None
+        return signals_after(self.compiled, mode, chosen, target, t, after, rows[-1])
 
     def run(self, name: str, termination: Termination) -> Run:
         """The :class:`Run` of everything recorded."""
