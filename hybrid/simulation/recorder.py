@@ -113,6 +113,11 @@ class Recorder:
         """Points stored so far."""
         self.monitor: Monitor | None = None
         """The requirement monitor, if the model has requirements: it sees every point and step."""
+        self._states: tuple[bytes, dict[str, float]] = (b"", {})
+        """The last jump's state after it, as bytes and as the mapping its record holds:
+        a jump that leaves the state as it was, or starts where the last one ended, shares
+        it (a system whose components switch at one instant would otherwise keep two
+        copies of the whole state per jump)."""
 
     def start(self, mode: CompiledMode, t: float, x: np.ndarray) -> None:
         """Store the initial point of the run (hybrid time 0)."""
@@ -164,6 +169,14 @@ class Recorder:
     ) -> None:
         """Record a jump and store the post-jump point (at ``t``, hybrid time ``j + 1``)."""
         names = self.compiled.state_names
+        point = before.tobytes()
+        kept, states = self._states
+        if point != kept:
+            states = dict(zip(names, before.tolist(), strict=True))
+        start = states
+        if after.tobytes() != point:
+            point, states = after.tobytes(), dict(zip(names, after.tolist(), strict=True))
+        self._states = (point, states)
         self.jumps.append(
             Jump(
                 t,
@@ -172,8 +185,8 @@ class Recorder:
                 chosen.view.label,
                 mode.name,
                 target.name,
-                dict(zip(names, before.tolist(), strict=True)),
-                dict(zip(names, after.tolist(), strict=True)),
+                start,
+                states,
                 tuple(tr.name for tr in enabled),
                 chosen_by,
             )
