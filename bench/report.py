@@ -235,12 +235,15 @@ def _ring(c: dict[str, Any] | None) -> list[str]:
         f"Coupled ring of n thermostats to t = {c['t_end']:g} (medians of {c['repeats']} fresh "
         "processes; CPU time; memory allocated during the call):",
         "",
-        "| n | jumps | first `simulate` | second | peak memory, first | second | resident |",
-        "|---|---|---|---|---|---|---|",
+        "| n | jumps | first `simulate` | of which full collections | second | peak memory, "
+        "first | second | resident |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for r in c["rows"]:
+        gc_s = r.get("first_full_gc_s")
         lines.append(
-            f"| {r['n']} | {r['jumps']} | {r['first_cpu_s']:.3f} s | {r['second_cpu_s']:.3f} s "
+            f"| {r['n']} | {r['jumps']} | {r['first_cpu_s']:.3f} s "
+            f"| {'' if gc_s is None else f'{gc_s:.3f} s'} | {r['second_cpu_s']:.3f} s "
             f"| {r['first_peak_mb']:.1f} MB | {r['second_peak_mb']:.1f} MB "
             f"| {r['peak_rss_mb']:.0f} MB |"
         )

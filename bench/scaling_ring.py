@@ -60,16 +60,34 @@ def ring(n: int) -> hybrid.System:
 
 
 def measure(n: int, memory: bool) -> dict[str, Any]:
-    """One process's first and second ``simulate`` of the ring of ``n``: CPU s or peak MB."""
+    """One process's first and second ``simulate`` of the ring of ``n``: CPU s or peak MB.
+
+    With the CPU times, the part of each spent in the cyclic garbage collector's full
+    collections (``gc.callbacks``): each walks every object of the process, the
+    imported libraries' included, and how many a call meets depends on how much it
+    allocates, in steps.
+    """
+    import gc
     import time
     import tracemalloc
 
     hybrid.simulate(ring(2), t_end=1.0, handle_sigint=False)  # imports and warm-up
     system = ring(n)
     found: dict[str, Any] = {"n": n}
+    full = [0.0, 0.0]  # seconds in full collections, and when the current one started
+
+    def clock(phase: str, info: dict[str, Any]) -> None:
+        if info["generation"] == 2:
+            if phase == "start":
+                full[1] = time.process_time()
+            else:
+                full[0] += time.process_time() - full[1]
+
+    gc.callbacks.append(clock)
     for call in ("first", "second"):
         if memory:
             tracemalloc.start()
+        full[0] = 0.0
         start = time.process_time()
         run = hybrid.simulate(system, t_end=T_END, handle_sigint=False)
         spent = time.process_time() - start
@@ -78,7 +96,9 @@ def measure(n: int, memory: bool) -> dict[str, Any]:
             tracemalloc.stop()
         else:
             found[f"{call}_cpu_s"] = spent
+            found[f"{call}_full_gc_s"] = full[0]
         found["jumps"], found["points"] = len(run.jumps), len(run)
+    gc.callbacks.remove(clock)
     return found
 
 
@@ -116,6 +136,8 @@ def run(repeats: int = 3) -> dict[str, Any]:
                 "points": times[0]["points"],
                 "first_cpu_s": statistics.median(t["first_cpu_s"] for t in times),
                 "second_cpu_s": statistics.median(t["second_cpu_s"] for t in times),
+                "first_full_gc_s": statistics.median(t["first_full_gc_s"] for t in times),
+                "second_full_gc_s": statistics.median(t["second_full_gc_s"] for t in times),
                 "first_peak_mb": memory["first_peak_mb"],
                 "second_peak_mb": memory["second_peak_mb"],
                 "peak_rss_mb": statistics.median(t["peak_rss_mb"] for t in times),
