@@ -12,16 +12,24 @@ Examples
 >>> defs = {"p": ir.Var("k", ir.SIGNAL), "k": ir.Num(2.0)}
 >>> evaluation_order({"p"}, defs)
 ['k', 'p']
+>>> signals_read([ir.Bin("+", ir.Var("p", ir.SIGNAL), ir.Var("x", ir.STATE))], defs)
+['k', 'p']
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from graphlib import CycleError, TopologicalSorter
 
 from hybrid.expr import ir
 
-__all__ = ["evaluation_order", "find_cycle", "find_dependency_cycle", "signal_dependencies"]
+__all__ = [
+    "evaluation_order",
+    "find_cycle",
+    "find_dependency_cycle",
+    "signal_dependencies",
+    "signals_read",
+]
 
 
 def find_dependency_cycle(deps: Mapping[str, Iterable[str]]) -> list[str] | None:
@@ -73,3 +81,24 @@ def evaluation_order(needed: Iterable[str], definitions: Mapping[str, ir.Expr]) 
         return list(TopologicalSorter({n: sorted(d) for n, d in graph.items()}).static_order())
     except CycleError as exc:
         raise ValueError(f"signals form a circular definition through '{exc.args[1][0]}'") from None
+
+
+def signals_read(
+    exprs: Iterable[ir.Expr],
+    definitions: Mapping[str, ir.Expr],
+    reads: Callable[[ir.Expr], Iterable[str]] = ir.names_in,
+) -> list[str]:
+    """The defined signals ``exprs`` read, directly or through other definitions, sorted.
+
+    ``reads`` gives the names an expression reads (a caller may pass a cached one);
+    only names ``definitions`` defines are followed.
+    """
+    seen: set[str] = set()
+    todo = [n for e in exprs for n in reads(e)]
+    while todo:
+        name = todo.pop()
+        if name in seen or name not in definitions:
+            continue
+        seen.add(name)
+        todo.extend(reads(definitions[name]))
+    return sorted(seen)

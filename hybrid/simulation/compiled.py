@@ -57,6 +57,7 @@ from hybrid.expr.codegen import (
     reads_items,
     reads_library,
 )
+from hybrid.expr.dependencies import signals_read
 from hybrid.expr.rho import guard_to_rho, level_key, levels
 from hybrid.modes import Binder, Mode, ModeView, TransitionView, mode_of
 from hybrid.simulation.forms import (
@@ -260,15 +261,7 @@ class CompiledModel:
 
     def _signals_read(self, exprs: list[ir.Expr], signals: Mapping[str, ir.Expr]) -> list[str]:
         """The signals ``exprs`` read, directly or through other signals, sorted."""
-        seen: set[str] = set()
-        todo = [n for e in exprs for n in self._reads_of(e)]
-        while todo:
-            name = todo.pop()
-            if name in seen or name not in signals:
-                continue
-            seen.add(name)
-            todo.extend(self._reads_of(signals[name]))
-        return sorted(seen)
+        return signals_read(exprs, signals, self._reads_of)
 
     def _reads_of(self, expr: ir.Expr) -> frozenset[str]:
         found = self._reads.get(id(expr))

@@ -121,6 +121,7 @@ from scipy.optimize import brentq, minimize_scalar
 from hybrid.compose import System
 from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
+from hybrid.expr.dependencies import signals_read
 from hybrid.expr.rho import guard_to_rho
 from hybrid.model import Requirement
 from hybrid.modes import Binder, Mode, mode_of
@@ -229,7 +230,7 @@ class MarginTable:
             if w.component is not None:
                 predicate = self._binder(w.component, predicate)
             margin = ir.Unary("-", guard_to_rho(predicate))
-            reads = _signals_read(margin, view.signals)
+            reads = signals_read([margin], view.signals)
             key = (k, tuple((s, id(view.signals[s])) for s in reads))
             fn = self._functions.get(key)
             if fn is None:
@@ -247,19 +248,6 @@ class MarginTable:
                 self._functions[key] = fn
             found.append((k, fn))
         return found
-
-
-def _signals_read(expr: ir.Expr, signals: Any) -> list[str]:
-    """The signals ``expr`` reads, directly or through other signals, sorted."""
-    seen: set[str] = set()
-    todo = list(ir.names_in(expr))
-    while todo:
-        name = todo.pop()
-        if name in seen or name not in signals:
-            continue
-        seen.add(name)
-        todo.extend(ir.names_in(signals[name]))
-    return sorted(seen)
 
 
 _LOCK = threading.Lock()

@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING, Any
 from hybrid.compose import System
 from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
+from hybrid.expr.dependencies import signals_read
 from hybrid.expr.rho import guard_to_rho, level_key, levels
 from hybrid.model import Automaton
 from hybrid.modes import Binder, Mode, _single, mode_of
@@ -301,7 +302,7 @@ class Parts:
     ) -> Fn:
         """A condition ``expr`` compiled: its rho for the prefixes ``inv`` and ``g``, else
         itself (or with ``as_is``); reused wherever it reads the same signal definitions."""
-        reads = _signals_read(expr, ctx.signals)
+        reads = signals_read([expr], ctx.signals, _reads)
         cache = (prefix, what, id(expr), tuple((s, id(ctx.signals[s])) for s in reads))
         found = self._conditions.get(cache)
         if found is None or found[0] is not expr:
@@ -380,19 +381,6 @@ def _column_count(a: Automaton) -> int:
     """How many signal columns automaton ``a`` has (a vector signal has one per entry)."""
     sizes = a.vector_sizes
     return sum(sizes.get(name, 1) for name in a.signal_names)
-
-
-def _signals_read(expr: ir.Expr, signals: Mapping[str, ir.Expr]) -> list[str]:
-    """The signals ``expr`` reads, directly or through other signals, sorted."""
-    seen: set[str] = set()
-    todo = list(_reads(expr))
-    while todo:
-        name = todo.pop()
-        if name in seen or name not in signals:
-            continue
-        seen.add(name)
-        todo.extend(_reads(signals[name]))
-    return sorted(seen)
 
 
 def _reads(expr: ir.Expr) -> set[str]:
