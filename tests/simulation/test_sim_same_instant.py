@@ -15,6 +15,7 @@ components jump, it decides a few transitions per jump, not all of them.
 
 from __future__ import annotations
 
+import os
 import random
 from typing import Any
 
@@ -26,6 +27,8 @@ from hybrid.simulation import boundary, loop, recorder
 from hybrid.simulation.compiled import CompiledModel
 
 T_END = 6.0
+FUZZ_SYSTEMS = 400
+"""Seeded systems of 8 to 14 components compared under ``make fuzz`` (``HYBRID_FUZZ=1``)."""
 
 
 def component(i: int, n: int, rng: random.Random, broken: str = "") -> str:
@@ -100,6 +103,19 @@ def test_a_system_jumping_together_runs_the_same_with_decisions_carried(
     assert_same(carried, whole)
     times = [j.t for j in carried.jumps]
     assert len(times) - len(set(times)) >= 5  # several jumps share their instant
+
+
+@pytest.mark.fuzz
+@pytest.mark.skipif(not os.environ.get("HYBRID_FUZZ"), reason="make fuzz runs it (HYBRID_FUZZ=1)")
+def test_many_systems_run_the_same_with_decisions_carried(monkeypatch: pytest.MonkeyPatch) -> None:
+    shared = 0
+    for seed in range(100, 100 + FUZZ_SYSTEMS):
+        n = 8 + seed % 7
+        carried, whole = run_both(lambda s=seed, n=n: system(s, n), monkeypatch)
+        assert_same(carried, whole)
+        times = [j.t for j in carried.jumps]
+        shared += len(times) - len(set(times))
+    assert shared >= FUZZ_SYSTEMS  # jumps at shared instants, on average one a system
 
 
 @pytest.mark.parametrize(
