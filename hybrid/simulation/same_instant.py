@@ -76,11 +76,8 @@ _NONE: frozenset[str] = frozenset()
 class _Decided(NamedTuple):
     """One part's transitions decided at the instant."""
 
-    part: Part
     enabled: list[CompiledTransition]
     armed: list[bool]
-    looked: bool
-    """The slope test's point was asked for."""
     levels: frozenset[str]
     """The levels read by the decisions that read ``used``."""
 
@@ -227,9 +224,7 @@ class InstantMemo:
                     enabled.append(tr)
                 if tr.levels and reached is not None:
                     levels.update(tr.level_keys)
-            self._decided[i] = _Decided(
-                part, enabled, armed, bool(asked), frozenset(levels) if levels else _NONE
-            )
+            self._decided[i] = _Decided(enabled, armed, frozenset(levels) if levels else _NONE)
             if enabled:
                 self._enabling.add(i)
             if asked:
