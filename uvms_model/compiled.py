@@ -110,6 +110,39 @@ def _bad_duration_nan(t0: float, tf: float) -> Callable[[float, float], float]:
     return nan
 
 
+@overload(_functions._shared_columns, jit_options=_OPTIONS)
+def _shared_columns_each_time(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> Callable[..., Any]:
+    # the compiled form computes the columns at each call (the kept ones are the Python's)
+    def columns(
+        x: float,
+        y: float,
+        phi: float,
+        q1: float,
+        q2: float,
+        q3: float,
+        a1: float,
+        a2: float,
+        a3: float,
+        bx: float,
+        by: float,
+    ) -> Any:
+        return _functions._columns(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+
+    return columns
+
+
 @overload(_fm._unknown_activation, jit_options=_OPTIONS)
 def _unknown_activation_nan(activation: str) -> Callable[[str], float]:
     def nan(activation: str) -> float:

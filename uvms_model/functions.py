@@ -29,6 +29,7 @@ Examples
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Callable
 from functools import lru_cache
 from typing import Any
@@ -110,6 +111,40 @@ def _columns(
         x, y, phi, q1, q2, q3, a1, a2, a3, bx, by
     )
     return network_columns(x, y, (p1x, p1y), (p2x, p2y), (p3x, p3y), (ex, ey))
+
+
+_PACK = struct.Struct("11d").pack
+_LAST_COLUMNS: list[tuple[bytes, tuple[Column, ...]]] = [(b"", ())]
+"""The configuration (its eleven doubles, bit for bit) and columns :func:`_shared_columns` last computed."""
+
+
+def _shared_columns(
+    x: float,
+    y: float,
+    phi: float,
+    q1: float,
+    q2: float,
+    q3: float,
+    a1: float,
+    a2: float,
+    a3: float,
+    bx: float,
+    by: float,
+) -> tuple[Column, ...]:
+    """:func:`_columns`, kept for the configuration last asked for.
+
+    At a stored point the signals ask for the same configuration's columns up to three
+    times (the state-3 rates, the state-3 and the joint accelerations). The key is the
+    arguments' bits as doubles (a zero of the other sign is another configuration); one
+    tuple is stored at once, so a thread never reads a key with another's columns.
+    """
+    key = _PACK(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    last_key, last_columns = _LAST_COLUMNS[0]
+    if key == last_key:
+        return last_columns
+    cols = _columns(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    _LAST_COLUMNS[0] = (key, cols)
+    return cols
 
 
 def _det3(a: Column, b: Column, c: Column) -> float:
@@ -194,7 +229,7 @@ def uvms_state3(
     by: float,
 ) -> tuple[float, float, float]:
     """Kinematic state 3 (location q1): ``(xd, yd, q2d)`` from the other six rates."""
-    cols = _columns(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    cols = _shared_columns(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
     return _solve(cols, (0, 1, 4), (0.0, 0.0, phid, q1d, 0.0, q3d, xed, yed, phied))
 
 
@@ -218,7 +253,7 @@ def _acceleration_setup(
     by: float,
 ) -> tuple[tuple[Column, ...], Column]:
     """Columns of N and the bias ``N' Psi`` of the second-order closure."""
-    cols = _columns(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
+    cols = _shared_columns(x, y, phi, q1, q2, q3, a1, a2, a3, bx, by)
     p1xd, p1yd, p2xd, p2yd, p3xd, p3yd, exd, eyd = joint_point_rates(
         x, y, phi, q1, q2, q3, xd, yd, phid, q1d, q2d, q3d, a1, a2, a3, bx, by
     )

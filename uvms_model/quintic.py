@@ -144,6 +144,11 @@ def quintic_state(
     >>> quintic_state(2.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)   # held at rest after tf
     (1.0, 0.0, 0.0)
     """
+    if clamp and t > tf and tf - t0 > 0.0:
+        # held after the end: the end state alone (what _evaluate computes there), without
+        # the coefficients (most calls come long after a switch's law has ended)
+        tau = t - tf
+        return pf + tau * (vf + 0.5 * af * tau), vf + af * tau, af
     coeffs = quintic_coefficients(t0, p0, v0, a0, tf, pf, vf, af)
     return _evaluate(coeffs, t0, tf, (pf, vf, af), t, clamp)
 

@@ -218,6 +218,70 @@ def reads_items(outputs: Sequence[ir.Expr], ctx: CodeContext) -> bool:
     return bool(ctx.states) and _tiny(list(outputs), [ctx.signals[s] for s in order], ctx)
 
 
+def _memo_deps(
+    order: Sequence[str], definitions: Sequence[ir.Expr], ctx: CodeContext, steady: frozenset[str]
+) -> dict[str, tuple[str, ...]]:
+    """The signals worth a last-arguments memo, each with what its value depends on.
+
+    A signal qualifies if its definition calls a library function and reads,
+    directly or through other signals, only ``t``, numbers, parameters and the
+    ``steady`` state variables; it depends on ``t`` and those state variables
+    (its key, in a fixed order; a signal reading neither is not memoized). A
+    library function is a function of its arguments (docs/spec-language.md,
+    "Function libraries"): the same arguments give the same value.
+    """
+    reads: dict[str, frozenset[str] | None] = {}
+    memo: dict[str, tuple[str, ...]] = {}
+    for s, definition in zip(order, definitions, strict=True):
+        key = _key_of(definition, steady, reads)
+        reads[s] = key
+        if key and _calls([definition], ctx.functions):
+            memo[s] = tuple(sorted(key, key=lambda n: (n != "t", n)))
+    return memo
+
+
+def _key_of(
+    definition: ir.Expr, steady: frozenset[str], reads: Mapping[str, frozenset[str] | None]
+) -> frozenset[str] | None:
+    """``t`` and the ``steady`` state variables ``definition`` reads (``reads``: those of
+    the signals before it), or None if it reads anything else that varies."""
+    key: set[str] = set()
+    for node in ir.walk(definition):
+        if isinstance(node, ir.Var) and node.kind in (ir.PARAM, ir.CONST):
+            continue
+        if isinstance(node, ir.Var) and node.kind == ir.TIME:
+            key.add("t")
+        elif isinstance(node, ir.Var) and node.kind == ir.STATE and node.name in steady:
+            key.add(node.name)
+        elif isinstance(node, (ir.Var, ir.Index)):
+            signal = isinstance(node, ir.Index) or node.kind == ir.SIGNAL
+            found = reads.get(node.name) if signal else None  # an input, a moving state
+            if found is None:
+                return None
+            key |= found
+    return frozenset(key)
+
+
+def _memoized(
+    emitted: str, target: str, key: tuple[str, ...], names: Mapping[str, str], index: int
+) -> list[str]:
+    """``emitted`` (``target = ...``) behind memo ``index`` of its last key, compared bit for bit."""
+    values = [("t" if k == "t" else names[k]) for k in key]
+    same = " and ".join(f"{v} == _k[{i}]" for i, v in enumerate(values))
+    # equal floats of different signs are zeros: -0.0 == 0.0, but a function may tell them apart
+    signs = " and ".join(
+        f"({v} or _copysign(1.0, {v}) == _copysign(1.0, _k[{i}]))" for i, v in enumerate(values)
+    )
+    return [
+        f"_k = _m{index}[0]",
+        f"if _k and {same} and {signs}:",
+        f"    {target} = _k[-1]",
+        "else:",
+        f"    {emitted}",
+        f"    _m{index}[0] = ({', '.join(values)}, {target})",
+    ]
+
+
 def compile_function(
     name: str,
     outputs: Sequence[ir.Expr],
@@ -228,6 +292,7 @@ def compile_function(
     part: bool = False,
     stash: Stash | None = None,
     share: Stash | None = None,
+    steady: frozenset[str] = frozenset(),
 ) -> Callable[..., Any]:
     """Compile ``outputs`` into one function ``f(t, x)`` of a time and a 1-D numpy array.
 
@@ -236,6 +301,14 @@ def compile_function(
     unchanged. On a math error the function records it in ``ctx.failure`` and
     returns NaN values (or ``False`` for conditions), so the solver stops and
     the simulator can say what failed and where.
+
+    ``steady`` names the state variables the function's solver keeps unchanged
+    (their flow is 0). In a function compiled with ``stash`` (the flow a solver
+    steps), a signal that calls a library function and reads only ``t``,
+    numbers, parameters and steady state variables (directly or through such
+    signals) is reused from the last call where all of those had the same
+    values, bit for bit (:func:`_memo_deps`): a Runge-Kutta step evaluates its
+    last stage and the step end at the same ``t``, with the same steady state.
 
     ``part=True`` compiles one component's share of a larger function: ``x``
     is then the state as a list of floats (``x.tolist()``, converted once by
@@ -267,6 +340,7 @@ def compile_function(
         all_used |= ir.names_in(ctx.signals[s])
 
     body: list[str] = []
+    memos = 0
     definitions = [ctx.signals[s] for s in order]
     if part or reset_of is not None or not ctx.states:
         stash = share = None
@@ -305,11 +379,19 @@ def compile_function(
         )
     else:
         share = None
+        memo = _memo_deps(order, definitions, ctx, steady) if stash is not None else {}
         for s, definition in zip(order, definitions, strict=True):
-            body.append(f"{names[s]} = {printer.emit(definition)[0]}")
+            emitted = f"{names[s]} = {printer.emit(definition)[0]}"
+            if s in memo:
+                body.extend(_memoized(emitted, names[s], memo[s], names, memos))
+                memos += 1
+            else:
+                body.append(emitted)
     if stash is not None and order:
         stash.names = tuple(order)
-        body.append(f"_slot[0] = (_stash, t, x.tobytes(), ({', '.join(names[s] for s in order)},))")
+        body.append(
+            f"if _keep: _slot[0] = (_stash, t, x.tobytes(), ({', '.join(names[s] for s in order)},))"
+        )
 
     failed: str
     if reset_of is not None:
@@ -328,10 +410,12 @@ def compile_function(
         body.append(f"return {open_}{', '.join(items)}{close}")
         failed = f"[_nan] * {len(items)}" if shape == "list" else f"({'_nan, ' * len(items)})"
 
+    # a stashing function keeps its signals only when asked (the solver's last stage)
+    header = f"def {name}(t, x, _keep=True):" if stash is not None else f"def {name}(t, x):"
     if part:
-        lines = [f"def {name}(t, x):", *(f"    {line}" for line in body)]
+        lines = [header, *(f"    {line}" for line in body)]
     else:
-        lines = [f"def {name}(t, x):", "    try:"]
+        lines = [header, "    try:"]
         lines += [f"        {line}" for line in body]
         lines += [
             "    except _ERRORS as _e:",
@@ -351,6 +435,8 @@ def compile_function(
     }
     if stash is not None:
         scope["_slot"], scope["_stash"] = stash.slot, stash
+    for k in range(memos):
+        scope[f"_m{k}"] = [()]  # the last key and value of memo k (an empty key matches nothing)
     if share is not None:
         scope["_slot"], scope["_share"] = share.slot, share
     for fname, func in BUILTINS.items():

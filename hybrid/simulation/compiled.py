@@ -306,6 +306,11 @@ class CompiledModel:
                 key,
                 shape="list",
                 stash=stash,
+                steady=frozenset(
+                    s
+                    for s, e in zip(self.state_names, flows, strict=True)
+                    if isinstance(e, ir.Num) and e.value == 0.0
+                ),
             )
             share = self._stashes.setdefault(id(flow), stash)
         outputs_ir = signal_outputs(self.system)

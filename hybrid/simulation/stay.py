@@ -217,7 +217,7 @@ class StayIntegrator:
         if self.stepped_class is not None and x0.dtype == np.float64:
             # the same steps, bit for bit, without scipy's per-step wrapping (stepper)
             solver_class = self.stepped_class
-            kwargs["float_time"] = mode.flow is not None
+            kwargs["keeps"] = mode.flow is not None
         try:
             return solver_class(
                 mode.rhs if mode.flow is None else mode.flow,

@@ -19,7 +19,12 @@ is called directly, its list written into the stage row (the same conversion
 receives ``t`` as a numpy scalar, as from scipy, unless it is declared to take a
 float (``float_time=True``: the engine's stepped flow, which converts it first
 anyway); a numpy scalar does not raise where a float does, so the plain
-right-hand side must see what it saw before.
+right-hand side must see what it saw before. ``keeps=True`` (the stepped flow
+again, given ``t`` as a float) says that the right-hand side keeps what it
+computed for others to read at the step end
+(:class:`~hybrid.expr.codegen.Stash`) unless a third argument ``False`` says
+the point is only a stage: only the last evaluation of a step, at its end, is
+kept.
 
 Examples
 --------
@@ -73,9 +78,10 @@ class _Stepped:
     error_exponent: float
     TOO_SMALL_STEP: str
 
-    def _stepped_setup(self, fun: Callable[..., Any], float_time: bool) -> None:
+    def _stepped_setup(self, fun: Callable[..., Any], float_time: bool, keeps: bool) -> None:
         self._rhs = fun
         self._float_time = float_time
+        self._keeps = keeps
         K = self.K  # written in place at every step: its views are made once
         # per stage: the rows of K so far (transposed), its row of A and its time, as
         # scipy's rk_step reads them (np.dot of the same views of the same arrays)
@@ -100,7 +106,7 @@ class _Stepped:
             h_abs = min_step
         fun, K, B, E = self._rhs, self.K, self.B, self.E
         stages, k_body, k_all = self._stages, self._k_body, self._k_all
-        as_float = self._float_time
+        as_float, keeps = self._float_time, self._keeps
         step_accepted = False
         step_rejected = False
         while not step_accepted:
@@ -114,7 +120,12 @@ class _Stepped:
             h_abs = abs(h)
             # rk_step
             K[0] = self.f
-            if as_float:
+            if keeps:
+                for s, k_s, a, c in stages:
+                    K[s] = fun(t + c * h, y + np.dot(k_s, a) * h, False)
+                y_new = y + h * np.dot(k_body, B)
+                K[-1] = fun(t + h, y_new)
+            elif as_float:
                 for s, k_s, a, c in stages:
                     K[s] = fun(t + c * h, y + np.dot(k_s, a) * h)
                 y_new = y + h * np.dot(k_body, B)
@@ -153,20 +164,30 @@ class SteppedRK45(_Stepped, RK45):  # type: ignore[misc]  # scipy is untyped
     """scipy's ``RK45``, its step without scipy's wrapping (bit-identical; module docstring)."""
 
     def __init__(
-        self, fun: Callable[..., Any], *args: Any, float_time: bool = False, **kwargs: Any
+        self,
+        fun: Callable[..., Any],
+        *args: Any,
+        float_time: bool = False,
+        keeps: bool = False,
+        **kwargs: Any,
     ):
         super().__init__(fun, *args, **kwargs)
-        self._stepped_setup(fun, float_time)
+        self._stepped_setup(fun, float_time or keeps, keeps)
 
 
 class SteppedRK23(_Stepped, RK23):  # type: ignore[misc]  # scipy is untyped
     """scipy's ``RK23``, its step without scipy's wrapping (bit-identical; module docstring)."""
 
     def __init__(
-        self, fun: Callable[..., Any], *args: Any, float_time: bool = False, **kwargs: Any
+        self,
+        fun: Callable[..., Any],
+        *args: Any,
+        float_time: bool = False,
+        keeps: bool = False,
+        **kwargs: Any,
     ):
         super().__init__(fun, *args, **kwargs)
-        self._stepped_setup(fun, float_time)
+        self._stepped_setup(fun, float_time or keeps, keeps)
 
 
 def stepped(method: type[Any]) -> type[Any] | None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from itertools import pairwise
 
 import numpy as np
 import pytest
@@ -120,3 +121,31 @@ def test_registered_path_rates_are_derivatives() -> None:
         for k in range(3):
             assert (plus[k] - minus[k]) / (2 * h) == pytest.approx(p[3 + k], abs=1e-7)
             assert (plus[3 + k] - minus[3 + k]) / (2 * h) == pytest.approx(p[6 + k], abs=1e-7)
+
+
+def test_columns_kept_for_a_configuration_are_its_own_to_the_bit() -> None:
+    """The state-3 rates and the accelerations share one configuration's columns; a
+    configuration equal as numbers but not to the bit (a zero of the other sign, x = -0.0
+    puts -0.0 in the columns) must get its own, and every answer is what it was alone."""
+    zero = [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, *GEOMETRY]  # q2 = 1: away from the singularity
+    negative = [-0.0, *zero[1:]]
+    assert repr(fn._columns(*zero)) != repr(fn._columns(*negative))  # the premise
+    rates = (0.1, -0.2, 0.05, 0.3, -0.1, 0.2)
+    rng = np.random.default_rng(12)
+    moving = [list(_moving_chain(rng)[0]) + list(GEOMETRY) for _ in range(3)]
+    sequence = [zero, negative, zero, *moving, moving[0], negative, negative]
+    for before, config in pairwise(sequence):
+        fn._LAST_COLUMNS[0] = (b"", ())  # alone: nothing kept
+        alone = (
+            repr(fn._columns(*config)),
+            fn.uvms_state3(*config[:6], 0.1, 0.2, 0.3, 0.05, 0.1, 0.2, *config[6:]),
+            fn.uvms_q0_acc(*config[:6], *rates, 0.0, 0.1, 0.0, 0.2, 0.1, 0.0, *config[6:]),
+        )
+        fn._LAST_COLUMNS[0] = (b"", ())
+        fn._shared_columns(*before)  # the columns kept are the configuration before's
+        kept = (
+            repr(fn._shared_columns(*config)),
+            fn.uvms_state3(*config[:6], 0.1, 0.2, 0.3, 0.05, 0.1, 0.2, *config[6:]),
+            fn.uvms_q0_acc(*config[:6], *rates, 0.0, 0.1, 0.0, 0.2, 0.1, 0.0, *config[6:]),
+        )
+        assert repr(kept) == repr(alone)

@@ -111,3 +111,15 @@ def test_velocity_and_acceleration_are_derivatives() -> None:
         _, v, a = law.evaluate(float(t))
         assert (p_p - p_m) / (2 * h) == pytest.approx(v, abs=1e-8)
         assert (v_p - v_m) / (2 * h) == pytest.approx(a, abs=1e-8)
+
+
+def test_after_its_end_the_law_is_its_end_state_and_a_bad_duration_still_raises() -> None:
+    # past tf the end state continues with constant acceleration: pf + vf tau + af tau^2 / 2
+    assert quintic_state(7.0, 2.0, 1.0, 0.3, -0.2, 5.0, 1.25, 0.5, 0.25) == (
+        1.25 + 2.0 * (0.5 + 0.125 * 2.0),
+        0.5 + 0.25 * 2.0,
+        0.25,
+    )
+    for tf in (1.0, 0.5, float("nan")):  # no law ends at or before it starts, even long after
+        with pytest.raises(ValueError):
+            quintic_state(9.0, 1.0, 0.0, 0.0, 0.0, tf, 1.0)
