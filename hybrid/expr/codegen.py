@@ -20,6 +20,7 @@ Examples
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -162,6 +163,9 @@ def _state_uses(
                 uses[node.name] = uses.get(node.name, 0) + 1
     return uses
 
+
+_GLOBAL_NAME = re.compile(r"\b_[A-Za-z0-9]\w*")
+"""A name a generated source may take from its scope (they all start with ``_``)."""
 
 _INDEXES: dict[int, tuple[Sequence[str], int, dict[str, int]]] = {}
 
@@ -446,6 +450,9 @@ def compile_function(
         scope[f"_{fname}"] = func.fn
     for u, fn in ctx.inputs.items():
         scope[f"_in_{u}"] = fn
-    compiled = define(name, source, scope)
+    # only what the source names: a system of many components compiles thousands of
+    # small functions, each with its own namespace
+    named = set(_GLOBAL_NAME.findall(source))
+    compiled = define(name, source, {k: v for k, v in scope.items() if k in named})
     compiled.__doc__ = source
     return compiled
