@@ -31,8 +31,11 @@ FUZZ_SYSTEMS = 400
 """Seeded systems of 8 to 14 components compared under ``make fuzz`` (``HYBRID_FUZZ=1``)."""
 
 
-def component(i: int, n: int, rng: random.Random, broken: str = "") -> str:
-    """Component ``i`` of ``n``: a clock ``x{i}`` reaching levels, reading ``i-1``'s signal."""
+def component(i: int, n: int, rng: random.Random, broken: tuple[str, str] = ("", "")) -> str:
+    """Component ``i`` of ``n``: a clock ``x{i}`` reaching levels, reading ``i-1``'s signal.
+
+    ``broken``: ``("flow", e)`` or ``("signal", e)``, the flow or the signal of location b.
+    """
     prev = (i - 1) % n
     start = rng.choice([0.0, 0.0, 0.25, 0.5])
     level = rng.choice(["x{i} >= 1", "x{i} == 1", "x{i} >= 1 and q{p} <= 1.5", "x{i} >= q{p}"])
@@ -43,7 +46,8 @@ def component(i: int, n: int, rng: random.Random, broken: str = "") -> str:
     second = rng.choice(["", f"  - {{name: also, from: a, to: c, guard: {level}, priority: 1}}\n"])
     urgent = rng.choice(["", "", "urgent: true, "])
     leave = f"q{prev} >= 1 or x{i} >= " + ("0" if urgent else "1")  # urgent: never blocked
-    flow_b = broken or "1"
+    flow_b = broken[1] if broken[0] == "flow" else "1"
+    signal_b = broken[1] if broken[0] == "signal" else f"0.5*x{i}"
     return f"""
 automaton: c{i}
 state: {{x{i}: {{initial: {start}}}}}
@@ -51,7 +55,7 @@ signals: {{q{i}: 0}}
 inputs: [q{prev}]
 locations:
   a: {{flow: {{x{i}: {speed}}}, signals: {{q{i}: {signal}}}, invariant: x{i} <= 4}}
-  b: {{flow: {{x{i}: {flow_b}}}, signals: {{q{i}: 0.5*x{i}}}, invariant: x{i} <= 2.5}}
+  b: {{flow: {{x{i}: {flow_b}}}, signals: {{q{i}: {signal_b}}}, invariant: x{i} <= 2.5}}
   c: {{{urgent}flow: {{x{i}: 1}}, signals: {{q{i}: 3}}}}
 edges:
   - {{name: go, from: a, to: b, guard: {level}, reset: {reset}}}
@@ -60,9 +64,11 @@ edges:
 """
 
 
-def system(seed: int, n: int = 10, broken: dict[int, str] | None = None) -> hybrid.System:
+def system(
+    seed: int, n: int = 10, broken: dict[int, tuple[str, str]] | None = None
+) -> hybrid.System:
     rng = random.Random(seed)
-    texts = [component(i, n, rng, (broken or {}).get(i, "")) for i in range(n)]
+    texts = [component(i, n, rng, (broken or {}).get(i, ("", ""))) for i in range(n)]
     return hybrid.compose(*[hybrid.load_text(t) for t in texts])
 
 
@@ -122,12 +128,14 @@ def test_many_systems_run_the_same_with_decisions_carried(monkeypatch: pytest.Mo
     ("broken", "words"),
     [
         # fails where c4 enters b with x4 >= 1 (unless its reset set x4 to 0)
-        ({4: "sqrt(0.5 - x4)"}, "the flow of"),
-        ({6: "1 + log(x6 - 1)"}, "the flow of"),  # at x6 == 1 exactly
+        ({4: ("flow", "sqrt(0.5 - x4)")}, "the flow of"),
+        ({6: ("flow", "1 + log(x6 - 1)")}, "the flow of"),  # at x6 == 1 exactly
+        # the signal of the point stored after c4's jump into b
+        ({4: ("signal", "sqrt(0.5 - x4)")}, "the signals of"),
     ],
 )
 def test_a_failure_met_in_the_middle_of_an_instant_is_said_the_same(
-    broken: dict[int, str], words: str, monkeypatch: pytest.MonkeyPatch
+    broken: dict[int, tuple[str, str]], words: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     failed = 0
     for seed in range(6):
