@@ -94,7 +94,7 @@ class Parts:
         """``dependents[i]``: the components whose part changes when ``i`` moves (``i`` too)."""
         self.state_slices = _slices([len(c.automaton.states) for c in comps])
         """Each component's entries of the state vector (its part's flow, in order)."""
-        self.column_slices = _slices([_column_count(c.automaton) for c in comps])
+        self.column_slices = _slices([len(_columns_of(c.automaton)) for c in comps])
         """Each component's signal columns (its part's signals, in order)."""
         # each component's locations as a system names them (``comp.loc``)
         self._named = [
@@ -239,14 +239,7 @@ class Parts:
         flows = [bind(i, loc.flow[s.name]) if s.name in loc.flow else _ZERO for s in a.states]
         flow_ctx = CodeContext(**{**vars(ctx), "failure": compiled.flow_failure})
         flow = compile_function(self._name("rhs"), flows, flow_ctx, shape="list", part=True)
-        outputs: list[ir.Expr] = []
-        sizes = a.vector_sizes
-        for name in a.signal_names:
-            if name in sizes:
-                outputs.extend(ir.Index(name, k) for k in range(sizes[name]))
-            else:
-                outputs.append(ir.Var(name, ir.SIGNAL))
-        out = compile_function(self._name("out"), outputs, ctx, shape="list", part=True)
+        out = compile_function(self._name("out"), _columns_of(a), ctx, shape="list", part=True)
         invariants: list[CompiledCondition] = []
         if not (isinstance(loc.invariant, ir.BoolConst) and loc.invariant.value):
             where = system.qualified(i, loc_name)
@@ -360,14 +353,19 @@ _ZERO = ir.Num(0.0)
 
 def signal_outputs(system: System) -> list[ir.Expr]:
     """Every signal column of ``system`` as an expression, in column order."""
+    return [column for c in system.components for column in _columns_of(c.automaton)]
+
+
+def _columns_of(a: Automaton) -> list[ir.Expr]:
+    """Automaton ``a``'s signal columns as expressions, in order (a vector signal has one
+    per entry)."""
+    sizes = a.vector_sizes
     found: list[ir.Expr] = []
-    for c in system.components:
-        sizes = c.automaton.vector_sizes
-        for name in c.automaton.signal_names:
-            if name in sizes:
-                found.extend(ir.Index(name, k) for k in range(sizes[name]))
-            else:
-                found.append(ir.Var(name, ir.SIGNAL))
+    for name in a.signal_names:
+        if name in sizes:
+            found.extend(ir.Index(name, k) for k in range(sizes[name]))
+        else:
+            found.append(ir.Var(name, ir.SIGNAL))
     return found
 
 
@@ -375,12 +373,6 @@ def _slices(sizes: list[int]) -> list[slice]:
     """Consecutive slices of the given sizes, from 0."""
     ends = list(itertools.accumulate(sizes))
     return [slice(end - size, end) for size, end in zip(sizes, ends, strict=True)]
-
-
-def _column_count(a: Automaton) -> int:
-    """How many signal columns automaton ``a`` has (a vector signal has one per entry)."""
-    sizes = a.vector_sizes
-    return sum(sizes.get(name, 1) for name in a.signal_names)
 
 
 def _reads(expr: ir.Expr) -> set[str]:
