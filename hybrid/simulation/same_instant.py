@@ -169,7 +169,12 @@ class InstantMemo:
     def _carry(self, mode: CompiledMode, parts: tuple[Part, ...], used: Set[str]) -> None:
         """Forget what the parts changed since the last entry, or the levels used, can change."""
         dependents = self._parts.dependents
-        changed = _changed(self._compiled, self._left, mode, parts, self._assembly)
+        moved = None
+        if self._left is not None:  # the jump the last answer chose, if it led here
+            source, tr = self._left
+            if tr.move is not None and self._compiled.target(source, tr) is mode:
+                moved = tr.move[0]
+        changed = _changed(self._parts, moved, parts, self._assembly)
         self._assembly = parts
         for c in changed:
             self._stale.add(c)
@@ -258,22 +263,15 @@ class InstantMemo:
 
 
 def _changed(
-    compiled: CompiledModel,
-    jumped: tuple[CompiledMode, CompiledTransition] | None,
-    mode: CompiledMode,
-    parts: tuple[Part, ...],
-    before: tuple[Part, ...],
+    parts: Parts, moved: int | None, now: tuple[Part, ...], before: tuple[Part, ...]
 ) -> list[int]:
-    """The components whose parts differ in ``parts`` from ``before``: when ``mode`` is
-    where ``jumped`` (a mode and its transition) leads, the dependents of the component
-    it moved (:meth:`~hybrid.simulation.parts.Parts.mode` builds one part per
-    component and its readers' locations); else by comparing them all."""
-    if jumped is not None:
-        source, tr = jumped
-        if tr.move is not None and compiled.target(source, tr) is mode:
-            assert compiled.parts is not None
-            return list(compiled.parts.dependents[tr.move[0]])
-    return [c for c, (a, b) in enumerate(zip(parts, before, strict=True)) if a is not b]
+    """The components whose parts differ in ``now`` from ``before``: when the one mode is
+    reached from the other by moving component ``moved``, its dependents
+    (:meth:`~hybrid.simulation.parts.Parts.mode` builds one part per component and its
+    readers' locations); else found by comparing them all."""
+    if moved is not None:
+        return list(parts.dependents[moved])
+    return [c for c, (a, b) in enumerate(zip(now, before, strict=True)) if a is not b]
 
 
 def signals_after(
@@ -285,9 +283,10 @@ def signals_after(
     x: np.ndarray,
     row: tuple[float, ...],
 ) -> tuple[float, ...] | None:
-    """The signals of ``(t, x)`` in ``target``, where ``tr`` leads from ``source``,
-    from ``row``, those of ``(t, x)`` in ``source``: the columns of the parts that
-    differ computed again. ``None`` if either mode is not built from parts."""
+    """The signals of ``(t, x)`` in ``target``, where ``tr`` leads from ``source``
+    (:meth:`~hybrid.simulation.compiled.CompiledModel.target`), from ``row``, those of
+    ``(t, x)`` in ``source``: the columns of the parts that differ computed again.
+    ``None`` if either mode is not built from parts."""
     parts = compiled.parts
     if parts is None or source.assembly is None or target.assembly is None:
         return None
@@ -295,7 +294,8 @@ def signals_after(
     xs = x.tolist()
     slices = parts.column_slices
     before = source.assembly.parts
-    for c in _changed(compiled, (source, tr), target, target.assembly.parts, before):
+    moved = None if tr.move is None else tr.move[0]
+    for c in _changed(parts, moved, target.assembly.parts, before):
         try:
             values[slices[c]] = target.assembly.parts[c].signals(t, xs)
         except _ERRORS as e:  # the whole function's failure: its name, and NaNs
