@@ -169,14 +169,14 @@ class Recorder:
     ) -> None:
         """Record a jump and store the post-jump point (at ``t``, hybrid time ``j + 1``)."""
         names = self.compiled.state_names
-        point = before.tobytes()
+        point, end = before.tobytes(), after.tobytes()
         kept, states = self._states
         if point != kept:
             states = dict(zip(names, before.tolist(), strict=True))
         start = states
-        if after.tobytes() != point:
-            point, states = after.tobytes(), dict(zip(names, after.tolist(), strict=True))
-        self._states = (point, states)
+        if end != point:
+            states = dict(zip(names, after.tolist(), strict=True))
+        self._states = (end, states)
         self.jumps.append(
             Jump(
                 t,
@@ -191,7 +191,7 @@ class Recorder:
                 chosen_by,
             )
         )
-        row = self._carried_signals(mode, chosen, target, t, before, after)
+        row = None if end != point else self._carried_signals(mode, chosen, target, t, after, point)
         if row is None:
             self.points(target, j + 1, np.array([t]), after.reshape(1, -1))
         else:
@@ -206,18 +206,18 @@ class Recorder:
         chosen: CompiledTransition,
         target: CompiledMode,
         t: float,
-        before: np.ndarray,
-        after: np.ndarray,
+        x: np.ndarray,
+        point: bytes,
     ) -> tuple[float, ...] | None:
-        """The signals after a jump that left the state as it was, from the point stored
-        before it (modes built from parts: :func:`~hybrid.simulation.same_instant.signals_after`)."""
+        """The signals at ``(t, x)`` (``point``: its bytes) after a jump that left the state
+        as it was, from the point stored before it (modes built from parts:
+        :func:`~hybrid.simulation.same_instant.signals_after`)."""
         if self.compiled.parts is None or not self.chunks:
             return None
         last, _, ts, xs, rows = self.chunks[-1]
-        point = before.tobytes()
-        if last is not mode or ts[-1] != t or xs[-1].tobytes() != point or after.tobytes() != point:
+        if last is not mode or ts[-1] != t or xs[-1].tobytes() != point:
             return None
-        return signals_after(self.compiled, mode, chosen, target, t, after, rows[-1])
+        return signals_after(self.compiled, mode, chosen, target, t, x, rows[-1])
 
     def run(self, name: str, termination: Termination) -> Run:
         """The :class:`Run` of everything recorded."""
