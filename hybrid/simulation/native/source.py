@@ -5,9 +5,10 @@ out*)`` (see ``kernel_types``) generated from the expression IR by
 :mod:`~hybrid.simulation.native.printer` as one numba ``cfunc``, with
 :mod:`~hybrid.simulation.native.mathlib` inlined into it and the
 per-operation functions (``model_rhs``...) inlined too, or compiled apart
-when the model is large (:data:`INLINE_LINES`); the lines all cases of an
-operation run alike come before its dispatch (:func:`_shared`), and cases
-alike are written once (:func:`_alike`). And the table
+when the model is large (:data:`INLINE_LINES`); the slots an operation reads
+are loaded and the lines all its cases run alike are computed before its
+dispatch (:func:`_hoisted`, :func:`_shared`), and cases alike are written once
+(:func:`_alike`). And the table
 ``tab`` (which transitions, levels and invariants each mode has, and the form
 numbers of their expressions). One module per model *structure*: parameters
 are slots, so their values are not in it. The source is built from checked
@@ -53,7 +54,8 @@ __all__ = ["generate"]
 MODEL_BASE_S, MODEL_SECONDS_PER_LINE = 0.4, 0.006
 """A model's compile time, about (measured: thermostat, 100 lines of operations, 0.5 s; the
 4th-order filtered oscillator, 300 lines, 1.8 s; UVMS mission 2, 5,800 lines, 34 s, and
-3,200 lines, 19.5 s, with what its cases share written once: :func:`_shared`, :func:`_alike`)."""
+2,500 lines, 15.6 s, with what its cases share written once: :func:`_hoisted`,
+:func:`_shared`, :func:`_alike`)."""
 INLINE_LINES = 600
 """Models whose operations take fewer generated lines are compiled as one function (measured,
 apart and as one: thermostat, 100 lines, 1.1 s and 0.5 s; the 16th-order filtered oscillator,
@@ -97,12 +99,18 @@ def _dispatch_at(var: str, cases: list[list[str]], starts: list[int], indent: st
 _READ = re.compile(r"\b([xp])\[(\d+)\]")
 
 
-def _hoisted(case: list[str]) -> list[str]:
-    """``case`` reading each state and parameter slot it uses once, into a local (numba types
-    each ``x[i]`` apart, trying every ``getitem`` it knows: UVMS, thousands; a fifth of its compile)."""
-    used = sorted({(m[1], int(m[2])) for line in case for m in _READ.finditer(line)})
+def _hoisted(cases: Sequence[list[str]]) -> tuple[list[str], list[list[str]]]:
+    """Each state and parameter slot the cases read, loaded once into a local before the
+    dispatch, and the cases reading the locals (numba types each ``x[i]`` apart, trying every
+    ``getitem`` it knows: UVMS, thousands; a fifth of its compile, and loaded in each case
+    apart, a third of its lines).
+
+    >>> _hoisted([["out[0] = x[1] * p[0]"], ["out[0] = x[0]"]])
+    (['p_0 = p[0]', 'x_0 = x[0]', 'x_1 = x[1]'], [['out[0] = x_1 * p_0'], ['out[0] = x_0']])
+    """
+    used = sorted({(m[1], int(m[2])) for case in cases for line in case for m in _READ.finditer(line)})
     loads = [f"{v}_{i} = {v}[{i}]" for v, i in used]
-    return loads + [_READ.sub(r"\1_\2", line) for line in case]
+    return loads, [[_READ.sub(r"\1_\2", line) for line in case] for case in cases]
 
 
 _TARGET = re.compile(r"^(\S+) = ")
@@ -115,8 +123,8 @@ def _shared(cases: list[list[str]]) -> tuple[list[str], list[list[str]]]:
     A line is shared when it is in every case, is no ``return``, and reads no name that a
     case defines otherwise (the lines are assignments of pure expressions, each name once
     per case, so a shared line computes the same value wherever it runs). The modes of a
-    product repeat most of their signals and flows: UVMS's ``model_outputs`` has 9 cases of
-    200 lines, 118 of them shared.
+    product repeat many of their signals and flows: UVMS's ``model_outputs`` has 9 cases of
+    146 lines (its loads apart: :func:`_hoisted`), 64 of them shared.
 
     >>> _shared([["a = x[0]", "b = a + 1.0", "out[0] = b"], ["a = x[0]", "b = a - 1.0", "out[0] = b"]])
     (['a = x[0]'], [['b = a + 1.0', 'out[0] = b'], ['b = a - 1.0', 'out[0] = b']])
@@ -178,8 +186,9 @@ def _alike(var: str, cases: list[list[str]], indent: str) -> list[str]:
 
 
 def _function(name: str, args: str, cases: Sequence[list[str]], fallback: str) -> list[str]:
-    shared, rest = _shared([_hoisted(case) for case in cases])
-    lines = [f"def {name}({args}):", *(f"    {line}" for line in shared)]
+    loads, read = _hoisted(cases)
+    shared, rest = _shared(read)
+    lines = [f"def {name}({args}):", *(f"    {line}" for line in loads + shared)]
     lines += _alike(args.split(",")[0], rest, "    ") if any(rest) else []
     return [*lines, f"    {fallback}", ""]
 
