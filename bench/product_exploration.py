@@ -20,12 +20,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import resource
-import sys
 import time
 from collections.abc import Sequence
 
 import hybrid
+from bench.resident import peak_mb, reset_peak
 from hybrid.analysis import analyse, run_checks
 from hybrid.compose import System
 from hybrid.model import Automaton, Properties
@@ -64,14 +63,10 @@ def build_system(copies: int) -> System:
     return dataclasses.replace(system, properties=props)
 
 
-def _peak_mb() -> float:
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    return peak / (1024 * 1024) if sys.platform == "darwin" else peak / 1024
-
-
 def run(copies: int = 12) -> dict[str, float | int | bool]:
     """Check ``copies`` timers in parallel; the numbers of the run."""
-    before = _peak_mb()
+    reset_peak()  # the peak of the benchmarks run before it in this process is not its own
+    before = peak_mb()
     start = time.perf_counter()
     system = build_system(copies)
     analysis = analyse(system)
@@ -87,7 +82,7 @@ def run(copies: int = 12) -> dict[str, float | int | bool]:
         "exploration_s": exploration.seconds,
         "modes_per_s": exploration.states / exploration.seconds if exploration.seconds else 0.0,
         "check_s": total,
-        "peak_rss_mb": _peak_mb(),
+        "peak_rss_mb": peak_mb(),
         "rss_before_mb": before,
     }
 

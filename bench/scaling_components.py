@@ -80,10 +80,11 @@ def check_case(name: str) -> dict[str, Any]:
 
 def _in_subprocess(call: str) -> dict[str, Any]:
     code = (
-        "import json, resource, sys\n"
+        "import json\n"
         "from bench import scaling_components as b\n"
+        "from bench.resident import peak_mb\n"
         f"r = b.{call}\n"
-        "r['peak_rss_mb'] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024\n"
+        "r['peak_rss_mb'] = peak_mb()\n"
         "print(json.dumps(r))\n"
     )
     out = subprocess.run(

@@ -104,10 +104,11 @@ def measure(n: int, memory: bool) -> dict[str, Any]:
 
 def _in_subprocess(n: int, memory: bool) -> dict[str, Any]:
     code = (
-        "import json, resource\n"
+        "import json\n"
         "from bench import scaling_ring as b\n"
+        "from bench.resident import peak_mb\n"
         f"r = b.measure({n}, {memory})\n"
-        "r['peak_rss_mb'] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024\n"
+        "r['peak_rss_mb'] = peak_mb()\n"
         "print(json.dumps(r))\n"
     )
     out = subprocess.run(
