@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import importlib.util
 import json
 import math
 import os
@@ -10,6 +11,7 @@ import subprocess
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 REPO = Path(__file__).resolve().parents[1]
@@ -34,6 +36,21 @@ edges:
 Simulate = Callable[..., Any]
 """The ``simulate`` fixture of tests/simulation: ``hybrid.simulate`` on the test's backend."""
 
+
+
+def import_source(path: Path, text: str) -> ModuleType:
+    """``text`` written to ``path`` and imported as a module (a generated module's plain
+    Python: importing it runs no ``build()``), kept out of ``sys.modules``."""
+    path.write_text(text, encoding="utf-8")
+    spec = importlib.util.spec_from_file_location(path.stem, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[path.stem] = module
+    try:
+        spec.loader.exec_module(module)
+    finally:
+        del sys.modules[path.stem]
+    return module
 
 def run_cli(
     *args: str | Path, cwd: Path | None = None, timeout: float = 60.0

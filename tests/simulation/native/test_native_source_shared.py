@@ -12,17 +12,14 @@ same bit for bit.
 
 from __future__ import annotations
 
-import importlib.util
 import random
-import sys
 from collections.abc import Callable
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import numpy as np
 import pytest
-from support import REPO
+from support import REPO, import_source
 
 import hybrid
 from hybrid.compose import as_system
@@ -45,19 +42,6 @@ edges:
   - {{name: heat, from: off, to: on, guard: T{i} <= 18, reset: {{T{i}: T{i} + 0.0}}}}
   - {{name: rest, from: on, to: off, guard: T{i} >= 22}}
 """
-
-
-def _module(path: Path, text: str) -> ModuleType:
-    path.write_text(text, encoding="utf-8")
-    spec = importlib.util.spec_from_file_location(path.stem, path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[path.stem] = module
-    try:
-        spec.loader.exec_module(module)  # its functions stay Python: build() is not called
-    finally:
-        del sys.modules[path.stem]
-    return module
 
 
 def _loads_in_each_case(
@@ -95,8 +79,8 @@ def test_every_operation_computes_what_it_computed_unshared(
     if name == "uvms_mission_2":
         assert shared.count("\n") < 0.5 * unshared.count("\n")
     tag = "".join(c for c in name if c.isalnum())
-    ours = _module(tmp_path / f"hybrid_probe_shared_{tag}.py", shared)
-    theirs = _module(tmp_path / f"hybrid_probe_unshared_{tag}.py", unshared)
+    ours = import_source(tmp_path / f"hybrid_probe_shared_{tag}.py", shared)
+    theirs = import_source(tmp_path / f"hybrid_probe_unshared_{tag}.py", unshared)
     rng = random.Random(name)
     indices = {"model_value": 0, "model_truth": 0, "model_reset": 0}
     for op in OPERATIONS:  # how many cases each has: its index past the last returns the fallback
