@@ -133,17 +133,18 @@ def _shared(cases: list[list[str]]) -> tuple[list[str], list[list[str]]]:
         return [], cases
     in_all = set(cases[0]).intersection(*cases[1:])
     shared: list[str] = []
+    defined: set[str] = set()  # names the shared lines define
     apart: set[str] = set()  # names case 0 defines by a line that is not shared
     for line in cases[0]:
-        target = _TARGET.match(line)
-        value = line[target.end() :] if target else line
-        if line in in_all and target and not apart.intersection(_NAME.findall(value)):
+        if not (target := _TARGET.match(line)):
+            continue
+        if line in in_all and not apart.intersection(_NAME.findall(line[target.end() :])):
             shared.append(line)
-        elif target:
+            defined.add(target[1])
+        else:
             apart.add(target[1])
     chosen = set(shared)
     rest = [[line for line in case if line not in chosen] for case in cases]
-    defined = {_TARGET.match(line)[1] for line in shared}  # type: ignore[index]
     for case, left in zip(cases, rest, strict=True):
         again = {m[1] for line in left if (m := _TARGET.match(line))}
         if len(case) - len(left) != len(shared) or defined & again:
@@ -174,14 +175,9 @@ def _alike(var: str, cases: list[list[str]], indent: str) -> list[str]:
     if len(bodies) == len(cases):
         return _dispatch(var, cases, indent)
     number = {body: k for k, body in enumerate(bodies)}
-    runs: list[list[str]] = []  # consecutive cases alike: one run
-    starts: list[int] = []
-    for i, case in enumerate(cases):
-        line = f"case_ = {number[tuple(case)]}"
-        if not runs or runs[-1] != [line]:
-            runs.append([line])
-            starts.append(i)
-    choose = _dispatch_at(var, runs, starts, indent)
+    numbers = [number[tuple(case)] for case in cases]
+    starts = [i for i, k in enumerate(numbers) if i == 0 or k != numbers[i - 1]]  # runs alike
+    choose = _dispatch_at(var, [[f"case_ = {numbers[i]}"] for i in starts], starts, indent)
     return choose + _dispatch("case_", [list(body) for body in bodies], indent)
 
 
