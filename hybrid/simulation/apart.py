@@ -307,7 +307,7 @@ def merge(system: System, parts: Sequence[_Part], settings: Settings) -> Run:
         signal_names=tuple(signal_names),
         t=np.array([t for t, _ in rows], dtype=float),
         j=np.array([j for _, j in rows], dtype=np.int64),
-        location=np.array(locations, dtype=np.str_),
+        location=np.array(locations, dtype=object),
         states=states,
         signals=signals,
         jumps=jumps,

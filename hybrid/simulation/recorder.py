@@ -227,7 +227,7 @@ class Recorder:
         t = np.concatenate([c[2] for c in chunks]) if chunks else np.empty(0)
         states = np.vstack([c[3] for c in chunks]) if chunks else np.empty((0, n_states))
         j = np.repeat(np.array([c[1] for c in chunks], dtype=np.int64), sizes)
-        location = np.repeat(np.array([c[0].name for c in chunks], dtype=np.str_), sizes)
+        location = np.repeat(np.array([c[0].name for c in chunks], dtype=object), sizes)
         rows = [row for c in chunks for row in c[4]]
         signals = np.array(rows, dtype=float).reshape(len(rows), n_signals)
         return Run(

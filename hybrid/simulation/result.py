@@ -135,7 +135,9 @@ class Run:
     signal_names: tuple[str, ...]
     t: NDArray[np.float64]
     j: NDArray[np.int64]
-    location: NDArray[np.str_]
+    location: NDArray[np.object_]
+    """The location of each point: its name, a ``str`` (one object per location, shared by
+    every point in it, so a system's long product names cost a reference a point)."""
     states: NDArray[np.float64]
     signals: NDArray[np.float64]
     jumps: Sequence[Jump]

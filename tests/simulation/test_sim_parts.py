@@ -114,3 +114,18 @@ def test_a_failure_worded_without_its_mode_names_the_mode_it_was_built_for(
     assert words[0] == words[1]
     assert words[0].startswith("the flow of th0.off|th1.off|")
     assert words[0].endswith("failed: sqrt(-1): math domain error")
+
+
+def test_each_point_refers_to_its_locations_one_name() -> None:
+    # a product's name grows with its components (here about 20 characters each): a
+    # fixed-width string column would hold it whole at every point
+    n = 3 * parts.PARTS_FROM
+    run = hybrid.simulate(ring(n), t_end=15.0, handle_sigint=False)
+    # the location of each point, from the jumps alone: the initial mode until the first
+    # jump, then each jump's target
+    initial = "|".join(f"th{i}.off" for i in range(n))
+    expected = [initial if j == 0 else run.jumps[j - 1].target for j in run.j.tolist()]
+    assert run.location.tolist() == expected
+    assert run.location.dtype == object
+    assert run.location.nbytes == 8 * len(run)  # a reference a point
+    assert len({id(name) for name in run.location}) == len(set(expected))

@@ -80,7 +80,7 @@ PACKED_WIDTH = b.PACKED_WIDTH
 class Layout:
     """Names by index: modes, transitions (global order of the tables), invariants."""
 
-    mode_names: NDArray[np.str_]
+    mode_names: NDArray[np.object_]
     transitions: tuple[tuple[int, int, Any], ...]
     """Per global transition: (source mode, place in its mode, NativeTransition)."""
     invariant_first: tuple[int, ...]
@@ -106,7 +106,7 @@ class Layout:
         for m, mode in enumerate(native.modes):
             rows += [(m, k, tr) for k, tr in enumerate(mode.transitions)]
             first.append(first[-1] + len(mode.invariants))
-        names = np.array([mode.name for mode in native.modes], dtype=np.str_)
+        names = np.array([mode.name for mode in native.modes], dtype=object)
         describe = tuple(
             (tr.view.name, tr.view.label, native.modes[m].name,
              native.modes[native.index[tr.view.target]].name)
