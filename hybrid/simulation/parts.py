@@ -32,6 +32,7 @@ True
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Callable, Mapping
@@ -308,13 +309,13 @@ class Parts:
 
     def _widen(self, what: str, ctx: CodeContext, key: Mode) -> Callable[[ir.Expr], Sitting]:
         """Compiles a condition decided within a band (its sitting form) when first needed."""
+        return _Widen(self, what, ctx, key)
 
-        def widen(expr: ir.Expr) -> Sitting:
-            name = self._name("sit")
-            self._what[name] = (what, (expr,), ctx, key)
-            return sitting_form(name, expr, ctx)
-
-        return widen
+    def sitting(self, what: str, ctx: CodeContext, key: Mode, expr: ir.Expr) -> Sitting:
+        """The sitting form of condition ``expr`` (``what``), compiled now."""
+        name = self._name("sit")
+        self._what[name] = (what, (expr,), ctx, key)
+        return sitting_form(name, expr, ctx)
 
     def _reset(self, tr: str, reset: Mapping[str, ir.Expr], ctx: CodeContext, key: Mode) -> Fn:
         """The reset, compiled when it first fires (most transitions never do).
@@ -323,29 +324,12 @@ class Parts:
         whole mode's reset copies them.
         """
         name = self._name("r")
-        exprs = list(reset.values())
         states = self.compiled.state_names
-        self._what[name] = (f"the reset of {tr}", tuple(exprs), ctx, key)
+        self._what[name] = (f"the reset of {tr}", tuple(reset.values()), ctx, key)
         index = {s: k for k, s in enumerate(states)}
-        where = [index[s] for s in reset if s in index]
-        assigned = [e for s, e in reset.items() if s in index]
-        failure, n, nan = ctx.failure, len(states), math.nan
-        compiled: list[Fn] = []
-
-        def fire(t: float, x: Any) -> Any:
-            if not compiled:
-                compiled.append(compile_function(name, assigned, ctx, shape="list", part=True))
-            xs = x.tolist()
-            try:
-                values = compiled[0](t, xs)
-            except _ERRORS as e:
-                failure.record(e, t, name)
-                return [nan] * n
-            for k, v in zip(where, values, strict=True):
-                xs[k] = v
-            return xs
-
-        return fire
+        where = tuple(index[s] for s in reset if s in index)
+        assigned = tuple(e for s, e in reset.items() if s in index)
+        return _Reset(name, where, assigned, ctx, len(states))
 
 
 _ZERO = ir.Num(0.0)
@@ -379,23 +363,76 @@ def _reads(expr: ir.Expr) -> set[str]:
     return ir.names_in(expr, ir.SIGNAL) | ir.names_in(expr, ir.INPUT)
 
 
+# A run of many components meets many modes, each with its functions and the parts'
+# callables below, and all of them are kept for the next run: as one object each (not a
+# closure, its tuple and a cell a variable), the cyclic collector has a third as many to
+# count, and its full collections come later.
+
+
 def _joined(parts: list[Fn], as_tuple: bool, failure: EvalFailure, where: str, n: int) -> Fn:
     """One function of ``(t, x)``: the parts' values in order, the state converted once.
 
     A list, or a tuple with ``as_tuple``; on the first failure (recorded as
     ``where``) ``n`` NaNs, as the whole mode's function gives.
     """
-    nan = math.nan
+    return functools.partial(_join, parts, as_tuple, failure, where, n)
 
-    def joined(t: float, x: Any) -> Any:
+
+def _join(
+    parts: list[Fn], as_tuple: bool, failure: EvalFailure, where: str, n: int, t: float, x: Any
+) -> Any:
+    xs = x.tolist()
+    out: list[Any] = []
+    try:
+        for part in parts:
+            out += part(t, xs)
+    except _ERRORS as e:  # the first failure ends the whole, as in one function
+        failure.record(e, t, where)
+        return (math.nan,) * n if as_tuple else [math.nan] * n
+    return tuple(out) if as_tuple else out
+
+
+class _Widen:
+    """A condition's sitting form, compiled by its parts when first needed."""
+
+    __slots__ = ("ctx", "key", "parts", "what")
+
+    def __init__(self, parts: Parts, what: str, ctx: CodeContext, key: Mode) -> None:
+        self.parts, self.what, self.ctx, self.key = parts, what, ctx, key
+
+    def __call__(self, expr: ir.Expr) -> Sitting:
+        return self.parts.sitting(self.what, self.ctx, self.key, expr)
+
+
+class _Reset:
+    """A part's reset: the variables it sets (at ``where``) computed, the others copied;
+    compiled when it first fires, as ``name``."""
+
+    __slots__ = ("assigned", "ctx", "function", "n", "name", "where")
+
+    def __init__(
+        self,
+        name: str,
+        where: tuple[int, ...],
+        assigned: tuple[ir.Expr, ...],
+        ctx: CodeContext,
+        n: int,
+    ) -> None:
+        self.name, self.where, self.assigned, self.ctx, self.n = name, where, assigned, ctx, n
+        self.function: Fn | None = None
+
+    def __call__(self, t: float, x: Any) -> Any:
+        function = self.function
+        if function is None:
+            function = self.function = compile_function(
+                self.name, list(self.assigned), self.ctx, shape="list", part=True
+            )
         xs = x.tolist()
-        out: list[Any] = []
         try:
-            for part in parts:
-                out += part(t, xs)
-        except _ERRORS as e:  # the first failure ends the whole, as in one function
-            failure.record(e, t, where)
-            return (nan,) * n if as_tuple else [nan] * n
-        return tuple(out) if as_tuple else out
-
-    return joined
+            values = function(t, xs)
+        except _ERRORS as e:
+            self.ctx.failure.record(e, t, self.name)
+            return [math.nan] * self.n
+        for k, v in zip(self.where, values, strict=True):
+            xs[k] = v
+        return xs
