@@ -59,7 +59,7 @@ class EvalFailure:
         self.error, self.t, self.where = None, None, ""
 
 
-@dataclass
+@dataclass(slots=True)
 class CodeContext:
     """Everything names in an expression can refer to when compiled.
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -56,7 +56,7 @@ def sitting_form(name: str, expr: ir.Expr, ctx: CodeContext) -> Sitting:
     band = "band"
     while band in taken:
         band += "_"
-    wide = CodeContext(**{**vars(ctx), "states": (*ctx.states, band)})
+    wide = replace(ctx, states=(*ctx.states, band))
     fn = compile_function(name, [within_band(expr, ir.Var(band, ir.STATE))], wide, shape="scalar")
 
     def sitting(t: float, x: Any, width: float) -> bool:

@@ -110,7 +110,8 @@ class Parts:
         self._keys: list[Mode] = []  # the modes built, in order (their failures' names)
         # what a part's function computes: its role (said with the mode it fails in), its
         # expressions and context, and the mode it was first compiled for
-        self._what: dict[str, tuple[str, tuple[ir.Expr, ...], CodeContext, Mode]] = {}
+        # (one expression as itself, not in a tuple: a large system keeps thousands)
+        self._what: dict[str, tuple[str, ir.Expr | tuple[ir.Expr, ...], CodeContext, Mode]] = {}
 
     # --- which components a part depends on --------------------------------------------
 
@@ -205,6 +206,7 @@ class Parts:
             return Source(f"the signals of {name}", tuple(signal_outputs(self.system)), ctx)
         assert described is not None
         what, exprs, ctx, _ = described
+        exprs = exprs if isinstance(exprs, tuple) else (exprs,)
         return Source(f"{what} in {name}", exprs, ctx)
 
     def _part(self, i: int, key: Mode, at: tuple[str, ...]) -> Part:
@@ -238,7 +240,7 @@ class Parts:
             failure=compiled.failure,
         )
         flows = [bind(i, loc.flow[s.name]) if s.name in loc.flow else _ZERO for s in a.states]
-        flow_ctx = CodeContext(**{**vars(ctx), "failure": compiled.flow_failure})
+        flow_ctx = replace(ctx, failure=compiled.flow_failure)
         flow = compile_function(self._name("rhs"), flows, flow_ctx, shape="list", part=True)
         out = compile_function(self._name("out"), _columns_of(a), ctx, shape="list", part=True)
         invariants: list[CompiledCondition] = []
@@ -302,7 +304,7 @@ class Parts:
         if found is None or found[0] is not expr:
             name = self._name(prefix)
             value = guard_to_rho(expr) if prefix in ("inv", "g") and not as_is else expr
-            self._what[name] = (what, (value,), ctx, key)
+            self._what[name] = (what, value, ctx, key)
             found = (expr, compile_function(name, [value], ctx, shape="scalar"))
             self._conditions[cache] = found
         return found[1]
@@ -314,7 +316,7 @@ class Parts:
     def sitting(self, what: str, ctx: CodeContext, key: Mode, expr: ir.Expr) -> Sitting:
         """The sitting form of condition ``expr`` (``what``), compiled now."""
         name = self._name("sit")
-        self._what[name] = (what, (expr,), ctx, key)
+        self._what[name] = (what, expr, ctx, key)
         return sitting_form(name, expr, ctx)
 
     def _reset(self, tr: str, reset: Mapping[str, ir.Expr], ctx: CodeContext, key: Mode) -> Fn:
