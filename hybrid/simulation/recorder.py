@@ -15,6 +15,7 @@ import math
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.integrate import OdeSolution
 
 from hybrid.simulation.compiled import CompiledMode, CompiledModel, CompiledTransition
@@ -106,7 +107,9 @@ class Recorder:
     def __init__(self, compiled: CompiledModel, settings: Settings) -> None:
         self.compiled = compiled
         self.settings = settings
-        self.chunks: list[tuple[CompiledMode, int, np.ndarray, np.ndarray, list[Any]]] = []
+        self.chunks: list[tuple[CompiledMode, int, np.ndarray, np.ndarray, Any]] = []
+        """Per stored stretch: mode, j, times, states, and the signals (a list of rows, or an
+        array of them when there are several)."""
         self.jumps: list[Jump] = []
         self.segments: list[tuple[int, float, float, Any]] = []
         self.count = 0
@@ -149,7 +152,11 @@ class Recorder:
                     signals.append(outputs(t, x))
             else:
                 signals = [outputs(t, x) for t, x in zip(ts.tolist(), xs, strict=True)]
-            self.chunks.append((mode, j, ts, xs, signals))
+            if len(signals) > 1:  # as floats in an array: a Python float and its place take 32 bytes
+                rows = np.array(signals, dtype=float).reshape(len(signals), len(self.compiled.columns))
+                self.chunks.append((mode, j, ts, xs, rows))
+            else:
+                self.chunks.append((mode, j, ts, xs, signals))
 
     def stay(self, mode: CompiledMode, j: int, t0: float) -> StayRecord:
         """Start recording a stay in ``mode`` that begins at ``t0`` (its first point is stored)."""
@@ -228,8 +235,7 @@ class Recorder:
         states = np.vstack([c[3] for c in chunks]) if chunks else np.empty((0, n_states))
         j = np.repeat(np.array([c[1] for c in chunks], dtype=np.int64), sizes)
         location = np.repeat(np.array([c[0].name for c in chunks], dtype=object), sizes)
-        rows = [row for c in chunks for row in c[4]]
-        signals = np.array(rows, dtype=float).reshape(len(rows), n_signals)
+        signals = _signal_rows([c[4] for c in chunks], n_signals)
         return Run(
             model=name,
             state_names=tuple(self.compiled.state_names),
@@ -246,3 +252,24 @@ class Recorder:
             **run_layout(self.compiled.system),
             requirements={} if self.monitor is None else self.monitor.results(termination.t),
         )
+
+
+def _signal_rows(stretches: list[Any], n_signals: int) -> NDArray[np.float64]:
+    """The signals of every stretch, in order, as one 2-D array, filled in place.
+
+    A stretch of several points holds an array already; those of one point (the
+    jumps' points, most of a system's) a list of rows, copied in a run of them at
+    a time.
+    """
+    signals = np.empty((sum(len(s) for s in stretches), n_signals))
+    k, rows = 0, list[Any]()
+    for stretch in [*stretches, None]:
+        if rows and not isinstance(stretch, list):
+            signals[k : k + len(rows)] = np.array(rows, dtype=np.float64).reshape(len(rows), n_signals)
+            k, rows = k + len(rows), []
+        if isinstance(stretch, np.ndarray):
+            signals[k : k + len(stretch)] = stretch
+            k += len(stretch)
+        elif stretch is not None:
+            rows += stretch
+    return signals
