@@ -269,7 +269,13 @@ def merge(system: System, parts: Sequence[_Part], settings: Settings) -> Run:
         p.fill(times, lj, states, xs, signals, ss)
         for i, column in zip(p.members, p.location_columns(lj), strict=True):
             per_component[i] = column
-    locations = ["|".join(parts_) for parts_ in zip(*per_component, strict=True)]
+    locations: list[str] = []
+    named: dict[tuple[str, ...], str] = {}  # one name per location, as the run's other points
+    for key in zip(*per_component, strict=True):
+        name = named.get(key)
+        if name is None:
+            name = named[key] = "|".join(key)
+        locations.append(name)
 
     index = {row: r for r, row in enumerate(rows)}
     jumps: list[Jump] = []

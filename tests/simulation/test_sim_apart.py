@@ -80,6 +80,8 @@ def test_merged_run_is_the_product_run(monkeypatch):
         for b in ("off", "on")
         for c in ("off", "on")
     }
+    # as a product's run, each point refers to its location's one name
+    assert len({id(name) for name in merged.location}) == len(set(merged.location))
 
 
 def test_a_group_that_ends_early_ends_the_run(monkeypatch):
