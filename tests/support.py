@@ -37,7 +37,6 @@ Simulate = Callable[..., Any]
 """The ``simulate`` fixture of tests/simulation: ``hybrid.simulate`` on the test's backend."""
 
 
-
 def import_source(path: Path, text: str) -> ModuleType:
     """``text`` written to ``path`` and imported as a module (a generated module's plain
     Python: importing it runs no ``build()``), kept out of ``sys.modules``."""
@@ -51,6 +50,7 @@ def import_source(path: Path, text: str) -> ModuleType:
     finally:
         del sys.modules[path.stem]
     return module
+
 
 def run_cli(
     *args: str | Path, cwd: Path | None = None, timeout: float = 60.0
