@@ -115,7 +115,9 @@ class CompiledNative:
         seal(self.kernel)  # both compiled whole now: their cache files are held to a manifest
         seal(self.module)
         self.functions: Any = self.module.model
-        self.fp = np.array([self.functions.address, 0, *_PIECES["one"]], dtype=np.int64)
+        from hybrid.simulation.native.pointers import model_addresses
+
+        self.fp = np.array([*model_addresses(self.functions), *_PIECES["one"]], dtype=np.int64)
         """The addresses the compiled loop calls: the model (a ``cfunc``), then the pieces."""
         assert self.fp.size == b.N_FP
         self.tab = self.generated.tab

@@ -33,7 +33,7 @@ cgutils: Any = numba.core.cgutils
 _function_type: Any = numba.experimental.function_type
 intrinsic: Any = numba.extending.intrinsic
 
-__all__ = ["TESTED_NUMBA", "addresses", "at", "function_at"]
+__all__ = ["TESTED_NUMBA", "addresses", "at", "function_at", "model_addresses"]
 
 TESTED_NUMBA = ((0, 60), (0, 68))
 """The first and last numba ``(major, minor)`` this module's use of numba's private API is
@@ -81,3 +81,22 @@ def addresses(dispatcher: Any) -> tuple[int, int]:
         int(_function_type._get_wrapper_address(dispatcher, signature)),
         int(_function_type._get_jit_address(dispatcher, signature)),
     )
+
+
+def model_addresses(model: Any) -> tuple[int, int]:
+    """``(C wrapper, compiled code)`` addresses of the model's ``cfunc``.
+
+    The compiled loop calls the compiled code directly when it has its
+    address (numba's calling convention, as between the kernel's pieces),
+    which spares the C wrapper's call and conversions on every evaluation;
+    0 if that code cannot be found (the wrapper is called then).
+    """
+    wrapper = str(model._wrapper_name or "")
+    prefix = "cfunc."
+    jit = 0
+    if wrapper.startswith(prefix):
+        try:
+            jit = int(model._library.get_pointer_to_function(wrapper[len(prefix):]) or 0)
+        except Exception:  # numba's internals moved: the wrapper, as before
+            jit = 0
+    return int(model.address), jit

@@ -53,3 +53,32 @@ def test_the_private_names_it_reads_are_there() -> None:
 
     model = datamodel.default_manager.lookup(kind)
     assert {"c_addr", "jit_addr", "py_addr"} <= set(model._fields)
+
+
+def test_a_models_compiled_code_is_found_behind_its_cfunc() -> None:
+    """The loop calls the model's code directly: its name is the wrapper's without ``cfunc.``."""
+    from hybrid.simulation.native.pointers import model_addresses
+
+    signature = numba.types.float64(numba.types.float64)
+
+    def twice(a: float) -> float:
+        return 2.0 * a
+
+    wrapped = numba.cfunc(signature)(twice)
+    c_address, jit_address = model_addresses(wrapped)
+    assert c_address == wrapped.address
+    assert jit_address not in (0, c_address)
+    assert wrapped._wrapper_name == "cfunc." + wrapped._library.get_function(
+        wrapped._wrapper_name[len("cfunc."):]
+    ).name
+
+
+def test_without_a_wrapper_name_the_wrapper_alone_is_called() -> None:
+    from hybrid.simulation.native.pointers import model_addresses
+
+    class Moved:  # numba's internals renamed: no compiled code found, no error
+        address = 1234
+        _wrapper_name = "renamed"
+        _library = None
+
+    assert model_addresses(Moved()) == (1234, 0)
