@@ -34,7 +34,7 @@ from typing import Any
 from hybrid.analysis.findings import Finding, Report
 from hybrid.campaigns.table import FAILED, SweepTable
 from hybrid.compose import System, as_system
-from hybrid.simulation.monitor import watched_requirements
+from hybrid.simulation.watched import watched_requirements
 
 __all__ = ["sweep_findings", "values_text"]
 

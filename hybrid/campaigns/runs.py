@@ -54,9 +54,8 @@ from hybrid.campaigns.targets import Constant, split
 from hybrid.compose import System
 from hybrid.errors import HybridError, UsageError
 from hybrid.simulation.bounds import BoundsWarning
-from hybrid.simulation.engine import simulate
-from hybrid.simulation.monitor import watched_requirements
 from hybrid.simulation.result import Run
+from hybrid.simulation.watched import watched_requirements
 
 __all__ = [
     "OUTCOME_COLUMNS",
@@ -201,8 +200,11 @@ def simulate_quietly(*args: Any, **kwargs: Any) -> Run:
     """:func:`~hybrid.simulation.engine.simulate` without a :class:`BoundsWarning` per run.
 
     A campaign's runs are rows of a table, not lines of a log: thousands of
-    runs would repeat the same warning.
+    runs would repeat the same warning. The engine is imported here, on the
+    first scipy run: a compiled campaign never loads scipy's integrators.
     """
+    from hybrid.simulation.engine import simulate
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", BoundsWarning)
         return simulate(*args, **kwargs)

@@ -45,8 +45,8 @@ from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.progress import Progress, Tracker, reporter
 from hybrid.simulation.interrupts import sigint_watch
-from hybrid.simulation.monitor import watched_requirements
 from hybrid.simulation.settings import DEFAULTS, Settings, merged
+from hybrid.simulation.watched import watched_requirements
 
 __all__ = ["SOLVER_OPTIONS", "campaign_settings", "executor_for", "hard_limit", "sweep"]
 

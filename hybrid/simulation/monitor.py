@@ -112,7 +112,7 @@ import math
 import threading
 import weakref
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -123,7 +123,6 @@ from hybrid.expr import ir
 from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
 from hybrid.expr.dependencies import signals_read
 from hybrid.expr.rho import guard_to_rho
-from hybrid.model import Requirement
 from hybrid.modes import Binder, Mode, mode_of
 from hybrid.simulation.compiled import CompiledMode, CompiledModel, Source
 from hybrid.simulation.crossing import HORIZON_SAMPLES, band, parts
@@ -131,6 +130,7 @@ from hybrid.simulation.dense import StepCurve
 from hybrid.simulation.failures import describe_failure
 from hybrid.simulation.result import RequirementResult, Run
 from hybrid.simulation.settings import Settings
+from hybrid.simulation.watched import Watched, watched_requirements
 
 __all__ = [
     "DIP_REACH",
@@ -147,40 +147,6 @@ __all__ = [
 
 
 Fn = Callable[[float, Any], Any]
-
-
-@dataclass(frozen=True)
-class Watched:
-    """A requirement as the monitor of a system sees it.
-
-    ``name`` is what results are reported under: the plain name in an automaton
-    and for a system file's own requirements, ``comp.name`` for a component's
-    requirement inside a system. ``component`` is the component whose
-    parameters the condition reads (None for a system file's requirement);
-    ``location`` is the ``in:`` location as ``(component index, location)``.
-    """
-
-    name: str
-    requirement: Requirement
-    component: int | None
-    location: tuple[int, str] | None
-
-
-def watched_requirements(system: System) -> list[Watched]:
-    """Every requirement of ``system``: each component's (in order), then the system file's."""
-    found: list[Watched] = []
-    for i, c in enumerate(system.components):
-        for r in c.automaton.requirements:
-            where = (i, r.location) if r.location is not None else None
-            found.append(Watched(system.qualified(i, r.name), r, i, where))
-    names = [c.name for c in system.components]
-    for r in system.requirements:
-        where = None
-        if r.location is not None:
-            comp, _, loc = r.location.partition(".")
-            where = (names.index(comp), loc)
-        found.append(Watched(r.name, r, None, where))
-    return found
 
 
 def owners(system: System, watched: Watched) -> set[int]:

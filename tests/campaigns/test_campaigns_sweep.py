@@ -15,8 +15,8 @@ from typing import Any
 import pytest
 
 import hybrid
-from hybrid.campaigns import runs as runs_module
 from hybrid.errors import UsageError
+from hybrid.simulation import engine
 
 H0, G = 10.0, 9.81
 T1 = math.sqrt(2 * H0 / G)
@@ -107,14 +107,14 @@ locations: {filling: {flow: {x: k*u}}}
 
 
 def test_a_failing_run_is_a_row_and_the_campaign_goes_on(monkeypatch: pytest.MonkeyPatch) -> None:
-    real = runs_module.simulate
+    real = engine.simulate  # what a campaign's scipy run calls
 
     def flaky(model: Any, **kwargs: Any) -> Any:
         if model.components[0].automaton.parameters["e"] == 0.7:
             raise RuntimeError("boom")
         return real(model, **kwargs)
 
-    monkeypatch.setattr(runs_module, "simulate", flaky)
+    monkeypatch.setattr(engine, "simulate", flaky)
     ball = hybrid.load("specs/bouncing_ball.yaml")
     table = hybrid.sweep(ball, t_end=1.0, grid={"e": [0.5, 0.7, 0.9]}, workers=0, backend="scipy")
     assert [row["cause"] for row in table.rows] == ["t_end", "error", "t_end"]

@@ -39,8 +39,8 @@ from typing import Any
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
-from hybrid.simulation.monitor import watched_requirements
 from hybrid.simulation.settings import Settings
+from hybrid.simulation.watched import watched_requirements
 
 __all__ = [
     "MAX_MODES",
