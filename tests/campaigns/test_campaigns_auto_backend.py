@@ -11,7 +11,14 @@ from support import SPECS, read_csv, run_cli
 import hybrid
 from hybrid.campaigns.choosing import BackendNote
 from hybrid.simulation.native import choice
-from hybrid.simulation.native.choice import KERNEL_COMPILE_S, LOAD_S, cached, choose
+from hybrid.simulation.native.choice import (
+    KERNEL_COMPILE_S,
+    LOAD_S,
+    SCIPY_LOAD_S,
+    SCIPY_RUN_FLOOR_S,
+    cached,
+    choose,
+)
 
 pytest.importorskip("numba")
 THERMO = hybrid.load(SPECS / "thermostat.yaml")
@@ -39,6 +46,45 @@ def test_the_choice_weighs_the_runs_against_loading_and_compiling(
     timed: list[int] = []
     loaded = choose(THERMO, 1, run_s=lambda: timed.append(1) or 0.0)
     assert loaded.backend == "compiled" and not timed  # nothing to load: nothing timed
+
+
+def test_a_campaign_too_long_for_scipy_at_its_cheapest_is_not_timed(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Timing one scipy run would load the scipy engine: not when no run can be cheap enough."""
+    timed: list[int] = []
+
+    def run_s() -> float:
+        timed.append(1)
+        return SCIPY_RUN_FLOOR_S
+
+    monkeypatch.setattr(choice, "cached", lambda model: ("cached", "cached", 1.0))
+    monkeypatch.setattr(choice, "_scipy_loaded", lambda: False)
+    # 1000 * 0.6 ms + 0.4 s of loading scipy = 1.0 s > LOAD_S (0.9 s)
+    runs = int((LOAD_S - SCIPY_LOAD_S) / SCIPY_RUN_FLOOR_S) + 1
+    chosen = choose(THERMO, runs, run_s=run_s)
+    assert chosen.backend == "compiled" and not timed
+    assert chosen.reason.startswith(f"{runs} runs would cost at least")
+    assert choose(THERMO, runs - 2, run_s=run_s).backend == "scipy" and timed == [1]
+    monkeypatch.setattr(choice, "_scipy_loaded", lambda: True)  # no import to spare
+    assert choose(THERMO, runs, run_s=run_s).backend == "scipy" and timed == [1, 1]
+    assert runs <= 1000  # the benchmark's sweep of 1,000 points is past it
+
+
+def test_a_compiled_sweep_does_not_load_the_scipy_engine() -> None:
+    """Its runs are the compiled backend's: the scipy engine (and scipy's integrators) stay out."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, hybrid\n"
+        f"model = hybrid.load({str(SPECS / 'thermostat.yaml')!r})\n"
+        "hybrid.sweep(model, 10.0, grid={'a': [0.1, 0.2]}, workers=0, backend='compiled')\n"
+        "print(sorted(m for m in ('hybrid.simulation.engine', 'scipy.integrate', "
+        "'scipy.optimize') if m in sys.modules))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip().splitlines()[-1] == "[]"
 
 
 def test_the_cache_is_read_from_the_manifests(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

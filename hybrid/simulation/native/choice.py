@@ -11,6 +11,9 @@ scipy run costs. :func:`choose` runs compiled when:
 - or the campaign's runs are expected to save more than loading (and, what is
   not in the cache, compiling) costs: ``runs * run_s`` (one scipy run of the
   model, timed by the caller) above :data:`LOAD_S` plus the compile estimate;
+  a campaign so long that scipy would cost more even at its cheapest
+  (:data:`SCIPY_RUN_FLOOR_S` a run, and :data:`SCIPY_LOAD_S` to load the
+  scipy engine where it is not loaded yet) is not timed: timing would load it;
 
 and scipy when the compiled backend cannot run the campaign (numba missing, a
 method other than RK45, inputs given as Python functions or expressions) or
@@ -37,13 +40,28 @@ from typing import Any
 from hybrid.errors import HybridError
 from hybrid.simulation.native.features import METHOD
 
-__all__ = ["KERNEL_COMPILE_S", "LOAD_S", "Choice", "cached", "choose", "compile_notice"]
+__all__ = [
+    "KERNEL_COMPILE_S",
+    "LOAD_S",
+    "SCIPY_LOAD_S",
+    "SCIPY_RUN_FLOOR_S",
+    "Choice",
+    "cached",
+    "choose",
+    "compile_notice",
+]
 
 KERNEL_COMPILE_S = 8.0
 """Seconds a first process on a machine spends compiling the kernel (bench: 7.7 s, 2 cores)."""
 LOAD_S = 0.9
 """CPU seconds a process spends importing numba and loading a cached kernel and model
 (``hybrid simulate`` of the thermostat, whole process: 1.81 s compiled, 0.93 s scipy)."""
+SCIPY_LOAD_S = 0.4
+"""CPU seconds a campaign's process spends importing the scipy engine (scipy's integrators
+and optimizers; measured 0.49 to 0.75 s): what its first scipy run costs beside the run."""
+SCIPY_RUN_FLOOR_S = 6e-4
+"""CPU seconds of the cheapest scipy run a campaign makes (a sweep point of a model with
+one state and no event, over 1e-9 s: measured 0.82 ms)."""
 COMPILED_SHARE = 1.0 / 50.0
 """A compiled run's time as a share of a scipy run's (measured 1/75 to 1/100: rounded up)."""
 
@@ -112,6 +130,10 @@ def choose(model: Any, runs: int, *, method: str = "RK45", inputs: bool = False,
     )  # fmt: skip
     if run_s is None:
         return Choice("scipy", f"one run: {what} would cost more than it saves")
+    least = runs * SCIPY_RUN_FLOOR_S + (0.0 if _scipy_loaded() else SCIPY_LOAD_S)
+    if least > cost:
+        return Choice("compiled", f"{runs} runs would cost at least {least:.1f} s on scipy "
+                                  f"(loading it included); {what}")  # fmt: skip
     saved = runs * run_s() * (1.0 - COMPILED_SHARE)
     verdict = "compiled" if saved > cost else "scipy"
     return Choice(verdict, f"{runs} runs would save about {saved:.1f} s; {what}")
@@ -133,6 +155,11 @@ def compile_notice(model: Any) -> str | None:
     if not parts:
         return None
     return f"compiling {' and '.join(parts)}; later runs load them from the cache"
+
+
+def _scipy_loaded() -> bool:
+    """Whether this process has loaded the scipy engine (a scipy run costs no import then)."""
+    return "hybrid.simulation.engine" in sys.modules
 
 
 def _sealed(directory: Path) -> bool:
