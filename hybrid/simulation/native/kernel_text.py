@@ -26,6 +26,7 @@ Examples
 from __future__ import annotations
 
 import ast
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -94,6 +95,7 @@ def kernel_source(modules: Sequence[str] = KERNEL_MODULES) -> tuple[str, list[st
     return "\n".join(parts), names
 
 
+@functools.lru_cache(maxsize=4)
 def kernel_module(parallel_over: str = "") -> Generated:
     """The source of the kernel module, or of the ensemble loop over the kernel module named.
 
@@ -102,7 +104,8 @@ def kernel_module(parallel_over: str = "") -> Generated:
     also get a C wrapper, so that they can be passed as function pointers. A
     second process finds every piece in numba's cache and compiles nothing; on
     a miss every function is compiled, callees first (each one found in the
-    cache is loaded instead).
+    cache is loaded instead). Made once per process (a tenth of a second: the
+    files are read and parsed), however often the cache is asked for it.
     """
     parallel = bool(parallel_over)
     modules = ("ensemble",) if parallel else KERNEL_MODULES[:-1]
