@@ -2,42 +2,28 @@
 
 It validates the settings (:class:`~hybrid.simulation.settings.Settings`) and
 the overrides (finite numbers, callable inputs), applies the overrides to the
-model, compiles it (once per model and thread,
-:class:`~hybrid.simulation.compiled.CompiledModel`) and runs the
-:class:`~hybrid.simulation.loop.EventLoop` with Ctrl-C turned into a clean end
-(:mod:`~hybrid.simulation.interrupts`) and progress reported through
-:mod:`hybrid.progress`.
+model, and runs it on the backend chosen: the reference engine
+(:mod:`~hybrid.simulation.reference`: scipy's integrators, the event loop) or
+the compiled one (:mod:`~hybrid.simulation.native.engine`), each imported on
+its first run, so that a process loads only the backend it runs. Progress is
+reported through :mod:`hybrid.progress`; the bounds are checked on the result.
 """
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable, Mapping
 from dataclasses import replace
 from types import ModuleType
 from typing import Any
 
-import numpy as np
-
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.progress import Reporter, Tracker
-from hybrid.simulation.apart import independent_groups, simulate_apart
 from hybrid.simulation.bounds import bound_excursions, warn_excursions
-from hybrid.simulation.compiled import CompiledModel
-from hybrid.simulation.interrupts import sigint_watch
-from hybrid.simulation.loop import EventLoop
-from hybrid.simulation.monitor import (
-    Monitor,
-    cut_results,
-    join_groups,
-    margin_table,
-    with_group_requirements,
-)
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings, finite_number, merged_values
-from hybrid.simulation.start import describe_start, run_inputs
+from hybrid.simulation.start import describe_start
 
 __all__ = ["simulate"]
 
@@ -177,7 +163,9 @@ def simulate(
     if settings.backend == "compiled":
         run = _simulate_compiled(model, settings, initial, inputs, handle_sigint, progressed)
     else:
-        run = _simulate_scipy(model, settings, initial, inputs, handle_sigint, progressed)
+        from hybrid.simulation.reference import simulate_reference
+
+        run = simulate_reference(model, settings, initial, inputs, handle_sigint, progressed)
     run.settings["start"] = start
     run.out_of_bounds = bound_excursions(
         model.states,
@@ -192,45 +180,6 @@ def simulate(
         warn_excursions(run.out_of_bounds)
     if tracker is not None:
         tracker.finish(run.termination.t, jumps=len(run.jumps), points=len(run))
-    return run
-
-
-def _simulate_scipy(
-    model: System,
-    settings: Settings,
-    initial: Mapping[str, float] | None,
-    inputs: Mapping[str, Callable[[float], float]] | None,
-    handle_sigint: bool,
-    progress: Callable[[float, int, int], None] | None,
-) -> Run:
-    """A run on the scipy backend: the event loop, or components apart when independent."""
-    compiled = _compiled(model, inputs)
-    x0 = np.array(_initial_vector(model, compiled, initial), dtype=float)
-    # a solution that blows up overflows inside the solver's linear algebra; the run
-    # sees the non-finite state and ends with a message, so numpy's warnings are noise
-    with sigint_watch(handle_sigint) as interrupts, np.errstate(all="ignore"):
-        if len(groups := _groups(model)) > 1:
-            # components that share no label and read no signal of each other: simulated
-            # apart and merged in hybrid time, never as a product
-            parts: list[tuple[Run, CompiledModel]] = []
-            whole = model
-
-            def run_group(
-                sub: System, start: np.ndarray, how: Settings
-            ) -> tuple[Run, CompiledModel]:
-                mine = {k: v for k, v in (inputs or {}).items() if k in sub.free_inputs}
-                part = _compiled(with_group_requirements(whole, sub), mine)
-                loop = EventLoop(part, how, interrupts, None)
-                loop.recorder.monitor = _monitor(part, how)
-                parts.append((loop.recorder.run(sub.name, loop.run(how.t_start, start)), part))
-                return parts[-1]
-
-            run = simulate_apart(model, groups, x0, settings, run_group)
-            run.requirements = cut_results(parts, run, settings)
-        else:
-            loop = EventLoop(compiled, settings, interrupts, progress)
-            loop.recorder.monitor = _monitor(compiled, settings)
-            run = loop.recorder.run(model.name, loop.run(settings.t_start, x0))
     return run
 
 
@@ -252,8 +201,10 @@ def _simulate_compiled(
             progress=progress,
         )  # fmt: skip
         return only
-    reference = _compiled(model, None)
-    monitor = _monitor(reference, settings)
+    from hybrid.simulation.reference import compiled_model, monitor_for
+
+    reference = compiled_model(model, None)
+    monitor = monitor_for(reference, settings)
     kept = settings if monitor is None or settings.dense else replace(settings, dense=True)
     run: Run = native.simulate_compiled(
         model, kept, initial=initial, inputs=inputs, handle_sigint=handle_sigint, progress=progress
@@ -307,18 +258,6 @@ _PLAIN: list[System | None] = [None]
 """The last model :func:`_has_requirements` found without requirements."""
 
 
-def _groups(model: System) -> list[tuple[int, ...]]:
-    """The groups simulated apart: independent components, joined where a requirement spans them."""
-    groups = independent_groups(model)
-    return join_groups(model, groups) if len(groups) > 1 and model.requirements else groups
-
-
-def _monitor(compiled: CompiledModel, settings: Settings) -> Monitor | None:
-    """A requirement monitor for one run of ``compiled`` (None if it has no requirement)."""
-    table = margin_table(compiled)
-    return None if table is None else Monitor(table, settings)
-
-
 def _updater(tracker: Tracker | None) -> Callable[[float, int, int], None] | None:
     if tracker is None:
         return None
@@ -351,48 +290,3 @@ def _check_inputs(inputs: Mapping[str, Callable[[float], float]] | None) -> None
             raise UsageError(
                 f"input '{name}' must be a function of t (e.g. lambda t: 0.5), got {fn!r}"
             )
-
-
-_CACHE = threading.local()
-_CACHE_SIZE = 8
-
-
-def _compiled(
-    model: System, inputs: Mapping[str, Callable[[float], float]] | None
-) -> CompiledModel:
-    """The compiled model of ``model``, reused across runs of the same model in a thread.
-
-    Compiling a mode's functions costs far more than a jump; a parameter sweep or
-    a benchmark simulates one model many times. Models given external inputs are
-    compiled afresh (the inputs are bound into the code); free inputs given none
-    are held at their nominal values (:func:`run_inputs`).
-    """
-    if inputs:
-        return CompiledModel(model, run_inputs(model, inputs))
-    cache: dict[int, tuple[Automaton | System, CompiledModel]] = (
-        getattr(_CACHE, "models", None) or {}
-    )
-    _CACHE.models = cache
-    hit = cache.get(id(model))
-    if hit is not None and hit[0] is model:
-        # a failure recorded by an earlier run of this model must not end this one
-        hit[1].failure.clear()
-        hit[1].flow_failure.clear()
-        return hit[1]
-    compiled = CompiledModel(model, run_inputs(model, None))
-    if len(cache) >= _CACHE_SIZE:
-        cache.pop(next(iter(cache)))
-    cache[id(model)] = (model, compiled)
-    return compiled
-
-
-def _initial_vector(
-    model: System, compiled: CompiledModel, initial: Mapping[str, float] | None
-) -> list[float]:
-    x0 = model.initial_vector()
-    if initial:
-        for name, value in initial.items():
-            if name not in compiled.state_names:
-                raise UsageError(f"initial value for unknown state variable '{name}'")
-            x0[compiled.state_names.index(name)] = float(value)
-    return x0

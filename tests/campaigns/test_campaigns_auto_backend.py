@@ -71,22 +71,6 @@ def test_a_campaign_too_long_for_scipy_at_its_cheapest_is_not_timed(
     assert runs <= 1000  # the benchmark's sweep of 1,000 points is past it
 
 
-def test_a_compiled_sweep_does_not_load_the_scipy_engine() -> None:
-    """Its runs are the compiled backend's: the scipy engine (and scipy's integrators) stay out."""
-    import subprocess
-    import sys
-
-    code = (
-        "import sys, hybrid\n"
-        f"model = hybrid.load({str(SPECS / 'thermostat.yaml')!r})\n"
-        "hybrid.sweep(model, 10.0, grid={'a': [0.1, 0.2]}, workers=0, backend='compiled')\n"
-        "print(sorted(m for m in ('hybrid.simulation.engine', 'scipy.integrate', "
-        "'scipy.optimize') if m in sys.modules))\n"
-    )
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert done.stdout.strip().splitlines()[-1] == "[]"
-
-
 def test_the_cache_is_read_from_the_manifests(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from hybrid.simulation.native import cache
 

@@ -38,7 +38,7 @@ def system(*extra: str) -> hybrid.System:
 def product_run(model: hybrid.System, monkeypatch: pytest.MonkeyPatch, **kw) -> hybrid.Run:
     with monkeypatch.context() as m:
         m.setattr(apart, "independent_groups", lambda s: [tuple(range(len(s.components)))])
-        m.setattr("hybrid.simulation.engine.independent_groups", apart.independent_groups)
+        m.setattr("hybrid.simulation.reference.independent_groups", apart.independent_groups)
         return hybrid.simulate(model, handle_sigint=False, **kw)
 
 

@@ -55,7 +55,8 @@ KERNEL_COMPILE_S = 8.0
 """Seconds a first process on a machine spends compiling the kernel (bench: 7.7 s, 2 cores)."""
 LOAD_S = 0.9
 """CPU seconds a process spends importing numba and loading a cached kernel and model
-(``hybrid simulate`` of the thermostat, whole process: 1.81 s compiled, 0.93 s scipy)."""
+(``hybrid simulate`` of the thermostat for 2 s, whole process, medians of 5: 1.46 s
+compiled, 0.92 s scipy, which loads the scipy engine instead: :data:`SCIPY_LOAD_S`)."""
 SCIPY_LOAD_S = 0.4
 """CPU seconds a campaign's process spends importing the scipy engine (scipy's integrators
 and optimizers; measured 0.49 to 0.75 s): what its first scipy run costs beside the run."""
