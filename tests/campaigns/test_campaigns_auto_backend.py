@@ -13,7 +13,7 @@ import hybrid
 from hybrid.campaigns.choosing import BackendNote
 from hybrid.simulation.native import choice
 from hybrid.simulation.native.choice import (
-    KERNEL_COMPILE_S,
+    KERNEL_COMPILE_CPU_S,
     LOAD_S,
     SCIPY_LOAD_S,
     SCIPY_RUN_FLOOR_S,
@@ -35,7 +35,7 @@ def test_the_choice_weighs_the_runs_against_loading_and_compiling(
     assert chosen.backend == "compiled" and chosen.reason.startswith("1000 runs would save about 9.8 s")
     assert choose(THERMO, 100, run_s=ten_ms).backend == "scipy"  # 0.98 s < LOAD_S + 1.0 s
     monkeypatch.setattr(choice, "cached", lambda model: ("missing", "missing", 1.0))
-    runs = int((LOAD_S + KERNEL_COMPILE_S + 1.0) / (0.01 * (1 - 1 / 50))) + 1
+    runs = int((LOAD_S + KERNEL_COMPILE_CPU_S + 1.0) / (0.01 * (1 - 1 / 50))) + 1
     assert choose(THERMO, runs, run_s=ten_ms).backend == "compiled"
     assert choose(THERMO, runs - 2, run_s=ten_ms).backend == "scipy"
     monkeypatch.setattr(choice, "cached", lambda model: ("cached", "cached", 1.0))

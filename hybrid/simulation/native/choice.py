@@ -1,8 +1,8 @@
 """``backend="auto"``: the compiled backend where it pays for its compile, else scipy, and why.
 
 A compiled run costs about 1/80 of a scipy run (docs/performance.md), but the
-first one on a machine compiles the kernel (about 8 s on the benchmark
-machine) and each new model structure (its estimated seconds, from its
+first one on a machine compiles the kernel (about 8 s of waiting and 18 s of CPU
+on the benchmark machine) and each new model structure (its estimated seconds, from its
 generated source's size), and a process that finds both in the cache still
 spends about 0.9 s of CPU importing numba and loading them: more than a short
 scipy run costs. :func:`choose` runs compiled when:
@@ -41,6 +41,7 @@ from hybrid.errors import HybridError
 from hybrid.simulation.native.features import METHOD
 
 __all__ = [
+    "KERNEL_COMPILE_CPU_S",
     "KERNEL_COMPILE_S",
     "LOAD_S",
     "SCIPY_LOAD_S",
@@ -52,7 +53,13 @@ __all__ = [
 ]
 
 KERNEL_COMPILE_S = 8.0
-"""Seconds a first process on a machine spends compiling the kernel (bench: 7.7 s, 2 cores)."""
+"""Seconds a first process on a machine waits for the kernel's compile (bench: 7.7 to
+10.8 s, 2 cores: worker processes compile shares of it meanwhile)."""
+KERNEL_COMPILE_CPU_S = 18.0
+"""CPU seconds the kernel's first compile costs, over every process that shares it: what
+the choice weighs (a machine's cores are not free). Bench: a cold compiled sweep of
+1,000 thermostat points took 22.2 s of CPU, 1.58 s warm; one process alone compiles
+the kernel and the model in 18.1 s."""
 LOAD_S = 0.9
 """CPU seconds a process spends importing numba and loading a cached kernel and model
 (``hybrid simulate`` of the thermostat for 2 s, whole process, medians of 5: 1.46 s
@@ -122,11 +129,11 @@ def choose(model: Any, runs: int, *, method: str = "RK45", inputs: bool = False,
         return Choice("scipy", f"the compiled backend cannot run it: {exc}")
     if model_state == kernel_state == "loaded":
         return Choice("compiled", "the compiled model is loaded in this process")
-    compiling = (KERNEL_COMPILE_S if kernel_state == "missing" else 0.0) + (
+    compiling = (KERNEL_COMPILE_CPU_S if kernel_state == "missing" else 0.0) + (
         estimate if model_state == "missing" else 0.0
     )
     cost = LOAD_S + compiling
-    what = f"compiling and loading (about {cost:.0f} s)" if compiling else (
+    what = f"compiling and loading (about {cost:.0f} s of CPU)" if compiling else (
         f"loading the cached compiled code (about {cost:.1f} s)"
     )  # fmt: skip
     if run_s is None:
