@@ -189,9 +189,26 @@ def plain(r: float) -> float:
     return 2.0 * r
 
 
+def limited(r: float) -> float:
+    """Defined up to 1.5 only: beyond, its Python form raises, and so does its compiled form."""
+    if r > 1.5:
+        raise ValueError("defined up to 1.5")
+    return 1.0
+
+
+def limited_compiled(r: float) -> float:
+    if r > 1.5:
+        raise ValueError("defined up to 1.5")
+    return 1.0
+
+
+limited.hybrid_arity = (1, 1)  # type: ignore[attr-defined]
+limited.hybrid_compiled = limited_compiled  # type: ignore[attr-defined]
+
+
 def native_library() -> dict[str, object]:
     """The function table a package would register under ``hybrid.functions``."""
-    return {"polar": polar, "spin": spin, "plain": plain}
+    return {"polar": polar, "spin": spin, "plain": plain, "limited": limited}
 
 
 # --- the same run on both backends (tests/simulation/native, tests/interchange) ------------

@@ -293,11 +293,7 @@ def generate(model: NativeModel) -> Generated:
         fallback = {"model_value": "return _NAN", "model_truth": "return False"}.get(name, "return")
         functions += _function(name, f"{index}, t, x, p, out", cases, fallback)
     op_lines = len(functions)
-    functions += [
-        "def model(op, i, t, xp, pp, outp):",
-        f"    x = carray(xp, ({max(1, len(states))},))",
-        f"    p = carray(pp, ({n_pe},))",
-        f"    out = carray(outp, ({out_size},))",
+    dispatch = [
         "    if op == OP_WATCH:",
         "        model_watch(i, t, x, p, out)",
         "    elif op == OP_VALUE:",
@@ -315,6 +311,47 @@ def generate(model: NativeModel) -> Generated:
         "    return 0.0",
         "",
     ]
+    pointers = [
+        "def model(op, i, t, xp, pp, outp):",
+        f"    x = carray(xp, ({max(1, len(states))},))",
+        f"    p = carray(pp, ({n_pe},))",
+        f"    out = carray(outp, ({out_size},))",
+    ]
+    if model.functions:  # a library's compiled form may raise: an evaluation failure, as NaN
+        watch_n = tuple(len(m.transitions) + len(m.invariants) for m in modes)
+        arm_n = tuple(len(m.transitions) + sum(len(t.levels) for t in m.transitions) for m in modes)
+        body["model_ops"], body["model_failed"] = [], []
+        functions += [
+            "def model_ops(op, i, t, x, p, out):",
+            *dispatch,
+            "def model_failed(op, i, out):",
+            '    """What an operation gives where a library function raised: NaN, a failure."""',
+            "    if op == OP_VALUE:",
+            "        return _NAN",
+            "    if op == OP_TRUTH:",
+            "        return 0.0  # its rho, evaluated first, has failed already",
+            "    n = 0",
+            "    if op == OP_RHS or op == OP_RESET:",
+            f"        n = {len(states)}",
+            "    elif op == OP_OUTPUTS:",
+            f"        n = {len(model.columns)}",
+            "    elif op == OP_WATCH:",
+            f"        n = {watch_n!r}[i]",
+            "    elif op == OP_ARM:",
+            f"        n = {arm_n!r}[i]",
+            "    for k in range(n):",
+            "        out[k] = _NAN",
+            "    return 0.0",
+            "",
+            *pointers,
+            "    try:",
+            "        return model_ops(op, i, t, x, p, out)",
+            "    except Exception:",
+            "        return model_failed(op, i, out)",
+            "",
+        ]
+    else:
+        functions += [*pointers, *dispatch]
     # a small model's operations are inlined into `model`, compiled as one function (less than
     # half the time: numba's cost per function dominates); a large model's apart: numba's typing
     # of one huge function costs more than that of its parts (UVMS mission 2: half its compile)

@@ -70,3 +70,25 @@ def test_a_function_without_a_compiled_form_is_named(testlib: None) -> None:
     with pytest.raises(UsageError, match="library function 'plain' has no compiled form"):
         hybrid.simulate(model, t_end=1.0, backend="compiled")
     assert hybrid.simulate(model, t_end=1.0).termination.cause == "t_end"
+
+
+RAISING = """
+automaton: growth
+uses: [testlib]
+state: {x: {initial: 1.0}}
+locations:
+  a: {flow: {x: limited(x)}}
+"""
+
+
+def test_a_compiled_form_that_raises_is_an_evaluation_failure(testlib: None) -> None:
+    """As on scipy: the run ends ``nonfinite`` where the function raised, and says why."""
+    model = hybrid.load_text(RAISING)
+    kwargs = {"t_end": 2.0, "rtol": 1e-10, "atol": 1e-12, "handle_sigint": False}
+    compiled = hybrid.simulate(model, backend="compiled", **kwargs)  # type: ignore[arg-type]
+    reference = hybrid.simulate(model, **kwargs)  # type: ignore[arg-type]
+    assert compiled.termination.cause == reference.termination.cause == "nonfinite"
+    assert "limited(1.5" in compiled.termination.message
+    assert "defined up to 1.5" in compiled.termination.message
+    assert compiled.termination.message == reference.termination.message
+    assert abs(compiled.termination.t - 0.5) < 1e-6  # x = 1 + t passes 1.5 at t = 0.5
