@@ -71,8 +71,13 @@ def _rows(work: Path, repeats: int) -> dict[str, dict[str, float]]:
     _cpu([*_sweep(work / "fill.csv"), "--backend", "compiled"], warm)  # kernel and model
     _cpu([*SIMULATE, "--backend", "compiled"], warm)
     times: dict[str, dict[str, list[float]]] = {"cold": {}, "warm": {}}
+    names = list(commands)
     for k in range(repeats):
-        for name, args in commands.items():  # interleaved: load drifts hit every row alike
+        # interleaved, so that load drifts hit every row alike, and each round starting at
+        # another row: in a fixed order the row after the heaviest command (a cold compiled
+        # sweep, 20 s) always ran first after it
+        for name in names[k % len(names):] + names[: k % len(names)]:
+            args = commands[name]
             cold = work / f"cold-{k}-{name.replace(' ', '-')}"
             times["cold"].setdefault(name, []).append(_cpu(args, cold))
             times["warm"].setdefault(name, []).append(_cpu(args, warm))

@@ -234,7 +234,8 @@ print(time.perf_counter() - t0)
 def compile_times() -> dict[str, float]:
     """Seconds, in fresh processes sharing one new cache directory, to a compiled run.
 
-    Each probe reports: importing hybrid's simulator (scipy), importing numba,
+    Each probe reports: importing hybrid's simulator (its entry: since a compiled run
+    stopped loading the scipy engine, scipy is not among it), importing numba,
     compiling or loading the kernel, generating and compiling or loading the
     model, and the first run. The first process compiles both; the second a new
     model only; the third finds both cached. ``first_process_kernel_and_model_s``:
