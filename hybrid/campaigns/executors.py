@@ -176,7 +176,11 @@ class LocalPool(Executor):
             "forkserver" if "forkserver" in methods else "spawn"
         )
         if "forkserver" in methods:
-            self.context.set_forkserver_preload(["hybrid.campaigns.jobs"])
+            # the scipy engine too: a compiled campaign runs in this process (choosing.settle),
+            # so the workers run scipy, and each would import it (about 0.5 s) on its first run
+            self.context.set_forkserver_preload(
+                ["hybrid.campaigns.jobs", "hybrid.simulation.reference"]
+            )
 
     def start(self, payload: Payload, plan: RunPlan) -> None:
         self.payload, self.plan = payload, plan

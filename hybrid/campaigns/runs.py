@@ -216,6 +216,8 @@ def run_point(
     """The row of run ``index`` at ``point`` (see the module docstring)."""
     row: dict[str, Any] = {"run": index, **point}
     over = split(point)
+    if plan.backend != "compiled":  # its import (about 0.5 s) is not the run's time
+        from hybrid.simulation import reference  # noqa: F401
     deadline = None if plan.timeout is None else time.monotonic() + plan.timeout
     try:
         target = model_variant(model, over.parameters)

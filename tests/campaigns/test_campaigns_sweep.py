@@ -139,6 +139,27 @@ def test_a_run_over_the_timeout_is_a_row() -> None:
     assert "longer than the run timeout of 0.5 s" in table.rows[1]["message"]
 
 
+def test_loading_the_scipy_engine_is_not_a_runs_time() -> None:
+    """A fresh process loads the scipy engine (0.45 to 0.75 s) before a run's clock starts.
+
+    Counted, it made the first run of a campaign (or of each new worker) time out under a
+    short ``run_timeout``: a run of 10 ms here, a timeout of 0.3 s.
+    """
+    import subprocess
+    import sys
+
+    code = (
+        "import hybrid\n"
+        "ball = hybrid.load('specs/bouncing_ball.yaml')\n"
+        "t = hybrid.sweep(ball, t_end=1.0, grid={'e': [0.5, 0.7]}, workers=0, run_timeout=0.3,"
+        " backend='scipy')\n"
+        "print([row['cause'] for row in t.rows])\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)  # fmt: skip
+    assert done.stdout.strip().splitlines()[-1] == "['t_end', 't_end']"
+
+
 def test_a_worker_that_does_not_answer_is_stopped_and_replaced() -> None:
     # two independent components are simulated apart, without progress reports, so only
     # the hard limit of the local pool (1.5 timeout + 2 s) can stop the slow run
