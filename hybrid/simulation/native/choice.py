@@ -166,8 +166,12 @@ def compile_notice(model: Any) -> str | None:
 
 
 def _scipy_loaded() -> bool:
-    """Whether this process has loaded the scipy engine (a scipy run costs no import then)."""
-    return "hybrid.simulation.engine" in sys.modules
+    """Whether this process has loaded the scipy engine (a scipy run costs no import then).
+
+    Its module is :mod:`hybrid.simulation.reference`; ``simulate``'s own module is loaded
+    by compiled runs too, without scipy.
+    """
+    return "hybrid.simulation.reference" in sys.modules
 
 
 def _sealed(directory: Path) -> bool:

@@ -50,3 +50,20 @@ def test_a_scipy_run_loads_it() -> None:
     """The check above can fail: a scipy run in the same kind of process loads all of it."""
     loaded = _loaded_after("hybrid.simulate(model, 10.0)")
     assert {"hybrid.simulation.reference", "scipy.integrate", "scipy.optimize"} <= set(loaded)
+
+
+def test_the_choice_knows_whether_the_scipy_engine_is_loaded() -> None:
+    """``auto`` credits a campaign with scipy's import only where it is still to come: not
+    after a scipy run, and still after a compiled one (which loads ``simulate``'s module)."""
+    script = (
+        "import hybrid\n"
+        "from hybrid.simulation.native.choice import _scipy_loaded\n"
+        f"model = hybrid.load({str(SPECS / 'thermostat.yaml')!r})\n"
+        "hybrid.simulate(model, 10.0, backend='compiled')\n"
+        "after_compiled = _scipy_loaded()\n"
+        "hybrid.simulate(model, 10.0)\n"
+        "print(after_compiled, _scipy_loaded())\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          check=True)  # fmt: skip
+    assert done.stdout.strip().splitlines()[-1] == "False True"
