@@ -206,6 +206,8 @@ def generate(model: NativeModel) -> Generated:
     forms = _Forms()
     tables: dict[str, list[int]] = {k: [] for k in TABLES}
     rhs_cases, out_cases, reset_cases, watch_cases, arm_cases = [], [], [], [], []
+    watch_sizes: list[int] = []  # each mode's watch terms, and what its arming reads
+    arm_sizes: list[int] = []
     outputs_ir = _output_exprs(model)
     levels = 0
     keys: dict[str, int] = {}  # a level's key (hybrid.expr.rho.level_key) -> its number
@@ -258,8 +260,10 @@ def generate(model: NativeModel) -> Generated:
         terms = oriented + [guard_to_rho(expr) for _, expr in mode.invariants]
         pre, items = body_lines(terms, mode.signals, names)
         watch_cases.append(pre + [f"out[{k}] = {v}" for k, v in enumerate(items)])
+        watch_sizes.append(len(items))
         pre, items = body_lines(raw + differences, mode.signals, names)
         arm_cases.append(pre + [f"out[{k}] = {v}" for k, v in enumerate(items)])
+        arm_sizes.append(len(items))
     tables["MODE_TR"].append(len(tables["TR_TARGET"]))
     tables["MODE_INV"].append(len(tables["INV_RHO"]))
     tables["TR_LV"].append(levels)
@@ -318,8 +322,6 @@ def generate(model: NativeModel) -> Generated:
         f"    out = carray(outp, ({out_size},))",
     ]
     if model.functions:  # a library's compiled form may raise: an evaluation failure, as NaN
-        watch_n = tuple(len(m.transitions) + len(m.invariants) for m in modes)
-        arm_n = tuple(len(m.transitions) + sum(len(t.levels) for t in m.transitions) for m in modes)
         body["model_ops"], body["model_failed"] = [], []
         functions += [
             "def model_ops(op, i, t, x, p, out):",
@@ -336,9 +338,9 @@ def generate(model: NativeModel) -> Generated:
             "    elif op == OP_OUTPUTS:",
             f"        n = {len(model.columns)}",
             "    elif op == OP_WATCH:",
-            f"        n = {watch_n!r}[i]",
+            f"        n = {tuple(watch_sizes)!r}[i]",
             "    elif op == OP_ARM:",
-            f"        n = {arm_n!r}[i]",
+            f"        n = {tuple(arm_sizes)!r}[i]",
             "    for k in range(n):",
             "        out[k] = _NAN",
             "    return 0.0",
