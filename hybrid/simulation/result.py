@@ -170,6 +170,11 @@ class Run:
     def __len__(self) -> int:
         return int(self.t.shape[0])
 
+    def checked_columns(self) -> tuple[NDArray[np.float64], Any, NDArray[np.float64]]:
+        """``(t, j, states)`` as the checks after a run read them (a compiled run's without
+        making its columns): rows in order, ``j`` as numbers."""
+        return self.t, self.j, self.states
+
     @property
     def columns(self) -> tuple[str, ...]:
         return (*self.state_names, *self.signal_names)

@@ -61,6 +61,7 @@ __all__ = [
     "JumpFields",
     "JumpRecords",
     "Layout",
+    "RecordedRun",
     "describe_native_failure",
     "jump_records",
     "run_from",
@@ -530,21 +531,93 @@ def run_from(
     buf: b.RunArrays,
     inputs: Inputs = None,
 ) -> Run:
-    """The :class:`Run` recorded in ``buf`` (one run's arrays) for ``model``."""
+    """The :class:`Run` recorded in ``buf`` (one run's arrays) for ``model``.
+
+    Its points are copied out of ``buf`` at once, as one block, and made into
+    columns when first read (:class:`RecordedRun`); the rest is made here.
+    """
     oi, of = buf.oi.tolist(), buf.of.tolist()  # the counts and numbers, read at once
     n, d = oi[b.I_POINTS], len(native.state_names)
-    pts = buf.pts[:n]
-    return Run(
+    run: RecordedRun = RecordedRun.__new__(RecordedRun)
+    run.__dict__.update(
         model=model.name,
         state_names=layout.state_names,
         signal_names=tuple(native.columns),
-        t=pts[:, b.P_T].copy(),
-        j=pts[:, b.P_J].astype(np.int64),
-        location=layout.mode_names.take(pts[:, b.P_M].astype(np.int64)),  # take: fancy's result, sooner
-        states=pts[:, b.P_X : b.P_X + d].copy(),
-        signals=pts[:, b.P_X + d :].copy(),
         jumps=JumpRecords(layout, buf.jps[: oi[b.I_JUMPS]].copy(), d),
         termination=termination_of(native, layout, model, settings, buf, inputs, (oi, of)),
         settings=settings_record(settings),
         segments=_segments(buf, d, oi[b.I_STORED_STEPS]) if oi[b.I_STORED_STEPS] else [],
-    )
+        units={},
+        requirements={},
+        _rows=buf.pts[:n].copy(),
+        _names=layout.mode_names,
+    )  # the fields a Run's __init__ sets, defaults included; not the columns yet
+    return run
+
+
+_COLUMNS = frozenset(("t", "j", "location", "states", "signals"))
+
+
+class RecordedRun(Run):
+    """A compiled run: a :class:`Run` whose columns are made from its points on first read.
+
+    The compiled loop's points (time, hybrid time, mode, states, signals per
+    row) are kept as the one block copied out of the loop's arrays; ``t``,
+    ``j``, ``location``, ``states`` and ``signals`` are made from it, all five
+    at once, the first time one is read, and are then what an eagerly built
+    :class:`Run` holds (contiguous arrays of their own). A run nobody reads
+    costs one copy. Copied or pickled, it is a plain :class:`Run`.
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+    >>> run = hybrid.simulate(ball, t_end=2.0, backend="compiled", handle_sigint=False)
+    >>> sorted(run.__dict__).count("t"), len(run), run.location[0], sorted(run.__dict__).count("t")
+    (0, 9, 'falling', 1)
+    """
+
+    def __getattr__(self, name: str) -> Any:
+        """A column not made yet: made now (called only for attributes not set)."""
+        if name in _COLUMNS and "_rows" in self.__dict__:
+            self._unpack()
+            return self.__dict__[name]
+        raise AttributeError(f"'Run' object has no attribute '{name}'")
+
+    def __len__(self) -> int:
+        rows = self.__dict__.get("_rows")
+        return int(self.t.shape[0] if rows is None else rows.shape[0])
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        self._unpack()
+        return (_plain_run, (dict(self.__dict__),))
+
+    def checked_columns(self) -> tuple[NDArray[np.float64], Any, NDArray[np.float64]]:
+        rows = self.__dict__.get("_rows")
+        if rows is None:
+            return super().checked_columns()
+        return rows[:, b.P_T], rows[:, b.P_J], rows[:, b.P_X : b.P_X + len(self.state_names)]
+
+    def _unpack(self) -> None:
+        """Make the columns from the block (two threads may both: they make the same)."""
+        found = self.__dict__
+        rows, names = found.get("_rows"), found.get("_names")
+        if rows is None or names is None:
+            return
+        d = len(self.state_names)
+        found.update(
+            t=rows[:, b.P_T].copy(),
+            j=rows[:, b.P_J].astype(np.int64),
+            location=names.take(rows[:, b.P_M].astype(np.int64)),
+            states=rows[:, b.P_X : b.P_X + d].copy(),
+            signals=rows[:, b.P_X + d :].copy(),
+        )
+        found.pop("_rows", None)
+        found.pop("_names", None)
+
+
+def _plain_run(fields: dict[str, Any]) -> Run:
+    """A :class:`Run` holding ``fields`` (how a :class:`RecordedRun` is copied and pickled)."""
+    run = Run.__new__(Run)
+    run.__dict__.update(fields)
+    return run
