@@ -605,13 +605,15 @@ class RecordedRun(Run):
         if rows is None or names is None:
             return
         d = len(self.state_names)
-        found.update(
-            t=rows[:, b.P_T].copy(),
-            j=rows[:, b.P_J].astype(np.int64),
-            location=names.take(rows[:, b.P_M].astype(np.int64)),
-            states=rows[:, b.P_X : b.P_X + d].copy(),
-            signals=rows[:, b.P_X + d :].copy(),
-        )
+        columns = {
+            "t": rows[:, b.P_T].copy(),
+            "j": rows[:, b.P_J].astype(np.int64),
+            "location": names.take(rows[:, b.P_M].astype(np.int64)),
+            "states": rows[:, b.P_X : b.P_X + d].copy(),
+            "signals": rows[:, b.P_X + d :].copy(),
+        }
+        for name, column in columns.items():
+            found.setdefault(name, column)  # one set before it was made stays
         found.pop("_rows", None)
         found.pop("_names", None)
 

@@ -108,3 +108,12 @@ def test_an_unknown_attribute_is_an_attribute_error() -> None:
     with pytest.raises(AttributeError, match="'Run' object has no attribute 'time'"):
         _ = run.time  # type: ignore[attr-defined]
     assert not hasattr(run, "_rows_missing")
+
+
+def test_a_column_set_before_the_others_are_made_is_kept() -> None:
+    run = hybrid.simulate(BALL, t_end=3.0, backend="compiled", **TOL)
+    mine = np.zeros(3)
+    run.signals = mine
+    assert run.t[0] == 0.0  # makes the other four
+    assert run.signals is mine
+    assert run.states.shape == (len(run), 2)
