@@ -27,8 +27,9 @@ from collections.abc import Callable, Mapping
 
 from hybrid.analysis.solve import closure, conjoin, dnf
 from hybrid.expr import ir
+from hybrid.expr.dependencies import evaluation_order
 
-__all__ = ["derivative", "exit_conditions"]
+__all__ = ["MAX_DERIVATIVE_DEPTH", "derivative", "exit_conditions"]
 
 _ZERO = ir.Num(0.0)
 _ONE = ir.Num(1.0)
@@ -87,6 +88,12 @@ _CHAIN: dict[str, Callable[[ir.Expr], ir.Expr]] = {
 }
 
 
+MAX_DERIVATIVE_DEPTH = 256
+"""Deepest derivative expression formed (deeper, it is not formed). A derivative through
+signals defined through each other can be as deep as their chain is long; what reads it
+(the interval evaluator) recurses over it."""
+
+
 def derivative(
     node: ir.Expr,
     flow: Mapping[str, ir.Expr],
@@ -94,6 +101,10 @@ def derivative(
     opaque: frozenset[str] = frozenset(),
 ) -> ir.Expr | None:
     """The time derivative of ``node`` along ``flow`` (``None`` if it cannot be formed).
+
+    A signal's derivative is formed once, after those of the signals it reads
+    (so a long chain of definitions is followed in order, not recursively); a
+    result deeper than :data:`MAX_DERIVATIVE_DEPTH` is not formed.
 
     Examples
     --------
@@ -103,6 +114,7 @@ def derivative(
     >>> to_source(d, {"x": "x"})
     '2.0 * x + x * 2.0'
     """
+    formed: dict[str, ir.Expr | None] = {}  # each signal's derivative, once
 
     def d(n: ir.Expr) -> ir.Expr | None:
         if isinstance(n, ir.Num):
@@ -113,7 +125,10 @@ def derivative(
             if n.kind == ir.TIME:
                 return _ONE
             if n.kind == ir.SIGNAL and n.name in signals:
-                return d(signals[n.name])
+                if n.name not in formed:
+                    for name in evaluation_order((n.name,), signals, formed):
+                        formed[name] = d(signals[name])
+                return formed[n.name]
             return None
         if isinstance(n, ir.Unary):
             inner = d(n.operand)
@@ -147,7 +162,19 @@ def derivative(
             return _div(_sub(_mul(dl, n.right), _mul(n.left, dr)), _mul(n.right, n.right))
         return None
 
-    return d(node)
+    found = d(node)
+    return None if found is None or _deeper_than(found, MAX_DERIVATIVE_DEPTH) else found
+
+
+def _deeper_than(node: ir.Expr, limit: int) -> bool:
+    """Whether ``node`` nests more than ``limit`` levels (walked without recursion)."""
+    stack = [(node, 1)]
+    while stack:
+        current, depth = stack.pop()
+        if depth > limit:
+            return True
+        stack.extend((child, depth + 1) for child in ir.children(current))
+    return False
 
 
 def _folded(rate: ir.Expr | None) -> ir.Expr | None:

@@ -31,6 +31,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from hybrid.expr import ir
+from hybrid.expr.dependencies import evaluation_order
 from hybrid.expr.functions import BUILTINS
 from hybrid.expr.interval import Interval
 from hybrid.expr.ranges import IntervalEvaluator
@@ -168,9 +169,15 @@ class Linearizer:
         if node.kind == ir.SIGNAL:
             cached = self._signals.get(node.name)
             if cached is None:
-                definition = self.evaluator.signals.get(node.name)
-                cached = self._opaque(node) if definition is None else self.affine(definition)
-                self._signals[node.name] = cached
+                definitions = self.evaluator.signals
+                if node.name not in definitions:
+                    cached = self._signals[node.name] = self._opaque(node)
+                    return cached
+                # the signals it reads first, each after those it reads (as the
+                # evaluator does): a chain is linearised in order, not recursively
+                for name in evaluation_order((node.name,), definitions, self._signals):
+                    self._signals[name] = self.affine(definitions[name])
+                cached = self._signals[node.name]
             return cached
         if node.kind == ir.TIME:
             return Affine({"t": 1.0}, 0.0)

@@ -18,7 +18,7 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Container, Iterable, Mapping
 from graphlib import CycleError, TopologicalSorter
 
 from hybrid.expr import ir
@@ -63,18 +63,22 @@ def find_cycle(definitions: Mapping[str, ir.Expr]) -> list[str] | None:
     return find_dependency_cycle(signal_dependencies(definitions))
 
 
-def evaluation_order(needed: Iterable[str], definitions: Mapping[str, ir.Expr]) -> list[str]:
+def evaluation_order(
+    needed: Iterable[str], definitions: Mapping[str, ir.Expr], done: Container[str] = ()
+) -> list[str]:
     """The signals ``needed`` and those they read, each after its dependencies.
 
+    Signals in ``done`` (evaluated already) are neither listed nor followed.
     Raises ``ValueError`` on a circular definition (loading refuses those first).
     """
     graph: dict[str, set[str]] = {}
-    pending = sorted(n for n in needed if n in definitions)
+    pending = sorted(n for n in needed if n in definitions and n not in done)
     while pending:
         name = pending.pop()
         if name in graph:
             continue
-        graph[name] = ir.names_in(definitions[name]) & definitions.keys()
+        graph[name] = {n for n in ir.names_in(definitions[name]) & definitions.keys()
+                       if n not in done}  # fmt: skip
         pending.extend(sorted(graph[name] - graph.keys()))
     try:
         # sorted predecessors: the same order in every process (generated source is cached by it)

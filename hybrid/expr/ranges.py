@@ -39,6 +39,7 @@ import math
 from collections.abc import Mapping
 
 from hybrid.expr import ir
+from hybrid.expr.dependencies import evaluation_order
 from hybrid.expr.function_ranges import call_range, power_range
 from hybrid.expr.interval import (
     ENTIRE,
@@ -120,9 +121,13 @@ class IntervalEvaluator:
         if node.kind == ir.SIGNAL:
             cached = self._cache.get(node.name)
             if cached is None:
-                definition = self.signals.get(node.name)
-                cached = ENTIRE if definition is None else self.number(definition)
-                self._cache[node.name] = cached
+                if node.name not in self.signals:
+                    return ENTIRE
+                # the signals it reads first, each after those it reads: a chain of
+                # definitions is evaluated in order, never as deep as it is long
+                for name in evaluation_order((node.name,), self.signals, self._cache):
+                    self._cache[name] = self.number(self.signals[name])
+                cached = self._cache[node.name]
             return cached
         if node.kind == ir.TIME:
             return self.box.get("t", TIME)
