@@ -20,11 +20,12 @@ import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
+from pathlib import PurePath
 from types import MappingProxyType
 from typing import Protocol
 
 from hybrid.binding import input_problems, signal_cycle_problems
-from hybrid.errors import Position, SpecError, did_you_mean
+from hybrid.errors import Position, SpecError, UsageError, did_you_mean
 from hybrid.expr.functions import Function
 from hybrid.model import Automaton, Properties, Range, Requirement, StateVar
 
@@ -35,6 +36,7 @@ __all__ = [
     "as_system",
     "check_system",
     "compose",
+    "expect_model",
 ]
 
 
@@ -308,6 +310,39 @@ def _resolve_parameter(system: System, key: str) -> tuple[str, str]:
     )
 
 
+def expect_model(value: object, caller: str) -> None:
+    """Raise a :class:`~hybrid.errors.UsageError` unless ``value`` is a model from :func:`hybrid.load`.
+
+    ``caller`` names the public function (``"simulate"``): the message shows how
+    to call it with a file's model.
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> try:
+    ...     expect_model("ball.yaml", "simulate")
+    ... except hybrid.UsageError as error:
+    ...     print(error)
+    simulate() takes a model from hybrid.load(), not a file name: hybrid.simulate(hybrid.load('ball.yaml'), ...)
+    """
+    if isinstance(value, Automaton | System):
+        return
+    if isinstance(value, str | PurePath):
+        raise UsageError(
+            f"{caller}() takes a model from hybrid.load(), not a file name: "
+            f"hybrid.{caller}(hybrid.load({str(value)!r}), ...)"
+        )
+    raise UsageError(
+        f"{caller}() takes a model from hybrid.load() or hybrid.load_text(), "
+        f"got {type(value).__name__}: {_shown(value)}"
+    )
+
+
+def _shown(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 def as_system(model: Automaton | System) -> System:
     """The system view of a model (an automaton is a system of one).
 
@@ -378,6 +413,13 @@ def compose(
     >>> hybrid.compose(a, b, names=["left", "right"]).state_names
     ('x', 'y')
     """
+    for automaton in automata:
+        if isinstance(automaton, System):
+            raise UsageError(
+                f"compose() takes automata; '{automaton.name}' is a system: compose the "
+                "automata of its components"
+            )
+        expect_model(automaton, "compose")
     if not automata:
         raise SpecError("compose() needs at least one automaton")
     comp_names = list(names) if names is not None else [a.name for a in automata]

@@ -38,10 +38,10 @@ from hybrid.campaigns.runs import (
     requirement_columns,
     simulate_quietly,
 )
-from hybrid.campaigns.space import SAMPLERS, Axis, ranges_axes, unit_samples
+from hybrid.campaigns.space import SAMPLERS, Axis, checked_seed, ranges_axes, unit_samples
 from hybrid.campaigns.sweep import campaign_backend, campaign_settings, executor_for, hard_limit
 from hybrid.campaigns.targets import Constant, check_names, split
-from hybrid.compose import System, as_system
+from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.progress import Progress, Tracker, reporter
@@ -183,6 +183,8 @@ def falsify(
     >>> result.found, result.values["k"] > 0.0575, result.robustness < 0
     (True, True, True)
     """
+    expect_model(model, "falsify")
+    seed = checked_seed(seed)
     chosen, solver = campaign_settings("falsify", settings, t_end, solver)
     t_end, (backend, announce) = chosen.t_end, campaign_backend(backend, chosen)
     if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:

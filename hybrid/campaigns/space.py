@@ -38,7 +38,8 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping, Sequence
+import numbers
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,6 +53,7 @@ __all__ = [
     "SAMPLERS",
     "Axis",
     "Point",
+    "checked_seed",
     "combine",
     "declared_axis",
     "declared_ranges",
@@ -105,7 +107,14 @@ class Axis:
     @classmethod
     def listed(cls, name: str, values: Sequence[float]) -> Axis:
         """A grid axis of explicit values (finite numbers), in the order given."""
-        seq = tuple(float(v) for v in values)
+        if isinstance(values, str | bytes) or not isinstance(values, Iterable):
+            raise UsageError(
+                f"{name}: a grid gives a list of values or a count, got {values!r}"
+            )
+        try:
+            seq = tuple(float(v) for v in values)
+        except (TypeError, ValueError):
+            raise UsageError(f"{name}: grid values must be numbers, got {list(values)!r}") from None
         if not seq:
             raise UsageError(f"{name}: the grid has no values")
         if not all(map(math.isfinite, seq)):
@@ -147,10 +156,26 @@ def grid_points(axes: Sequence[Axis]) -> list[Point]:
     ]
 
 
+def checked_seed(seed: object) -> int:
+    """``seed`` if it is a whole number >= 0 (what numpy's generators take), else a UsageError.
+
+    Examples
+    --------
+    >>> checked_seed(7)
+    7
+    """
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise UsageError(f"the seed must be a whole number >= 0, got {seed!r}")
+    return int(seed)
+
+
 def sample_points(axes: Sequence[Axis], n: int, seed: int, sampler: str = "lhs") -> list[Point]:
     """``n`` points of the box of ``axes``' ranges, drawn from ``seed`` (the same anywhere)."""
     if sampler not in SAMPLERS:
         raise UsageError(f"unknown sampler '{sampler}' (choose from {', '.join(SAMPLERS)})")
+    if isinstance(n, bool) or not isinstance(n, numbers.Integral):
+        raise UsageError(f"the number of samples must be a whole number, got {n!r}")
+    seed = checked_seed(seed)
     if n < 1 or n > MAX_POINTS:
         raise UsageError(f"the number of samples must be from 1 to {MAX_POINTS}, got {n}")
     if not axes:
@@ -170,7 +195,7 @@ def unit_samples(d: int, n: int, seed: int, sampler: str = "lhs") -> np.ndarray:
     """``n`` points of the unit cube ``[0, 1)^d``, one row each, from ``seed``."""
     from scipy.stats import qmc
 
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(checked_seed(seed))
     if sampler == "lhs":
         return np.asarray(qmc.LatinHypercube(d=d, seed=rng).random(n))
     if sampler == "sobol":
@@ -275,10 +300,14 @@ def grid_axes(
             else:
                 axes.append(Axis.listed(str(name), values))
         return axes
+    if isinstance(given, str | bytes) or not isinstance(given, Iterable):
+        raise UsageError(f"grid must be a mapping {{name: values or N}} or a list, got {given!r}")
     for item in given:
         if isinstance(item, Axis):
             axes.append(item)
         else:
+            if isinstance(item, str | bytes) or not isinstance(item, Sequence) or len(item) != 2:
+                raise UsageError(f"a grid item is an Axis or (name, N), got {item!r}")
             name, count = item
             axes.append(declared_axis(model, str(name), _count(str(name), count)))
     return axes

@@ -32,6 +32,7 @@ from hybrid.campaigns.runs import (
 from hybrid.campaigns.space import (
     Axis,
     Point,
+    checked_seed,
     combine,
     grid_axes,
     grid_points,
@@ -40,7 +41,7 @@ from hybrid.campaigns.space import (
 )
 from hybrid.campaigns.table import FAILED, SweepTable
 from hybrid.campaigns.targets import INPUT, check_names
-from hybrid.compose import System, as_system
+from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.progress import Progress, Tracker, reporter
@@ -212,6 +213,8 @@ def sweep(
     >>> [(row["e"], row["cause"], row["jumps"]) for row in table.rows]
     [(0.5, 't_end', 1), (0.9, 't_end', 1)]
     """
+    expect_model(model, "sweep")
+    seed = checked_seed(seed)
     chosen, solver = campaign_settings("sweep", settings, t_end, solver)
     t_end, (backend, announce) = chosen.t_end, campaign_backend(backend, chosen)
     if parameters:

@@ -53,7 +53,7 @@ def add_campaign_commands(
                         "declared range; none: every declared range); repeatable")  # fmt: skip
     p.add_argument("--sample", type=types["count"], default=None, metavar="N",
                    help="N seeded samples of the --vary ranges")  # fmt: skip
-    p.add_argument("--seed", type=int, default=0, help="seed of the samples (default 0)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the samples, a whole number >= 0 (default 0)")
     p.add_argument("--sampler", choices=SAMPLERS, default="lhs", help="how samples are drawn")
     p.add_argument("--summary", action="append", default=[], metavar="KIND:NAME",
                    help="a column per run: max:x, min:x, last:x, mean:x, jumps:EDGE, jump_t:K")  # fmt: skip
@@ -75,7 +75,7 @@ def add_campaign_commands(
                    help="a range to search (a parameter, init.x or input.u; a bare init.x or "
                         "input.u: its declared range; none: every declared range); repeatable")  # fmt: skip
     p.add_argument("--budget", type=types["count"], default=100, help="simulations at most")
-    p.add_argument("--seed", type=int, default=0, help="seed of the global phase (default 0)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the global phase, a whole number >= 0 (default 0)")
     p.add_argument("--sampler", choices=SAMPLERS, default="lhs", help="the global design")
     _common(p, types)
     p.add_argument("--backend", default="auto", choices=CHOICES,

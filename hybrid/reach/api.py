@@ -28,7 +28,7 @@ import time
 import numpy as np
 from numpy.typing import NDArray
 
-from hybrid.compose import System, as_system
+from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import UsageError
 from hybrid.expr import ir
 from hybrid.model import Automaton, Forbidden
@@ -120,6 +120,7 @@ def reach(
     >>> hybrid.reach(ball, settings=hybrid.Settings(t_end=2.0), max_jumps=3, step=0.001).t_end
     2.0
     """
+    expect_model(model, "reach")
     if settings is not None and not isinstance(settings, Settings):
         raise UsageError(f"settings must be a hybrid.Settings, got {settings!r}")
     if t_end is None and settings is not None:

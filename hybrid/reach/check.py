@@ -37,7 +37,7 @@ from dataclasses import replace
 from hybrid.analysis.api import check as analysis_check
 from hybrid.analysis.explore import DEFAULT_MAX_BYTES, DEFAULT_MAX_STATES, Progress
 from hybrid.analysis.findings import Finding, Report
-from hybrid.compose import System
+from hybrid.compose import System, expect_model
 from hybrid.errors import SpecError, UsageError
 from hybrid.model import Automaton
 
@@ -94,6 +94,7 @@ def check(
     >>> [(f.rule, f.severity) for f in check(tank, reach_t_end=3.0).findings]
     [('property-violated', 'error')]
     """
+    expect_model(model, "check")
     ignore = tuple(ignore)
     report = analysis_check(
         model, max_states=max_states, max_bytes=max_bytes, ignore=ignore, progress=progress

@@ -16,7 +16,7 @@ from dataclasses import replace
 from types import ModuleType
 from typing import Any
 
-from hybrid.compose import System, as_system
+from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.progress import Reporter, Tracker
@@ -135,6 +135,7 @@ def simulate(
     >>> same.jumps[0].t == run.jumps[0].t
     True
     """
+    expect_model(model, "simulate")
     settings = merged_values(
         settings,
         t_end,

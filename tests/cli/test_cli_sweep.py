@@ -97,6 +97,8 @@ def test_invalid_usage_is_exit_2_with_one_line(
         (("--grid", "k=0:1:2", "--out", "r.txt"), ".csv or .parquet"),
         (("--vary", "k=0:1", "--out", "r.csv"), "add --sample N"),
         (("--grid", "k=0:1:2", "--out", "r.csv", "--summary", "top:x"), "KIND:NAME"),
+        (("--vary", "k=0:1", "--sample", "3", "--seed", "-1", "--out", "r.csv"),
+         "the seed must be a whole number >= 0, got -1"),
     ]
     for args, message in cases:
         assert _sweep(spec, *args) == 2, args

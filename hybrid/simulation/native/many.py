@@ -24,7 +24,7 @@ from typing import Any, overload
 import numpy as np
 from numpy.typing import NDArray
 
-from hybrid.compose import System, as_system
+from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
 from hybrid.simulation.bounds import BoundExcursion, bound_excursions, warn_ensemble
@@ -250,6 +250,7 @@ def simulate_many(
     >>> runs.n_jumps.tolist(), [round(run.jumps[0].t, 6) for run in runs if run.jumps]
     ([1, 1, 0], [1.009638, 1.427843])
     """
+    expect_model(model, "simulate_many")
     settings = merged(
         settings,
         t_end,

@@ -1,0 +1,92 @@
+"""Mistakes in calls of the public functions are UsageErrors that say what to do.
+
+The contract: every error a user can cause is a ``SpecError`` or a
+``SimulationError`` (``UsageError`` is one); anything else escaping is a bug.
+Each case here once escaped as an AttributeError, TypeError or ValueError.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import pytest
+from support import SPECS
+
+import hybrid
+
+BALL = hybrid.load(SPECS / "bouncing_ball.yaml")
+THERMOSTAT = hybrid.load(SPECS / "thermostat.yaml")
+
+CALLS: dict[str, Callable[[Any], Any]] = {
+    "simulate": lambda m: hybrid.simulate(m, t_end=1.0),
+    "check": lambda m: hybrid.check(m),
+    "reach": lambda m: hybrid.reach(m, t_end=1.0),
+    "sweep": lambda m: hybrid.sweep(m, t_end=1.0, grid={"e": [0.5]}, workers=0),
+    "falsify": lambda m: hybrid.falsify(m, "low", t_end=1.0),
+    "simulate_many": lambda m: hybrid.simulate_many(m, t_end=1.0),
+    "compose": lambda m: hybrid.compose(m),
+}
+
+
+@pytest.mark.parametrize("name", sorted(CALLS))
+def test_a_file_name_instead_of_a_model_says_to_load_it(name: str) -> None:
+    path = str(SPECS / "bouncing_ball.yaml")
+    with pytest.raises(hybrid.UsageError) as caught:
+        CALLS[name](path)
+    assert str(caught.value) == (
+        f"{name}() takes a model from hybrid.load(), not a file name: "
+        f"hybrid.{name}(hybrid.load({path!r}), ...)"
+    )
+    with pytest.raises(hybrid.UsageError, match="not a file name"):
+        CALLS[name](SPECS / "bouncing_ball.yaml")  # a Path too
+
+
+@pytest.mark.parametrize("name", sorted(CALLS))
+@pytest.mark.parametrize("value", [None, [], 3.0])
+def test_something_else_instead_of_a_model_names_what_it_got(name: str, value: object) -> None:
+    with pytest.raises(hybrid.UsageError) as caught:
+        CALLS[name](value)
+    assert f"got {type(value).__name__}: {value!r}" in str(caught.value)
+
+
+def test_compose_takes_automata_not_a_system() -> None:
+    system = hybrid.compose(BALL, THERMOSTAT)
+    with pytest.raises(hybrid.UsageError, match="is a system: compose the automata"):
+        hybrid.compose(system)
+
+
+@pytest.mark.parametrize("seed", [-1, 1.5, True, "3"])
+def test_a_seed_is_a_whole_number_at_least_zero(seed: object) -> None:
+    with pytest.raises(hybrid.UsageError, match=r"the seed must be a whole number >= 0"):
+        hybrid.sweep(BALL, t_end=1.0, vary={"e": (0.1, 0.9)}, samples=3, seed=seed, workers=0)  # type: ignore[arg-type]
+    with pytest.raises(hybrid.UsageError, match=r"the seed must be a whole number >= 0"):
+        hybrid.falsify(BALL, "x", t_end=1.0, seed=seed, workers=0)  # type: ignore[arg-type]
+
+
+def test_the_same_seed_gives_the_same_samples_and_zero_is_one() -> None:
+    def drawn(seed: int) -> list[float]:
+        table = hybrid.sweep(BALL, t_end=0.5, vary={"e": (0.1, 0.9)}, samples=4, seed=seed, workers=0)
+        return [row["e"] for row in table.rows]
+
+    assert drawn(0) == drawn(0) != drawn(1)
+    assert all(0.1 <= e <= 0.9 for e in drawn(0))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"grid": {"e": 0.5}}, "e: a grid gives a list of values or a count, got 0.5"),
+        ({"grid": {"e": "0:1:3"}}, "e: a grid gives a list of values or a count, got '0:1:3'"),
+        ({"grid": {"e": ["a"]}}, "e: grid values must be numbers, got ['a']"),
+        ({"grid": [1, 2]}, "a grid item is an Axis or (name, N), got 1"),
+        ({"grid": 7}, "grid must be a mapping {name: values or N} or a list, got 7"),
+        ({"vary": {"e": (0.1, 0.9)}, "samples": "3"}, "the number of samples must be a whole number, got '3'"),
+    ],
+)
+def test_a_sweep_given_the_wrong_kind_of_grid_or_samples_says_so(
+    kwargs: dict[str, Any], message: str
+) -> None:
+    with pytest.raises(hybrid.UsageError) as caught:
+        hybrid.sweep(BALL, t_end=1.0, workers=0, **kwargs)
+    assert str(caught.value) == message
