@@ -27,7 +27,7 @@ from typing import Protocol
 from hybrid.binding import input_problems, signal_cycle_problems
 from hybrid.errors import Position, SpecError, UsageError, did_you_mean
 from hybrid.expr.functions import Function
-from hybrid.model import Automaton, Properties, Range, Requirement, StateVar
+from hybrid.model import Automaton, Properties, Range, Requirement, StateVar, check_overrides
 
 __all__ = [
     "Component",
@@ -254,6 +254,7 @@ class System:
         """
         if not overrides:
             return self
+        check_overrides(overrides, self.position)
         if self.single:
             (c,) = self.components
             return _replace_components(

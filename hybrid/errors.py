@@ -24,6 +24,7 @@ __all__ = [
     "Position",
     "SimulationError",
     "SpecError",
+    "UnknownName",
     "UsageError",
     "did_you_mean",
 ]
@@ -162,6 +163,18 @@ class UsageError(SimulationError):
 
     def __str__(self) -> str:
         return f"{self.at}: {self.message}" if self.at is not None else self.message
+
+
+class UnknownName(UsageError, KeyError):
+    """A name asked of something that does not have it (``run["zz"]``): a :class:`UsageError`,
+    and a ``KeyError`` for code that looks names up as in a mapping.
+
+    Examples
+    --------
+    >>> error = UnknownName("no state variable or signal 'zz'")
+    >>> isinstance(error, KeyError), str(error)
+    (True, "no state variable or signal 'zz'")
+    """
 
 
 def did_you_mean(name: str, candidates: Iterable[str], cutoff: float = 0.6) -> str:

@@ -26,6 +26,7 @@ __all__ = [
     "Range",
     "Requirement",
     "StateVar",
+    "check_overrides",
 ]
 
 
@@ -316,6 +317,7 @@ class Automaton:
         """A copy with some parameters replaced; unknown names are a :class:`SpecError`."""
         if not overrides:
             return self
+        check_overrides(overrides, self.position)
         unknown = [k for k in overrides if k not in self.parameters]
         if unknown:
             name = unknown[0]
@@ -376,10 +378,25 @@ class Automaton:
         return result
 
 
+def check_overrides(overrides: object, position: Position) -> None:
+    """Refuse parameter overrides that are not a mapping of names (a :class:`SpecError`, as an
+    unknown name is): what :meth:`Automaton.with_parameters` is given."""
+    if not isinstance(overrides, Mapping):
+        raise SpecError(f"parameters must be a mapping of names to numbers, got {overrides!r}", position)
+    for key in overrides:
+        if not isinstance(key, str):
+            raise SpecError(f"a parameter is named by a string, got {key!r}", position)
+
+
 def _as_float(name: str, value: object, position: Position) -> float:
+    """A parameter's new value: a finite number (NaN or infinite, every expression reading it
+    would be), as the spec's own ``parameters:`` must be."""
     if isinstance(value, bool) or not isinstance(value, int | float | str):
         raise SpecError(f"value of '{name}' must be a number, got {value!r}", position)
     try:
-        return float(value)
+        number = float(value)
     except ValueError:
         raise SpecError(f"value of '{name}' must be a number, got {value!r}", position) from None
+    if not math.isfinite(number):
+        raise SpecError(f"value of '{name}' must be a finite number, got {value!r}", position)
+    return number

@@ -19,7 +19,7 @@ from pydantic import ValidationError
 
 from hybrid.allocation import gc_paused
 from hybrid.compose import System
-from hybrid.errors import Position, SpecError
+from hybrid.errors import Position, SpecError, UsageError
 from hybrid.model import Automaton
 from hybrid.reader.build import build_automaton
 from hybrid.reader.messages import closest, validation_problems
@@ -59,9 +59,30 @@ def load(path: str | Path, parameters: Mapping[str, float] | None = None) -> Aut
     >>> ball.parameters["e"], ball.initial_location
     (0.7, 'falling')
     """
+    path = _path_given(path)
     with gc_paused():
         doc = read_yaml_file(path)
         return load_document(doc, Path(path).parent, parameters)
+
+
+def _path_given(path: object) -> str | Path:
+    """``path`` if it names a file (bytes decoded); a :class:`UsageError` saying what to pass if not."""
+    if isinstance(path, bytes):
+        path = os.fsdecode(path)
+    if isinstance(path, str) and "\n" in path:
+        raise UsageError(
+            "load() takes the path of a spec file; this is the text of one: "
+            "use hybrid.load_text(text)"
+        )
+    if isinstance(path, os.PathLike):
+        path = Path(os.fspath(path))
+    if not isinstance(path, str | Path):
+        shown = repr(path)
+        shown = shown if len(shown) <= 60 else shown[:57] + "..."
+        raise UsageError(
+            f"load() takes the path of a spec file (a str or Path), got {type(path).__name__}: {shown}"
+        )
+    return path
 
 
 def load_text(
@@ -91,6 +112,15 @@ def load_text(
     >>> m.name, m.file
     ('a', 'a.yaml')
     """
+    if isinstance(text, bytes):
+        try:
+            text = text.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise SpecError(
+                f"the text is not UTF-8 (byte {exc.start}): decode it first", Position(file)
+            ) from None
+    if not isinstance(text, str):
+        raise UsageError(f"load_text() takes the YAML text as a str, got {type(text).__name__}")
     with gc_paused():
         doc = read_yaml_text(text, file)
         return load_document(doc, Path(base_dir), parameters)

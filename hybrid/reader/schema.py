@@ -69,6 +69,8 @@ Expression = Annotated[
     ),
 ]
 Number = Annotated[float, Field(strict=True)]
+FiniteNumber = Annotated[float, Field(strict=True, allow_inf_nan=False)]
+"""A parameter's value: NaN or infinite, every expression reading it would be."""
 Interval = Annotated[
     tuple[Number, Number],
     WithJsonSchema(
@@ -349,7 +351,7 @@ class AutomatonSpec(_Strict):
 
     automaton: Name
     description: str = ""
-    parameters: dict[Name, Number] = Field(default_factory=dict)
+    parameters: dict[Name, FiniteNumber] = Field(default_factory=dict)
     state: dict[Name, StateVarSpec] = Field(default_factory=dict)
     signals: dict[Name, SignalDefinition] = Field(
         default_factory=dict,
@@ -375,7 +377,7 @@ class ComponentSpec(_Strict):
         default_factory=dict,
         description="old: new names of the spec's state variables, signals, inputs and labels.",
     )
-    parameters: dict[Name, Number] = Field(default_factory=dict)
+    parameters: dict[Name, FiniteNumber] = Field(default_factory=dict)
     initial: InitialSpec | None = None
 
 

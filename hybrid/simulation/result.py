@@ -21,6 +21,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from hybrid.errors import UnknownName
+
 __all__ = ["CAUSES", "PLOT_BACKEND", "Jump", "RequirementResult", "Run", "Termination"]
 
 CAUSES = ("t_end", "max_jumps", "zeno", "blocked", "nonfinite", "solver_failure", "interrupted")
@@ -157,6 +159,16 @@ class Run:
     (:class:`hybrid.simulation.bounds.BoundExcursion`); empty when it stayed within."""
 
     def __getitem__(self, name: str) -> NDArray[np.float64]:
+        """The column of the state variable or signal ``name``.
+
+        An unknown name (or something else than a name) is an
+        :class:`~hybrid.errors.UnknownName`: a ``UsageError`` and a ``KeyError``.
+        """
+        if not isinstance(name, str):
+            raise UnknownName(
+                f"run[...] takes the name of a state variable or signal, got {name!r}; "
+                "the values at point k are run.t[k], run.states[k] and run.signals[k]"
+            )
         if name in self.state_names:
             return self.states[:, self.state_names.index(name)]
         if name in self.signal_names:
@@ -165,7 +177,7 @@ class Run:
 
         close = get_close_matches(name, [*self.state_names, *self.signal_names], n=1)
         hint = f"; did you mean '{close[0]}'?" if close else ""
-        raise KeyError(f"no state variable or signal '{name}'{hint}")
+        raise UnknownName(f"no state variable or signal '{name}'{hint}")
 
     def __len__(self) -> int:
         return int(self.t.shape[0])

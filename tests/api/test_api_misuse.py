@@ -90,3 +90,54 @@ def test_a_sweep_given_the_wrong_kind_of_grid_or_samples_says_so(
     with pytest.raises(hybrid.UsageError) as caught:
         hybrid.sweep(BALL, t_end=1.0, workers=0, **kwargs)
     assert str(caught.value) == message
+
+
+@pytest.mark.parametrize("value", [".nan", ".inf", "-.inf"])
+def test_a_spec_parameter_that_is_not_finite_is_refused_where_it_is_written(value: str) -> None:
+    text = f"automaton: a\nparameters:\n  k: 1.0\n  g: {value}\nstate:\n  x: {{initial: 0}}\nlocations: {{l: {{flow: {{x: k}}}}}}\n"
+    with pytest.raises(hybrid.SpecError) as caught:
+        hybrid.load_text(text, file="a.yaml")
+    assert (caught.value.file, caught.value.line, caught.value.column) == ("a.yaml", 4, 6)
+    assert "parameters.g: Input should be a finite number" in caught.value.message
+
+
+@pytest.mark.parametrize(
+    ("parameters", "message"),
+    [
+        ({"e": float("nan")}, "value of 'e' must be a finite number, got nan"),
+        ({"e": "inf"}, "value of 'e' must be a finite number, got 'inf'"),
+        ({1: 1.0}, "a parameter is named by a string, got 1"),
+        ([("e", 1.0)], "parameters must be a mapping of names to numbers, got [('e', 1.0)]"),
+    ],
+)
+def test_parameter_overrides_are_names_and_finite_numbers(parameters: Any, message: str) -> None:
+    with pytest.raises(hybrid.SpecError) as caught:
+        hybrid.load(SPECS / "bouncing_ball.yaml", parameters=parameters)
+    assert caught.value.message == message
+    system = hybrid.compose(BALL, THERMOSTAT)
+    with pytest.raises(hybrid.SpecError):
+        system.with_parameters(parameters)
+
+
+def test_load_and_load_text_say_which_one_takes_what() -> None:
+    text = "automaton: a\nlocations: {only: {}}\n"
+    with pytest.raises(hybrid.UsageError, match=r"this is the text of one: use hybrid.load_text\(text\)"):
+        hybrid.load(text)
+    with pytest.raises(hybrid.UsageError, match="got NoneType: None"):
+        hybrid.load(None)  # type: ignore[arg-type]
+    with pytest.raises(hybrid.UsageError, match="load_text\\(\\) takes the YAML text as a str, got NoneType"):
+        hybrid.load_text(None)  # type: ignore[arg-type]
+    assert hybrid.load_text(text.encode()).name == "a"  # bytes read from a file: UTF-8
+    assert hybrid.load(str(SPECS / "bouncing_ball.yaml").encode()).name == "bouncing_ball"  # type: ignore[arg-type]
+    with pytest.raises(hybrid.SpecError, match="not UTF-8"):
+        hybrid.load_text(b"automaton: \xff\n")  # type: ignore[arg-type]
+
+
+def test_a_run_is_indexed_by_names_and_says_how_to_get_a_point() -> None:
+    run = hybrid.simulate(BALL, t_end=1.0)
+    assert run["h"][0] == 10.0  # dropped from 10 m
+    with pytest.raises(hybrid.UsageError, match="did you mean 'energy'") as caught:
+        run["enrgy"]
+    assert isinstance(caught.value, KeyError)  # code that looks names up as in a dict
+    with pytest.raises(hybrid.UsageError, match=r"run\.t\[k\], run\.states\[k\]"):
+        run[0]  # type: ignore[index]

@@ -114,7 +114,7 @@ def test_the_quoted_form_the_message_offers_is_accepted(tmp_path: Path) -> None:
 PYTHON = [
     (
         'run = hybrid.simulate(model, t_end=1.0)\nrun["h3"]',
-        "KeyError: \"no state variable or signal 'h3'; did you mean 'h'?\"",
+        "hybrid.errors.UnknownName: no state variable or signal 'h3'; did you mean 'h'?",
     ),
     (
         'hybrid.simulate(model, t_end="10")',
