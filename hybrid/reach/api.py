@@ -129,6 +129,8 @@ def reach(
         raise UsageError(f"t_end must be a finite number, got {t_end!r}")
     if step is None:
         step = t_end / DEFAULT_STEPS if t_end > 0 else 1.0
+    if isinstance(step, bool) or not isinstance(step, int | float):
+        raise UsageError(f"step must be a finite number > 0, got {step!r}")
     if isinstance(max_jumps, bool) or not isinstance(max_jumps, int):
         raise UsageError(f"max_jumps must be an integer >= 0, got {max_jumps!r}")
     started = time.process_time()

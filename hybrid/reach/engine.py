@@ -53,6 +53,7 @@ from hybrid.reach.flowpipe import Overflow, flowpipe
 __all__ = [
     "MAX_CLUSTERS",
     "MAX_FLOWPIPES",
+    "MAX_STEPS",
     "Mode",
     "ReachSet",
     "Transition",
@@ -65,6 +66,10 @@ __all__ = [
 Array = NDArray[np.float64]
 MAX_CLUSTERS = 4
 """Boxes queued per edge and flowpipe after clustering."""
+MAX_STEPS = 1_000_000
+"""Most steps of one flowpipe (``t_end / step``): each keeps four boxes a step, and the
+default step gives 4,000."""
+
 MAX_FLOWPIPES = 20_000
 """Flowpipes computed at most; beyond, the result is incomplete (nothing is proved)."""
 
@@ -265,6 +270,11 @@ def explore(
         raise UsageError(f"t_end must be a finite number >= 0, got {t_end}")
     if not (math.isfinite(step) and step > 0.0):
         raise UsageError(f"the step must be a finite number > 0, got {step}")
+    if t_end / step > MAX_STEPS:
+        raise UsageError(
+            f"step={step:g} gives {t_end / step:.3g} steps to t_end={t_end:g} (the limit is "
+            f"{MAX_STEPS:.0e} a flowpipe): raise it"
+        )
     if max_jumps < 0:
         raise UsageError(f"max_jumps must be >= 0, got {max_jumps}")
     forms = forms or forms_of(model)

@@ -78,6 +78,23 @@ def test_a_horizon_is_needed_and_read_from_the_spec(tmp_path: Path) -> None:
     assert "t <= 6," in done.stdout
 
 
+@pytest.mark.parametrize("step", ["1e-300", "1e-12", "1e-7"])
+def test_a_step_too_small_to_finish_is_refused_at_once(tmp_path: Path, step: str) -> None:
+    """t_end / step over a million steps a flowpipe: one line and exit 2, not a traceback
+    (1e-300 and 1e-12 overflowed numpy's arrays) or a run that never ends (1e-7)."""
+    done = run_cli("reach", _spec(tmp_path, HEATER), "--t-end", "1", "--step", step, timeout=30)
+    assert done.returncode == 2, done.stderr
+    assert f"step={float(step):g} gives {1 / float(step):.3g} steps to t_end=1" in done.stderr
+    assert_no_traceback(done.stderr)
+    with pytest.raises(hybrid.UsageError, match="the limit is 1e\\+06 a flowpipe"):
+        hybrid.reach(hybrid.load(_spec(tmp_path, HEATER)), t_end=1.0, step=float(step))
+
+
+def test_a_step_that_is_not_a_number_is_a_usage_error(tmp_path: Path) -> None:
+    with pytest.raises(hybrid.UsageError, match=r"step must be a finite number > 0, got '0\.1'"):
+        hybrid.reach(hybrid.load(_spec(tmp_path, HEATER)), t_end=1.0, step="0.1")  # type: ignore[arg-type]
+
+
 @pytest.mark.parametrize(
     ("flag", "value", "text"),
     [
