@@ -44,7 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hybrid.compose import System
-from hybrid.errors import UsageError
+from hybrid.errors import Position, UsageError
 from hybrid.model import Edge
 from hybrid.reach.affine import TIME, Condition, Forms, Rows
 from hybrid.reach.boxes import affine_image, meets, meets_many
@@ -338,12 +338,25 @@ def _segments(
             mode.a, mode.b, mode.c, forms.u_lo, forms.u_hi, start[0], start[1], step, steps, keep
         )
     except Overflow:
-        norm = float(np.abs(mode.a).sum(axis=1).max()) * step
+        rows = np.abs(mode.a).sum(axis=1)
+        norm = float(rows.max()) * step
         raise UsageError(
             f"the bounds of location '{mode.name}' overflow at step {step:g} "
-            f"(|A| h = {norm:.3g} in the infinity norm): give a smaller step"
+            f"(|A| h = {norm:.3g} in the infinity norm): give a smaller step",
+            at=_fastest_flow(forms, mode, int(np.argmax(rows))),
         ) from None
     return kept
+
+
+def _fastest_flow(forms: Forms, mode: Mode, row: int) -> Position | None:
+    """Where the flow of ``row``'s variable in ``mode`` is written (the row of the largest
+    ``|A|`` sum: the one that overflows first), or None (time's row, a flow not written)."""
+    variable = forms.variables[row]
+    for component, location in zip(forms.system.components, mode.key, strict=True):
+        if variable in component.automaton.state_names:
+            place = component.automaton.locations[location]
+            return place.flow_positions.get(variable, place.position)
+    return None
 
 
 def _clusters(segments: list[tuple[Array, Array]], guard: Condition) -> list[tuple[Array, Array]]:

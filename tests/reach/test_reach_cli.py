@@ -194,3 +194,18 @@ def test_check_decides_forbidden_entries_with_reach(tmp_path: Path) -> None:
     assert (
         "r.yaml:8:7: error property-violated: forbidden state 'x > 4.0' is reached" in done.stdout
     )
+
+
+def test_a_step_the_bounds_overflow_at_is_refused_at_the_fastest_flow(tmp_path: Path) -> None:
+    """|A| h = 1e6 * 0.1 for y: its flow is the place; x (slow) is not."""
+    spec = _spec(
+        tmp_path,
+        "automaton: stiff\nstate:\n  x: {initial: 1.0}\n  y: {initial: 1.0}\n"
+        "locations:\n  only:\n    flow:\n      x: -x\n      y: -1e6 * y\n",
+    )
+    with pytest.raises(hybrid.UsageError, match="overflow at step 0.1") as caught:
+        hybrid.reach(hybrid.load(spec), t_end=1.0, step=0.1)
+    assert caught.value.at is not None
+    assert (caught.value.at.line, caught.value.at.column) == (9, 10)  # "      y: -1e6 * y"
+    done = run_cli("reach", spec, "--t-end", "1", "--step", "0.1")
+    assert done.returncode == 2 and done.stderr.startswith(f"{spec}:9:10: the bounds of location")
