@@ -125,8 +125,9 @@ def reach(
         raise UsageError(f"settings must be a hybrid.Settings, got {settings!r}")
     if t_end is None and settings is not None:
         t_end = settings.t_end
-    if isinstance(t_end, bool) or not isinstance(t_end, int | float) or not math.isfinite(t_end):
-        raise UsageError(f"t_end must be a finite number, got {t_end!r}")
+    if (isinstance(t_end, bool) or not isinstance(t_end, int | float) or not math.isfinite(t_end)
+            or not t_end > 0):  # fmt: skip
+        raise UsageError(f"t_end must be a finite number > 0, got {t_end!r}")
     if step is None:
         step = t_end / DEFAULT_STEPS if t_end > 0 else 1.0
     if isinstance(step, bool) or not isinstance(step, int | float):

@@ -31,6 +31,8 @@ Examples
 
 from __future__ import annotations
 
+import math
+import numbers
 from collections.abc import Iterable
 from dataclasses import replace
 
@@ -95,7 +97,8 @@ def check(
     [('property-violated', 'error')]
     """
     expect_model(model, "check")
-    ignore = tuple(ignore)
+    ignore = (ignore,) if isinstance(ignore, str) else tuple(ignore)  # one rule, not its letters
+    _check_arguments(max_states, max_bytes, progress, reach_t_end, reach_max_jumps, reach_step)
     report = analysis_check(
         model, max_states=max_states, max_bytes=max_bytes, ignore=ignore, progress=progress
     )
@@ -143,3 +146,23 @@ def check(
         elif p.verdict == "unknown":
             kept.append(replace(f, message=f"{f.message}; reach: {p.message}"))
     return Report(tuple(kept), report.name, report.file)
+
+
+def _check_arguments(max_states: object, max_bytes: object, progress: object,
+                     reach_t_end: object, reach_max_jumps: object, reach_step: object) -> None:  # fmt: skip
+    """A :class:`UsageError` for an argument of :func:`check` it cannot use (as the command
+    line refuses the same values)."""
+    for name, value, least in (("max_states", max_states, 1), ("max_bytes", max_bytes, 1),
+                               ("reach_max_jumps", reach_max_jumps, 0)):  # fmt: skip
+        if name == "reach_max_jumps" and value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or int(value) < least:
+            raise UsageError(f"{name} must be a whole number >= {least}, got {value!r}")
+    for name, value in (("reach_t_end", reach_t_end), ("reach_step", reach_step)):
+        if value is None:
+            continue
+        if (isinstance(value, bool) or not isinstance(value, numbers.Real)
+                or not math.isfinite(float(value)) or not float(value) > 0):  # fmt: skip
+            raise UsageError(f"{name} must be a finite number > 0, got {value!r}")
+    if progress is not None and not callable(progress):
+        raise UsageError(f"progress must be a function of a status, got {progress!r}")

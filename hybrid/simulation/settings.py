@@ -86,16 +86,29 @@ def finite_number(name: str, value: Any) -> float:
     """
     if not _plain_number(value) and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
         raise UsageError(f"{name} must be a number, got {_shown(value)}")
-    number = float(value)
+    try:
+        number = float(value)
+    except OverflowError:  # an int beyond any float (10**400)
+        raise UsageError(f"{name} must be a finite number, got {value:.3e}") from None
     if not math.isfinite(number):
         raise UsageError(f"{name} must be a finite number, got {number}")
     return number
+
+
+def _finite(value: Any) -> bool:
+    """``math.isfinite`` that reads an int beyond any float (10**400) as not finite."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
 
 
 def _shown(value: Any) -> str:
     """``value`` as a message shows it; a string is named as one (``t_end="10"``)."""
     if isinstance(value, str):
         return f"the string {value!r}: pass a number, not text"
+    if value.__class__ is int and abs(value) >= 10**18:
+        return f"an integer of {len(str(abs(value)))} digits"
     return str(value) if _plain_number(value) else repr(value)
 
 
@@ -113,9 +126,16 @@ def _whole(name: str, value: Any, least: int) -> int:
         isinstance(value, bool) or not isinstance(value, numbers.Integral)
     ):
         raise UsageError(f"{name} must be a whole number, got {value!r}")
-    if value < least:
-        raise UsageError(f"{name} must be >= {least}, got {value}")
-    return int(value)
+    whole = int(value)
+    if whole < least:
+        raise UsageError(f"{name} must be >= {least}, got {whole}")
+    if whole > MAX_WHOLE:
+        raise UsageError(f"{name} must be at most {MAX_WHOLE} (2**62), got {whole}")
+    return whole
+
+
+MAX_WHOLE = 2**62
+"""The largest count a setting takes (the compiled loop keeps counts in 64-bit integers)."""
 
 
 def _flag(name: str, value: Any) -> None:
@@ -204,7 +224,7 @@ class Settings:
                 not _plain_number(self.t_end)
                 and (isinstance(self.t_end, bool) or not isinstance(self.t_end, numbers.Real))
             )
-            or not math.isfinite(self.t_end)
+            or not _finite(self.t_end)
             or self.t_end <= t0
         ):
             raise UsageError(
@@ -225,7 +245,7 @@ class Settings:
         if (
             not _plain_number(step) and (isinstance(step, bool) or not isinstance(step, numbers.Real))
         ) or not step > 0:
-            raise UsageError(f"max_step must be > 0, got {step}")
+            raise UsageError(f"max_step must be > 0, got {_shown(step)}")
         resolution = 4 * 2.220446049250313e-16 * max(1.0, abs(t0), abs(float(self.t_end)))
         if step < resolution:
             raise UsageError(

@@ -141,3 +141,72 @@ def test_a_run_is_indexed_by_names_and_says_how_to_get_a_point() -> None:
     assert isinstance(caught.value, KeyError)  # code that looks names up as in a dict
     with pytest.raises(hybrid.UsageError, match=r"run\.t\[k\], run\.states\[k\]"):
         run[0]  # type: ignore[index]
+
+
+@pytest.mark.parametrize("backend", ["scipy", "compiled"])
+@pytest.mark.parametrize("name", ["max_jumps", "max_jumps_per_instant"])
+def test_a_count_beyond_64_bits_is_refused_on_both_backends(backend: str, name: str) -> None:
+    if backend == "compiled":
+        pytest.importorskip("numba")
+    with pytest.raises(hybrid.UsageError, match=rf"{name} must be at most 4611686018427387904"):
+        hybrid.simulate(BALL, t_end=1.0, backend=backend, **{name: 2**70})
+    run = hybrid.simulate(BALL, t_end=2.0, backend=backend, handle_sigint=False, **{name: 2**62})
+    assert run.termination.cause == "t_end" and len(run.jumps) == 1  # the bound itself is taken
+
+
+def test_the_command_line_refuses_a_huge_max_jumps_with_exit_2() -> None:
+    from support import assert_no_traceback, run_cli
+
+    done = run_cli("simulate", SPECS / "bouncing_ball.yaml", "--t-end", "1", "--max-jumps",
+                   str(10**23), "--backend", "compiled", "--quiet")  # fmt: skip
+    assert done.returncode == 2 and "max_jumps must be at most" in done.stderr
+    assert_no_traceback(done.stderr)
+
+
+def test_numbers_too_large_for_a_float_and_text_are_named() -> None:
+    with pytest.raises(hybrid.UsageError, match="got an integer of 401 digits"):
+        hybrid.simulate(BALL, t_end=10**400)
+    with pytest.raises(hybrid.UsageError, match=r"max_step must be > 0, got the string '0\.1'"):
+        hybrid.simulate(BALL, t_end=1.0, max_step="0.1")  # type: ignore[arg-type]
+
+
+TANK = """automaton: tank
+state: {x: {initial: [0, 1]}}
+locations: {fill: {flow: {x: 1}}}
+properties:
+  forbidden: [{location: fill, when: "x >= 12"}]
+"""
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"reach_t_end": 0}, "reach_t_end must be a finite number > 0, got 0"),
+        ({"reach_t_end": float("nan")}, "reach_t_end must be a finite number > 0, got nan"),
+        ({"reach_t_end": "5"}, "reach_t_end must be a finite number > 0, got '5'"),
+        ({"reach_step": 0.0}, "reach_step must be a finite number > 0, got 0.0"),
+        ({"reach_max_jumps": -1}, "reach_max_jumps must be a whole number >= 0, got -1"),
+        ({"max_states": "a"}, "max_states must be a whole number >= 1, got 'a'"),
+        ({"max_bytes": 0}, "max_bytes must be a whole number >= 1, got 0"),
+        ({"progress": 3}, "progress must be a function of a status, got 3"),
+    ],
+)
+def test_check_refuses_what_the_command_line_refuses(kwargs: dict[str, Any], message: str) -> None:
+    """reach_t_end=0 used to prove the tank's entry over [0, 0] and drop its warning."""
+    tank = hybrid.load_text(TANK, file="tank.yaml")
+    with pytest.raises(hybrid.UsageError) as caught:
+        hybrid.check(tank, **kwargs)
+    assert str(caught.value) == message
+
+
+def test_check_reads_one_rule_to_ignore_as_one_rule() -> None:
+    tank = hybrid.load_text(TANK, file="tank.yaml")
+    assert [f.rule for f in hybrid.check(tank).findings] == ["property-unproved"]
+    assert hybrid.check(tank, ignore="property-unproved").findings == ()
+
+
+@pytest.mark.parametrize("t_end", [0, 0.0, -1.0, float("nan")])
+def test_reach_needs_a_horizon_after_zero(t_end: float) -> None:
+    tank = hybrid.load_text(TANK, file="tank.yaml")
+    with pytest.raises(hybrid.UsageError, match="t_end must be a finite number > 0"):
+        hybrid.reach(tank, t_end=t_end)
