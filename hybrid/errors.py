@@ -19,6 +19,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 __all__ = [
+    "CannotWrite",
     "HybridError",
     "Note",
     "Position",
@@ -175,6 +176,26 @@ class UnknownName(UsageError, KeyError):
     >>> isinstance(error, KeyError), str(error)
     (True, "no state variable or signal 'zz'")
     """
+
+
+class CannotWrite(UsageError, OSError):
+    """An output that cannot be written: a :class:`UsageError` for callers of the API, and an
+    ``OSError`` (with the system's ``errno`` and ``strerror``) for code that handles failed
+    writes (the command line keeps the output elsewhere).
+
+    Examples
+    --------
+    >>> error = CannotWrite.of("out.csv", IsADirectoryError(21, "Is a directory"))
+    >>> str(error), isinstance(error, OSError), error.errno
+    ("cannot write 'out.csv': Is a directory", True, 21)
+    """
+
+    @classmethod
+    def of(cls, path: object, exc: OSError, hint: str = "") -> CannotWrite:
+        """The error for writing ``path`` failing with ``exc`` (its reason, then ``hint``)."""
+        error = cls(f"cannot write '{path}': {exc.strerror or exc}{hint}")
+        error.errno, error.strerror, error.filename = exc.errno, exc.strerror, str(path)
+        return error
 
 
 def did_you_mean(name: str, candidates: Iterable[str], cutoff: float = 0.6) -> str:

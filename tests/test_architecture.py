@@ -21,7 +21,7 @@ PACKAGE = REPO / "hybrid"
 
 LAYERS: tuple[frozenset[str], ...] = (
     frozenset({"errors", "version", "lazy", "allocation", "progress"}),
-    frozenset({"expr"}),
+    frozenset({"expr", "files"}),
     frozenset({"model"}),
     frozenset({"binding"}),
     frozenset({"compose"}),

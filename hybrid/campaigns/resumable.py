@@ -30,16 +30,14 @@ Examples
 
 from __future__ import annotations
 
-import contextlib
 import json
-import os
-import secrets
 import shutil
 import time
 from pathlib import Path
 from typing import Any
 
-from hybrid.errors import UsageError
+from hybrid.errors import CannotWrite, UsageError
+from hybrid.files import atomic_write
 
 __all__ = ["CHUNK_ROWS", "CHUNK_SECONDS", "LOST", "ChunkStore", "parts_dir", "write_whole"]
 
@@ -53,27 +51,9 @@ CHUNK_SECONDS = 1.0
 
 
 def write_whole(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` whole or not at all (the rule of ``hybrid.export.atomic``).
-
-    A hidden temporary file beside ``path``, created with mode ``0o666`` under the
-    umask, flushed and fsynced, then renamed over ``path``; a replaced file keeps its
-    permission bits.
-    """
-    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
-    tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
-    fd = os.open(tmp, flags, 0o666)
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            with contextlib.suppress(FileNotFoundError):
-                os.chmod(tmp, os.stat(path).st_mode & 0o7777)
-            handle.write(data)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    """Write ``data`` to ``path`` whole or not at all (:func:`hybrid.files.atomic_write`)."""
+    with atomic_write(path) as handle:
+        handle.write(data)
 
 
 def parts_dir(out: Path) -> Path:
@@ -100,7 +80,10 @@ class ChunkStore:
                 )
             self._read()
         else:
-            self.folder.mkdir()
+            try:
+                self.folder.mkdir()
+            except OSError as exc:  # a read-only place, /proc
+                raise CannotWrite.of(self.folder, exc) from None
             manifest = {"fingerprint": fingerprint, "created": time.time()}
             write_whole(self.folder / "campaign.json", json.dumps(manifest).encode())
 

@@ -43,6 +43,7 @@ from hybrid.campaigns.table import FAILED, SweepTable
 from hybrid.campaigns.targets import INPUT, check_names
 from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import UsageError
+from hybrid.files import writable_target
 from hybrid.model import Automaton
 from hybrid.progress import Progress, Tracker, reporter
 from hybrid.simulation.interrupts import sigint_watch
@@ -292,8 +293,7 @@ def _check_out(out: str | Path | None) -> None:
         return
     if Path(out).suffix.lower() not in (".csv", ".parquet"):
         raise UsageError(f"results go to a .csv or .parquet file, got '{out}'")
-    if not Path(out).resolve().parent.is_dir():
-        raise UsageError(f"the folder of '{out}' does not exist")
+    writable_target(out)  # a directory, a missing folder: a CannotWrite
 
 
 def run_campaign(

@@ -254,9 +254,9 @@ def run_falsify(args: argparse.Namespace) -> int:
 
 
 def _write_result(result: Any, out: Path) -> None:
-    from hybrid.export.atomic import atomic_write
     from hybrid.export.outputs import make_directory
     from hybrid.export.trajectory import write_csv, write_events
+    from hybrid.files import atomic_write
 
     make_directory(out, "--out")
     document = _finite(result.as_dict())

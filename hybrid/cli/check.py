@@ -36,9 +36,9 @@ from hybrid.analysis.formats import FORMATS, write
 from hybrid.analysis.ignore import check_rule_ids
 from hybrid.cli.exits import EXIT_FINDINGS, EXIT_INVALID, EXIT_OK
 from hybrid.errors import SpecError, UsageError
-from hybrid.export.atomic import atomic_write
 from hybrid.export.diagrams import DIAGRAM_FORMATS
 from hybrid.export.pictures import RENDERED_FORMATS, render
+from hybrid.files import atomic_write
 from hybrid.progress import Reporter, Tracker, terminal_reporter
 from hybrid.reach.check import check
 from hybrid.reader.loader import load

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from hybrid.cli.exits import EXIT_OK
 from hybrid.errors import UsageError
-from hybrid.export.atomic import atomic_write
+from hybrid.files import atomic_write
 
 __all__ = ["add_interchange_commands", "run_export", "run_import"]
 

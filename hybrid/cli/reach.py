@@ -110,7 +110,7 @@ def run_reach(args: argparse.Namespace) -> int:
     step = args.step if args.step is not None else model.properties.reach_step
     result = reach(model, t_end, max_jumps=10 if max_jumps is None else max_jumps, step=step)
     if args.sets is not None:
-        from hybrid.export.atomic import atomic_write
+        from hybrid.files import atomic_write
 
         with atomic_write(args.sets) as handle:
             result.write_sets(handle, Path(args.sets).suffix.lower().lstrip("."))

@@ -20,7 +20,7 @@ from __future__ import annotations
 import sys
 
 from hybrid.cli.exits import EXIT_OK
-from hybrid.export.atomic import atomic_write
+from hybrid.files import atomic_write
 from hybrid.reader.jsonschema import spec_schema_text
 
 __all__ = ["run_schema"]

@@ -11,7 +11,6 @@ from typing import TYPE_CHECKING
 from hybrid.lazy import lazy_attributes
 
 if TYPE_CHECKING:
-    from hybrid.export.atomic import atomic_write
     from hybrid.export.diagrams import to_dot, to_mermaid
     from hybrid.export.pictures import render
     from hybrid.export.plot import figure_of, figures_of, plot_run, save_figure
@@ -22,6 +21,7 @@ if TYPE_CHECKING:
         write_mat,
         write_npz,
     )
+    from hybrid.files import atomic_write
 
 __all__ = [
     "atomic_write",
@@ -42,7 +42,7 @@ __all__ = [
 __getattr__, __dir__ = lazy_attributes(
     __name__,
     {
-        "atomic_write": "hybrid.export.atomic",
+        "atomic_write": "hybrid.files",
         "events_document": "hybrid.export.trajectory",
         "figure_of": "hybrid.export.plot",
         "figures_of": "hybrid.export.plot",

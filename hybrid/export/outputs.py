@@ -4,7 +4,7 @@ Every command that writes asks :func:`writable_file` (or :func:`writable_directo
 about each output before it loads, simulates or sweeps anything, so no work is
 lost to a bad path. The question is answered by doing what the write will do:
 creating (and removing) the hidden temporary file that
-:func:`~hybrid.export.atomic.atomic_write` renames over the target, in the
+:func:`~hybrid.files.atomic_write` renames over the target, in the
 target's folder. That catches what a look at permission bits cannot: a path in
 ``/proc``, a read-only mount, a folder of another user, a name that is a folder.
 
@@ -89,7 +89,7 @@ def make_directory(folder: Path, flag: str) -> Path:
 
 
 def _probe(target: Path, flag: str, shown: str | Path) -> None:
-    from hybrid.export.atomic import temporary_name
+    from hybrid.files import temporary_name
 
     probe = temporary_name(target)
     try:

@@ -35,8 +35,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hybrid.errors import SimulationError, UsageError
-from hybrid.export.atomic import atomic_write
 from hybrid.export.hybrid_time import Stay, View, jump_rows, stays, views
+from hybrid.files import atomic_write
 from hybrid.simulation.result import Run
 from hybrid.version import install_hint
 

@@ -18,7 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from hybrid.export.atomic import atomic_write
+from hybrid.errors import UsageError
+from hybrid.files import atomic_write, writable_target
 from hybrid.progress import Reporter, Tracker
 from hybrid.simulation.result import Run
 
@@ -43,6 +44,8 @@ def write_csv(run: Run, path: str | Path, progress: Reporter | None = None) -> N
     Columns are formatted whole with ``repr`` (``nan``, ``inf`` and ``-inf`` for
     non-finite values), a chunk of rows at a time.
     """
+    _expect_run(run, "write_csv")
+    path = writable_target(path)  # a directory, a missing folder: refused first
     rows = len(run)
     tracker = Tracker(f"writing {Path(path).name}", total=rows, unit="rows", report=progress)
     header = ",".join(["t", "j", "location", *run.state_names, *run.signal_names]) + "\n"
@@ -70,6 +73,8 @@ def _csv_text(text: str) -> str:
 
 def write_npz(run: Run, path: str | Path, progress: Reporter | None = None) -> None:
     """Write the trajectory as a NumPy ``.npz`` archive (atomically)."""
+    _expect_run(run, "write_npz")
+    path = writable_target(path)  # a directory, a missing folder: refused first
     arrays: dict[str, Any] = {
         "t": run.t,
         "j": run.j,
@@ -104,6 +109,8 @@ def write_mat(run: Run, path: str | Path, progress: Reporter | None = None) -> N
     >>> back["h"].shape == (len(run), 1), bool((back["h"][:, 0] == run["h"]).all())
     (True, True)
     """
+    _expect_run(run, "write_mat")
+    path = writable_target(path)  # a directory, a missing folder: refused first
     from scipy.io import savemat
 
     arrays: dict[str, Any] = {
@@ -149,6 +156,8 @@ def events_document(run: Run) -> dict[str, Any]:
 
 def write_events(run: Run, path: str | Path, progress: Reporter | None = None) -> None:
     """Write the events JSON (atomically); non-finite numbers become null."""
+    _expect_run(run, "write_events")
+    path = writable_target(path)  # a directory, a missing folder: refused first
     tracker = Tracker(
         f"writing {Path(path).name}", total=len(run.jumps), unit="jumps", report=progress
     )
@@ -166,3 +175,9 @@ def _finite(value: Any) -> Any:
     if isinstance(value, list):
         return [_finite(v) for v in value]
     return value
+
+
+def _expect_run(run: object, writer: str) -> None:
+    """A :class:`UsageError` unless ``run`` is what :func:`hybrid.simulate` returns."""
+    if not isinstance(run, Run):
+        raise UsageError(f"{writer}() writes a run from hybrid.simulate, got {type(run).__name__}")

@@ -158,9 +158,13 @@ class ReachResult:
         if fmt not in ("json", "npz"):
             raise UsageError(f"sets are written as .json or .npz, not '{fmt}'")
         if isinstance(target, str | Path):
-            with open(target, "wb") as handle:
+            from hybrid.files import atomic_write  # whole or not at all
+
+            with atomic_write(target) as handle:
                 self.write_sets(handle, fmt)
             return
+        if not hasattr(target, "write"):
+            raise UsageError(f"sets are written to a path or a binary file, got {target!r}")
         n = len(self.variables)
         if fmt == "npz":
             np.savez_compressed(

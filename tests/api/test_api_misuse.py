@@ -8,12 +8,14 @@ Each case here once escaped as an AttributeError, TypeError or ValueError.
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import pytest
 from support import SPECS
 
 import hybrid
+from hybrid.errors import CannotWrite
 
 BALL = hybrid.load(SPECS / "bouncing_ball.yaml")
 THERMOSTAT = hybrid.load(SPECS / "thermostat.yaml")
@@ -210,3 +212,56 @@ def test_reach_needs_a_horizon_after_zero(t_end: float) -> None:
     tank = hybrid.load_text(TANK, file="tank.yaml")
     with pytest.raises(hybrid.UsageError, match="t_end must be a finite number > 0"):
         hybrid.reach(tank, t_end=t_end)
+
+
+def _writers(tmp: Path) -> dict[str, Callable[[Any], Any]]:
+    from hybrid.export import write_csv, write_events, write_mat, write_npz
+
+    run = hybrid.simulate(BALL, t_end=1.0)
+    return {
+        "write_csv": lambda p: write_csv(run, p),
+        "write_npz": lambda p: write_npz(run, p),
+        "write_events": lambda p: write_events(run, p),
+        "write_mat": lambda p: write_mat(run, p),
+        "Run.plot": lambda p: run.plot(path=p),
+        "SweepTable.write": lambda p: hybrid.sweep(BALL, t_end=0.5, grid={"e": [0.5]}, workers=0).write(p),
+        "sweep(out=)": lambda p: hybrid.sweep(BALL, t_end=0.5, grid={"e": [0.5]}, workers=0, out=p),
+        "write_sets": lambda p: hybrid.reach(BALL, t_end=0.5, step=0.01).write_sets(p),
+    }
+
+
+SUFFIX = {"write_csv": ".csv", "write_npz": ".npz", "write_events": ".json", "write_mat": ".mat",
+          "Run.plot": ".png", "SweepTable.write": ".csv", "sweep(out=)": ".csv", "write_sets": ".json"}  # fmt: skip
+
+
+@pytest.mark.parametrize("writer", sorted(SUFFIX))
+def test_an_output_that_cannot_be_written_is_a_usage_error_and_an_os_error(
+    writer: str, tmp_path: Path
+) -> None:
+    """A missing folder, /proc and a directory named like the file: nothing is written, and
+    no temporary file is left beside the target."""
+    if writer in ("Run.plot", "write_mat"):
+        pytest.importorskip("matplotlib" if writer == "Run.plot" else "scipy.io")
+    write = _writers(tmp_path)[writer]
+    suffix = SUFFIX[writer]
+    clash = tmp_path / f"taken{suffix}"
+    clash.mkdir()
+    for target in (tmp_path / "missing" / f"x{suffix}", Path(f"/proc/x{suffix}"), clash):
+        with pytest.raises(CannotWrite) as caught:
+            write(target)
+        assert isinstance(caught.value, hybrid.UsageError) and isinstance(caught.value, OSError)
+        assert str(caught.value).startswith("cannot write '")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [clash.name]  # nothing else there
+    write(tmp_path / f"good{suffix}")  # and a good path is written
+    assert (tmp_path / f"good{suffix}").exists()
+
+
+def test_writers_say_what_they_take() -> None:
+    from hybrid.export import write_csv, write_npz
+
+    with pytest.raises(hybrid.UsageError, match="a file to write is named by a str or Path, got int"):
+        write_csv(hybrid.simulate(BALL, t_end=1.0), 5)  # type: ignore[arg-type]
+    with pytest.raises(hybrid.UsageError, match=r"write_npz\(\) writes a run from hybrid.simulate, got NoneType"):
+        write_npz(None, "x.npz")  # type: ignore[arg-type]
+    with pytest.raises(hybrid.UsageError, match="sets are written to a path or a binary file, got 3"):
+        hybrid.reach(BALL, t_end=0.5, step=0.01).write_sets(3)  # type: ignore[arg-type]

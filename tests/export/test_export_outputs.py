@@ -69,7 +69,7 @@ def test_a_write_failing_midway_leaves_no_half_file(
         target.write_bytes(b"previous complete content\n")
     real_fdopen = os.fdopen
     monkeypatch.setattr(
-        "hybrid.export.atomic.os.fdopen", lambda *a, **k: _FailingHalfway(real_fdopen(*a, **k))
+        "hybrid.files.os.fdopen", lambda *a, **k: _FailingHalfway(real_fdopen(*a, **k))
     )
     with pytest.raises(OSError, match="No space left"):
         writer(ball_run, target)

@@ -19,6 +19,7 @@ b'done'
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import secrets
 import stat
@@ -26,7 +27,9 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import BinaryIO
 
-__all__ = ["atomic_write", "temporary_name"]
+from hybrid.errors import CannotWrite, UsageError
+
+__all__ = ["atomic_write", "temporary_name", "writable_target"]
 
 _ATTEMPTS = 100
 
@@ -60,10 +63,15 @@ def atomic_write(path: str | Path) -> Iterator[BinaryIO]:
     If the block raises (or the process dies), ``path`` is left as it was and
     the temporary file is removed (or, on a hard kill, left as a hidden
     ``.name.*.tmp`` file, never as a half-written ``path``). A new file gets
-    the permissions of the umask; a replaced one keeps its own.
+    the permissions of the umask; a replaced one keeps its own. A path that
+    cannot be written (a directory, a missing folder, no permission, a full
+    disk) is a :class:`~hybrid.errors.CannotWrite`, an ``OSError`` too.
     """
-    target = Path(path)
-    fd, tmp = _create(target)
+    target = writable_target(path)
+    try:
+        fd, tmp = _create(target)
+    except OSError as exc:
+        raise CannotWrite.of(target, exc) from None
     try:
         with os.fdopen(fd, "wb") as handle:
             with contextlib.suppress(FileNotFoundError):
@@ -73,7 +81,25 @@ def atomic_write(path: str | Path) -> Iterator[BinaryIO]:
             handle.flush()
             os.fsync(handle.fileno())
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and not isinstance(exc, CannotWrite):
+            raise CannotWrite.of(target, exc) from exc  # a full disk, a folder gone
         raise
+
+
+def writable_target(path: object) -> Path:
+    """``path`` as a :class:`~pathlib.Path` a file can be written to, else a :class:`CannotWrite`
+    (a directory, a missing folder) or a :class:`~hybrid.errors.UsageError` (not a path)."""
+    if isinstance(path, bytes):
+        path = os.fsdecode(path)
+    if not isinstance(path, str | os.PathLike):
+        raise UsageError(f"a file to write is named by a str or Path, got {type(path).__name__}")
+    target = Path(path)
+    if target.is_dir():
+        raise CannotWrite.of(target, IsADirectoryError(errno.EISDIR, "it is a directory"),
+                             ": give a file name inside it")  # fmt: skip
+    if not target.parent.is_dir():
+        raise CannotWrite.of(target, FileNotFoundError(errno.ENOENT, "its folder does not exist"))
+    return target
