@@ -22,6 +22,7 @@ __all__ = [
     "CannotWrite",
     "HybridError",
     "Note",
+    "OutOfRange",
     "Position",
     "SimulationError",
     "SpecError",
@@ -175,6 +176,17 @@ class UnknownName(UsageError, KeyError):
     >>> error = UnknownName("no state variable or signal 'zz'")
     >>> isinstance(error, KeyError), str(error)
     (True, "no state variable or signal 'zz'")
+    """
+
+
+class OutOfRange(UsageError, IndexError):
+    """An index a sequence of results does not have (``ensemble[10]`` of ten runs): a
+    :class:`UsageError`, and an ``IndexError`` for code that iterates by index.
+
+    Examples
+    --------
+    >>> isinstance(OutOfRange("run 10 of 10"), IndexError)
+    True
     """
 
 

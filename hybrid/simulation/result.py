@@ -124,12 +124,14 @@ class RequirementResult:
         return found
 
 
-@dataclass
+@dataclass(eq=False)
 class Run:
     """A hybrid trajectory: one entry per stored point, two points per jump.
 
     ``run.t``, ``run.j`` and ``run.location`` are arrays; ``run["name"]`` is the
-    column of a state variable or signal.
+    column of a state variable or signal. Two runs are equal only if they are the
+    same object (compare their columns to compare their values): the fields' arrays
+    have no single truth value.
     """
 
     model: str

@@ -15,7 +15,7 @@ import pytest
 from support import SPECS
 
 import hybrid
-from hybrid.errors import CannotWrite
+from hybrid.errors import CannotWrite, OutOfRange
 
 BALL = hybrid.load(SPECS / "bouncing_ball.yaml")
 THERMOSTAT = hybrid.load(SPECS / "thermostat.yaml")
@@ -265,3 +265,52 @@ def test_writers_say_what_they_take() -> None:
         write_npz(None, "x.npz")  # type: ignore[arg-type]
     with pytest.raises(hybrid.UsageError, match="sets are written to a path or a binary file, got 3"):
         hybrid.reach(BALL, t_end=0.5, step=0.01).write_sets(3)  # type: ignore[arg-type]
+
+
+def test_runs_compare_by_identity_not_by_their_arrays() -> None:
+    first, second = (hybrid.simulate(BALL, t_end=3.0) for _ in range(2))
+    assert first == first and first != second  # no "truth value of an array is ambiguous"
+    assert first in [first] and second not in [first]
+
+
+@pytest.mark.parametrize(
+    ("index", "message"),
+    [
+        (3, "run 3 of an ensemble of 3 runs"),
+        (-4, "run -4 of an ensemble of 3 runs"),
+        (1.0, "runs are indexed by whole numbers or slices, got 1.0"),
+        ("a", "runs are indexed by whole numbers or slices, got 'a'"),
+        (None, "runs are indexed by whole numbers or slices, got None"),
+    ],
+)
+def test_an_ensemble_index_it_does_not_have_is_out_of_range(index: Any, message: str) -> None:
+    pytest.importorskip("numba")
+    ensemble = hybrid.simulate_many(BALL, t_end=3.0, parameters={"e": [0.5, 0.6, 0.7]})
+    for get in (ensemble.__getitem__, ensemble.model_of):
+        with pytest.raises(OutOfRange) as caught:
+            get(index)
+        assert str(caught.value) == message and isinstance(caught.value, IndexError)
+    first = 2 * 10.0 / 9.81  # sqrt of it: the first impact from 10 m, the same for every e
+    assert ensemble[-1].jumps[0].t == pytest.approx(first**0.5, abs=1e-6)
+    assert [run.jumps[0].t for run in ensemble[0:2]] == pytest.approx([first**0.5] * 2, abs=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"parameters": {"e": []}}, "parameters: column 'e' is empty"),
+        ({"parameters": {"e": ["a", "b"]}}, "parameters: column 'e' must be numbers, got ['a', 'b']"),
+        ({"parameters": {"e": "0.5"}}, "parameters: column 'e' must be a list of numbers, got '0.5'"),
+        ({"parameters": {"e": [float("nan"), 0.5]}},
+         "parameters: column 'e' must be finite numbers, got nan in row 0"),
+        ({"parameters": {"e": [[0.5, 0.6], [0.1, 0.2]]}},
+         "parameters: column 'e' must be one list of numbers, got shape (2, 2)"),
+        ({"parameters": {"e": [0.5]}, "threads": "two"}, "threads must be a whole number >= 1, got 'two'"),
+        ({"parameters": {"e": [0.5]}, "threads": 0}, "threads must be a whole number >= 1, got 0"),
+    ],
+)
+def test_simulate_many_refuses_a_table_it_cannot_run(kwargs: dict[str, Any], message: str) -> None:
+    pytest.importorskip("numba")
+    with pytest.raises(hybrid.UsageError) as caught:
+        hybrid.simulate_many(BALL, t_end=2.0, **kwargs)
+    assert str(caught.value) == message

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import bisect
 import math
+import numbers
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import replace
 from typing import Any, overload
@@ -25,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hybrid.compose import System, as_system, expect_model
-from hybrid.errors import UsageError
+from hybrid.errors import OutOfRange, UsageError
 from hybrid.model import Automaton
 from hybrid.simulation.bounds import BoundExcursion, bound_excursions, warn_ensemble
 from hybrid.simulation.interrupts import immediate
@@ -59,18 +60,37 @@ def _columns(table: Table, what: str) -> dict[str, NDArray[np.float64]]:
     if hasattr(table, "to_dict") and hasattr(table, "columns"):
         table = table.to_dict("list")
     if isinstance(table, Mapping):
-        columns = {str(k): np.asarray(v, dtype=float).reshape(-1) for k, v in table.items()}
+        columns = {str(k): _column(what, str(k), v) for k, v in table.items()}
     elif isinstance(table, Sequence) and all(isinstance(row, Mapping) for row in table):
         keys = list(table[0]) if table else []
         if any(list(row) != keys for row in table):
             raise UsageError(f"{what}: every row must name the same columns")
-        columns = {k: np.array([float(row[k]) for row in table]) for k in keys}
+        columns = {str(k): _column(what, str(k), [row[k] for row in table]) for k in keys}
     else:
         raise UsageError(f"{what}: give a mapping of columns, a list of rows or a data frame")
     sizes = {len(v) for v in columns.values()}
     if len(sizes) > 1:
         raise UsageError(f"{what}: columns of different lengths {sorted(sizes)}")
     return columns
+
+
+def _column(what: str, name: str, values: object) -> NDArray[np.float64]:
+    """One column of a table: a non-empty list of finite numbers (a UsageError naming it if not)."""
+    if isinstance(values, str | bytes):
+        raise UsageError(f"{what}: column '{name}' must be a list of numbers, got {values!r}")
+    try:
+        column = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise UsageError(f"{what}: column '{name}' must be numbers, got {values!r}"[:200]) from None
+    if column.ndim != 1:
+        raise UsageError(f"{what}: column '{name}' must be one list of numbers, got shape {column.shape}")
+    if column.size == 0:
+        raise UsageError(f"{what}: column '{name}' is empty")
+    bad = np.flatnonzero(~np.isfinite(column))
+    if bad.size:
+        k = int(bad[0])
+        raise UsageError(f"{what}: column '{name}' must be finite numbers, got {column[k]} in row {k}")
+    return column
 
 
 def _slot(system: System, compiled: CompiledNative, key: str) -> int:
@@ -163,10 +183,7 @@ class Ensemble(Sequence[Run]):
     def __getitem__(self, i: int | slice) -> Run | list[Run]:
         if isinstance(i, slice):
             return [self[k] for k in range(*i.indices(len(self)))]
-        if i < 0:
-            i += len(self)
-        if not 0 <= i < self._n:
-            raise IndexError("run index out of range")
+        i = self._index(i)
         if i in self._alone:
             return self._alone[i]
         c, r = self._where(i)
@@ -182,8 +199,20 @@ class Ensemble(Sequence[Run]):
     def __iter__(self) -> Iterator[Run]:
         return (self[k] for k in range(len(self)))
 
+    def _index(self, i: object, runs: int | None = None) -> int:
+        """Run ``i`` of ``runs`` (default: those run so far) as a position (negative from the
+        end), or an :class:`OutOfRange`."""
+        runs = self._n if runs is None else runs
+        if isinstance(i, bool) or not isinstance(i, numbers.Integral):
+            raise OutOfRange(f"runs are indexed by whole numbers or slices, got {i!r}")
+        k = int(i) + (runs if int(i) < 0 else 0)
+        if not 0 <= k < runs:
+            raise OutOfRange(f"run {int(i)} of an ensemble of {runs} runs")
+        return k
+
     def model_of(self, i: int) -> System:
         """The model with run ``i``'s parameter values."""
+        i = self._index(i, self.params.shape[0])  # every row's, also while the runs go on
         names = self.compiled.native.slot_names  # the held inputs' slots after them
         values = self.params[i].tolist()[: len(names)]
         return self.model.with_parameters(dict(zip(names, values, strict=True)))
@@ -288,6 +317,9 @@ def simulate_many(
             raise UsageError(f"initial value for unknown state variable '{name}'")
         x0s[:, native.state_names.index(name)] = column
     ensemble = Ensemble(model, compiled, settings, params, params_table, starts)
+    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, numbers.Integral)
+                                or threads < 1):  # fmt: skip
+        raise UsageError(f"threads must be a whole number >= 1, got {threads!r}")
     if threads is not None:
         import numba
 
