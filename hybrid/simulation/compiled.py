@@ -109,7 +109,7 @@ class CompiledModel:
         self.flow_failure: EvalFailure = LatestFailure()
         self.terms_failure = EvalFailure()
         """Where a mode's ``terms`` record failures (read and cleared by the watch)."""
-        self.inputs = dict(inputs or {})
+        self.inputs = {name: _numeric(fn) for name, fn in (inputs or {}).items()}
         external = self._external_inputs()
         missing = [n for n in external if n not in self.inputs]
         if missing:
@@ -428,3 +428,22 @@ class CompiledModel:
 
 def _identifier(name: str) -> str:
     return "".join(ch if ch.isalnum() else "_" for ch in name)
+
+
+def _numeric(fn: Callable[[float], float]) -> Callable[[float], float]:
+    """``fn`` if it gives floats (an expression or a time series of the command line), else
+    ``fn`` with each value made a float: text, None, a complex number or an array of several
+    values is then an evaluation error where the input is read (the run ends ``nonfinite``,
+    naming the expression and the value), not an error inside numpy or the solver."""
+    from hybrid.simulation.inputs import ExpressionInput, TimeSeries
+
+    if isinstance(fn, ExpressionInput | TimeSeries):
+        return fn
+
+    def number(t: float) -> float:
+        value = fn(t)
+        if isinstance(value, str | bytes):
+            raise TypeError(f"an input gave {value!r}, not a number")
+        return float(value)
+
+    return number

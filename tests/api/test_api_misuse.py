@@ -7,10 +7,12 @@ Each case here once escaped as an AttributeError, TypeError or ValueError.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from support import SPECS
 
@@ -314,3 +316,34 @@ def test_simulate_many_refuses_a_table_it_cannot_run(kwargs: dict[str, Any], mes
     with pytest.raises(hybrid.UsageError) as caught:
         hybrid.simulate_many(BALL, t_end=2.0, **kwargs)
     assert str(caught.value) == message
+
+
+RELAY = """
+automaton: relay
+inputs: [u]
+state: {x: {initial: 0.0}}
+locations:
+  low: {flow: {x: 0}}
+  high: {flow: {x: 0}}
+edges:
+  - {name: up, from: low, to: high, guard: u >= 0.5}
+  - {name: down, from: high, to: low, guard: u <= -0.5}
+"""
+
+
+@pytest.mark.parametrize(
+    ("value", "said"),
+    [
+        ("a", "an input gave 'a', not a number"),
+        (None, "not 'NoneType'"),
+        (1j, "not 'complex'"),
+        (np.array([1.0, 2.0]), "arrays can be converted"),
+    ],
+)
+def test_an_input_that_gives_no_number_ends_the_run_where_it_is_read(value: Any, said: str) -> None:
+    relay = hybrid.load_text(RELAY)
+    run = hybrid.simulate(relay, t_end=1.0, inputs={"u": lambda t: value})
+    assert run.termination.cause == "nonfinite" and run.termination.t == 0.0
+    assert said in run.termination.message and "the guard of up failed" in run.termination.message
+    good = hybrid.simulate(relay, t_end=1.0, inputs={"u": lambda t: math.sin(2 * t)}, rtol=1e-10, atol=1e-12)
+    assert good.jumps[0].t == pytest.approx(math.pi / 12, abs=1e-8)  # sin(2t) = 0.5
