@@ -16,6 +16,7 @@ Examples
 
 from __future__ import annotations
 
+import re
 import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -423,11 +424,36 @@ def compose(
         expect_model(automaton, "compose")
     if not automata:
         raise SpecError("compose() needs at least one automaton")
-    comp_names = list(names) if names is not None else [a.name for a in automata]
+    comp_names = _names_given(names, len(automata)) if names is not None else [a.name for a in automata]
+    if name is not None:
+        _check_name(name, "name")
     parts = tuple(Component(n, a, a.position) for n, a in zip(comp_names, automata, strict=True))
     system = System(name or "_".join(comp_names), parts)
     check_system(system)
     return system
+
+
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+"""A name, as specs write them (``|`` and ``.`` join names into qualified ones)."""
+
+
+def _check_name(value: object, what: str) -> None:
+    if not isinstance(value, str) or not _NAME.fullmatch(value):
+        raise UsageError(
+            f"{what} must be a name (an ASCII letter or _, then letters, digits or _), "
+            f"got {value!r}"
+        )
+
+
+def _names_given(names: object, count: int) -> list[str]:
+    """``compose``'s component names: one name per automaton."""
+    if isinstance(names, str) or not isinstance(names, Sequence):
+        raise UsageError(f"names must be a list of {count} names, got {names!r}")
+    if len(names) != count:
+        raise UsageError(f"names must give one name per automaton ({count}), got {len(names)}")
+    for given in names:
+        _check_name(given, "a component's name")
+    return list(names)
 
 
 def check_system(system: System) -> None:

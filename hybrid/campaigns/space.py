@@ -350,11 +350,27 @@ def ranges_axes(
             if bounds is None:
                 items.append(str(name))
             else:
-                low, high = bounds
-                items.append(Axis.of(str(name), float(low), float(high)))
+                low, high = _pair(str(name), bounds)
+                items.append(Axis.of(str(name), low, high))
     else:
+        if isinstance(given, str | bytes) or not isinstance(given, Iterable):
+            raise UsageError(f"vary must be a mapping {{name: (low, high)}} or a list, got {given!r}")
         items = list(given)
+        for item in items:
+            if not isinstance(item, Axis | str):
+                raise UsageError(f"a range to vary is an Axis or a name, got {item!r}")
     return [declared_axis(model, item) if isinstance(item, str) else item for item in items]
+
+
+def _pair(name: str, bounds: object) -> tuple[float, float]:
+    """``(low, high)`` of a range given as two numbers, else a :class:`UsageError` naming it."""
+    try:
+        pair = np.asarray(bounds, dtype=float)  # a tuple, a list, an array
+    except (TypeError, ValueError):
+        pair = np.zeros(0)
+    if isinstance(bounds, str | bytes) or pair.shape != (2,):
+        raise UsageError(f"{name}: a range is two numbers (low, high), got {bounds!r}")
+    return float(pair[0]), float(pair[1])
 
 
 def parse_range(text: str) -> Axis | str:

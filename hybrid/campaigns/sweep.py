@@ -400,14 +400,19 @@ def hard_limit(timeout: float | None) -> float | None:
 
 def _listed(points: Sequence[Mapping[str, float]]) -> tuple[list[str], list[Point]]:
     """The names and points of an explicit list (every point gives the same names)."""
-    if isinstance(points, Mapping) or not points:
+    if isinstance(points, Mapping | str | bytes) or not isinstance(points, Sequence) or not points:
         raise UsageError("points must be a non-empty list of {name: value} mappings")
+    if not isinstance(points[0], Mapping):
+        raise UsageError(f"point 0 must be a mapping {{name: value}}, got {points[0]!r}")
     names = [str(n) for n in points[0]]
     listed: list[Point] = []
     for k, point in enumerate(points):
         if not isinstance(point, Mapping) or sorted(map(str, point)) != sorted(names):
             raise UsageError(f"point {k} must give a value to each of {', '.join(names)}")
-        values = {n: float(point[n]) for n in names}
+        try:
+            values = {n: float(point[n]) for n in names}
+        except (TypeError, ValueError):
+            raise UsageError(f"point {k}: values must be numbers, got {dict(point)!r}") from None
         if not all(map(math.isfinite, values.values())):
             raise UsageError(f"point {k}: values must be finite numbers, got {values}")
         listed.append(values)

@@ -347,3 +347,41 @@ def test_an_input_that_gives_no_number_ends_the_run_where_it_is_read(value: Any,
     assert said in run.termination.message and "the guard of up failed" in run.termination.message
     good = hybrid.simulate(relay, t_end=1.0, inputs={"u": lambda t: math.sin(2 * t)}, rtol=1e-10, atol=1e-12)
     assert good.jumps[0].t == pytest.approx(math.pi / 12, abs=1e-8)  # sin(2t) = 0.5
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"names": ["p"]}, "names must give one name per automaton (2), got 1"),
+        ({"names": "pq"}, "names must be a list of 2 names, got 'pq'"),
+        ({"names": ["p|q", "r"]}, "a component's name must be a name (an ASCII letter or _, then letters, digits or _), got 'p|q'"),
+        ({"names": ["p.q", "p"]}, "a component's name must be a name (an ASCII letter or _, then letters, digits or _), got 'p.q'"),
+        ({"name": 5}, "name must be a name (an ASCII letter or _, then letters, digits or _), got 5"),
+    ],
+)
+def test_compose_takes_names_as_specs_write_them(kwargs: dict[str, Any], message: str) -> None:
+    """'p|q' once garbled the system's location names ('|' joins them, '.' qualifies)."""
+    with pytest.raises(hybrid.UsageError) as caught:
+        hybrid.compose(BALL, THERMOSTAT, **kwargs)
+    assert str(caught.value) == message
+    system = hybrid.compose(BALL, THERMOSTAT, names=["p", "q"], name="pq")
+    assert hybrid.simulate(system, t_end=0.5).location[0] == "p.falling|q.off"
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"samples": 2, "vary": {"e": (0.1, 0.5, 0.9)}}, "e: a range is two numbers (low, high), got (0.1, 0.5, 0.9)"),
+        ({"samples": 2, "vary": {"e": "0.1:0.5"}}, "e: a range is two numbers (low, high), got '0.1:0.5'"),
+        ({"samples": 2, "vary": {"e": 0.9}}, "e: a range is two numbers (low, high), got 0.9"),
+        ({"samples": 2, "vary": [1]}, "a range to vary is an Axis or a name, got 1"),
+        ({"points": [0.5]}, "point 0 must be a mapping {name: value}, got 0.5"),
+        ({"points": [{"e": "x"}]}, "point 0: values must be numbers, got {'e': 'x'}"),
+    ],
+)
+def test_sweep_ranges_and_points_of_the_wrong_shape_are_named(kwargs: dict[str, Any], message: str) -> None:
+    with pytest.raises(hybrid.UsageError) as caught:
+        hybrid.sweep(BALL, t_end=1.0, workers=0, **kwargs)
+    assert str(caught.value) == message
+    table = hybrid.sweep(BALL, t_end=1.0, workers=0, samples=3, vary={"e": np.array([0.1, 0.9])})
+    assert all(0.1 <= row["e"] <= 0.9 for row in table.rows)
