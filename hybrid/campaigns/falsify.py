@@ -193,6 +193,8 @@ def falsify(
         raise UsageError(f"global_share must be in (0, 1], got {global_share}")
     if sampler not in SAMPLERS:
         raise UsageError(f"unknown sampler '{sampler}' (choose from {', '.join(SAMPLERS)})")
+    if isinstance(starts, bool) or not isinstance(starts, int) or starts < 1:
+        raise UsageError(f"starts must be a whole number >= 1, got {starts!r}")
     if parameters:
         model = model.with_parameters(dict(parameters))
     system = as_system(model)  # the one model type below; the user's model goes to the workers

@@ -216,6 +216,8 @@ def sweep(
     """
     expect_model(model, "sweep")
     seed = checked_seed(seed)
+    if resume and out is None:
+        raise UsageError("resume=True finishes the campaign writing out=: give out")
     chosen, solver = campaign_settings("sweep", settings, t_end, solver)
     t_end, (backend, announce) = chosen.t_end, campaign_backend(backend, chosen)
     if parameters:

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from hybrid.campaigns.resumable import write_whole
-from hybrid.errors import UsageError
+from hybrid.errors import UnknownName, UsageError
 from hybrid.version import install_hint
 
 __all__ = ["FAILED", "SweepTable", "column_type"]
@@ -98,7 +98,7 @@ class SweepTable:
     def column(self, name: str) -> list[Any]:
         """The values of one column, in run order."""
         if name not in self.columns:
-            raise KeyError(f"no column '{name}' (columns: {', '.join(self.columns)})")
+            raise UnknownName(f"no column '{name}' (columns: {', '.join(self.columns)})")
         return [r.get(name) for r in self.rows]
 
     def failed(self) -> list[dict[str, Any]]:

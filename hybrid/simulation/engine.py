@@ -153,6 +153,10 @@ def simulate(
     model = model.with_parameters(parameters) if parameters else model
     if isinstance(model, System) and initial_location:
         raise UsageError("initial_location applies to an automaton; set it per component")
+    if initial_location is not None and not isinstance(initial_location, str):
+        raise UsageError(f"initial_location must be a location's name, got {initial_location!r}")
+    if progress is not None and not callable(progress):
+        raise UsageError(f"progress must be a function of a status, got {progress!r}")
     start = describe_start(model, inputs, initial, initial_location, t_start)
     if isinstance(model, Automaton) and (initial or initial_location):
         model = model.with_initial(initial_location, initial)

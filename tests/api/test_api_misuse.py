@@ -385,3 +385,20 @@ def test_sweep_ranges_and_points_of_the_wrong_shape_are_named(kwargs: dict[str, 
     assert str(caught.value) == message
     table = hybrid.sweep(BALL, t_end=1.0, workers=0, samples=3, vary={"e": np.array([0.1, 0.9])})
     assert all(0.1 <= row["e"] <= 0.9 for row in table.rows)
+
+
+def test_smaller_arguments_say_what_they_take() -> None:
+    with pytest.raises(hybrid.UsageError, match="initial_location must be a location's name, got 3"):
+        hybrid.simulate(BALL, t_end=1.0, initial_location=3)  # type: ignore[arg-type]
+    with pytest.raises(hybrid.UsageError, match="progress must be a function of a status, got 5"):
+        hybrid.simulate(BALL, t_end=1.0, progress=5)  # type: ignore[arg-type]
+    with pytest.raises(hybrid.UsageError, match="resume=True finishes the campaign writing out="):
+        hybrid.sweep(BALL, t_end=1.0, grid={"e": [0.5]}, workers=0, resume=True)
+    for starts in (0, -1, 1.5):
+        with pytest.raises(hybrid.UsageError, match="starts must be a whole number >= 1"):
+            hybrid.falsify(BALL, "x", t_end=1.0, starts=starts, workers=0)  # type: ignore[arg-type]
+    table = hybrid.sweep(BALL, t_end=2.0, grid={"e": [0.5, 0.9]}, workers=0)
+    assert table.column("e") == [0.5, 0.9]
+    with pytest.raises(hybrid.UsageError, match="no column 'zz'") as caught:
+        table.column("zz")
+    assert isinstance(caught.value, KeyError)
