@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hybrid.errors import UnknownName
+from hybrid.errors import UnknownName, UsageError
 
 __all__ = ["CAUSES", "PLOT_BACKEND", "Jump", "RequirementResult", "Run", "Termination"]
 
@@ -244,6 +244,11 @@ class Run:
         >>> [ax.get_ylabel() for ax in fig.axes]
         ['location', 'h [m]', 'v [m/s]', 'signals']
         """
+        for name in names:
+            if not isinstance(name, str):
+                raise UsageError(f"plot() takes names of state variables or signals, got {name!r}")
+        if path is not None and not isinstance(path, str | Path):
+            raise UsageError(f"plot(path=) names a file with a str or Path, got {path!r}")
         backend = importlib.import_module(PLOT_BACKEND)
         return backend.plot(
             self,

@@ -270,8 +270,11 @@ class Settings:
             raise UsageError(f"unknown method '{self.method}'; choose one of {', '.join(METHODS)}")
         if self.backend is not None and self.backend not in CHOICES:
             raise UsageError(f"unknown backend '{self.backend}'; choose one of {', '.join(CHOICES)}")
-        _flag("dense", self.dense)
-        _flag("zeno", self.zeno)
+        for flag in ("dense", "zeno"):
+            value = getattr(self, flag)
+            if value.__class__.__module__ == "numpy" and value.__class__.__name__ in ("bool", "bool_"):
+                object.__setattr__(self, flag, bool(value))  # numpy's True: a Python one
+            _flag(flag, getattr(self, flag))
 
     def as_dict(self) -> dict[str, Any]:
         """The settings as the events JSON records them (``max_step`` null when not limited)."""

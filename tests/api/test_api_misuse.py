@@ -402,3 +402,13 @@ def test_smaller_arguments_say_what_they_take() -> None:
     with pytest.raises(hybrid.UsageError, match="no column 'zz'") as caught:
         table.column("zz")
     assert isinstance(caught.value, KeyError)
+
+
+def test_numpy_true_and_false_are_flags_and_plot_takes_names() -> None:
+    settings = hybrid.Settings(t_end=1.0, zeno=np.bool_(True), dense=np.bool_(False))
+    assert settings.zeno is True and settings.dense is False  # Python's, as JSON writes them
+    run = hybrid.simulate(BALL, settings=settings)
+    with pytest.raises(hybrid.UsageError, match="plot\\(\\) takes names of state variables or signals, got 3"):
+        run.plot(3)  # type: ignore[arg-type]
+    with pytest.raises(hybrid.UsageError, match="names a file with a str or Path, got 3"):
+        run.plot(path=3)  # type: ignore[arg-type]
