@@ -218,7 +218,10 @@ class LocalPool(Executor):
                     if not w.assigned:
                         w.since = now
                     w.assigned.extend(batch)
-                    w.conn.send(batch)
+                    try:
+                        w.conn.send(batch)
+                    except OSError:  # it died since it last answered (a broken pipe)
+                        self._lost(w, queue, on_result, failed)
             busy = {w.conn: w for w in self.pool if w.assigned}
             for conn in wait(list(busy), timeout=POLL):
                 self._receive(busy[conn], queue, on_result, failed)  # type: ignore[index]
@@ -243,10 +246,14 @@ class LocalPool(Executor):
                 w.since = time.monotonic()
                 on_result(index, result)
         except (EOFError, OSError):
-            w.process.join(timeout=1.0)
-            code = w.process.exitcode
-            message = f"the worker process died (exit code {code}) during this run"
-            self._replace(w, queue, on_result, failed, "error", message)
+            self._lost(w, queue, on_result, failed)
+
+    def _lost(self, w: _Worker, queue: deque[Job], on_result: OnResult, failed: Failed) -> None:
+        """``w`` died: its run in progress is an error row, the rest go to another worker."""
+        w.process.join(timeout=1.0)
+        code = w.process.exitcode
+        message = f"the worker process died (exit code {code}) during this run"
+        self._replace(w, queue, on_result, failed, "error", message)
 
     def _replace(
         self,

@@ -13,7 +13,7 @@ import math
 import sys
 import warnings
 from collections.abc import Iterator, Sequence
-from typing import Any
+from typing import Any, TextIO
 
 from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_INVALID, EXIT_OK
 from hybrid.errors import Note, SimulationError, SpecError, UsageError
@@ -342,8 +342,11 @@ def _run(args: argparse.Namespace) -> int:
         placed = isinstance(exc, UsageError) and exc.at is not None  # file:line:column first
         print(str(exc) if placed else f"{getattr(args, 'file', 'hybrid')}: {exc}", file=sys.stderr)
         return EXIT_INVALID
-    except BrokenPipeError:
-        return EXIT_OK
+    except BrokenPipeError as exc:
+        if _reader_gone(sys.stdout):  # `hybrid ... | head`: the reader has all it wanted
+            return EXIT_OK
+        print(f"hybrid: a connection broke (a worker process died?): {exc}", file=sys.stderr)
+        return EXIT_FINDINGS
     except OSError as exc:  # an output that failed where it could not be known before
         from hybrid.export.outputs import reason
 
@@ -351,6 +354,17 @@ def _run(args: argparse.Namespace) -> int:
         print(f"hybrid: cannot write{where}: {reason(exc)}", file=sys.stderr)
         return EXIT_INVALID
     return EXIT_INVALID
+
+
+def _reader_gone(stream: TextIO) -> bool:
+    """Whether writing to ``stream`` fails because its reader has closed it."""
+    try:
+        stream.flush()
+    except BrokenPipeError:
+        return True
+    except (OSError, ValueError):
+        return False
+    return False
 
 
 def _validate(files: Sequence[str]) -> int:
