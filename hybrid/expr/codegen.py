@@ -32,6 +32,7 @@ from hybrid.expr.generated import define
 from hybrid.expr.printer import SourcePrinter
 
 __all__ = [
+    "EVALUATION_ERRORS",
     "CodeContext",
     "EvalFailure",
     "Stash",
@@ -40,7 +41,12 @@ __all__ = [
     "reads_library",
 ]
 
-_ERRORS = (ArithmeticError, ValueError, TypeError)
+EVALUATION_ERRORS: tuple[type[Exception], ...] = (Exception,)
+"""What an expression's evaluation may raise and is then a failure of that evaluation (the
+run ends ``nonfinite`` naming it): arithmetic and domain errors, and whatever a library
+function raises (an IndexError of a table, its own exception class). Not KeyboardInterrupt
+or SystemExit."""
+_ERRORS = EVALUATION_ERRORS
 
 
 @dataclass

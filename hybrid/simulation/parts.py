@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING, Any
 
 from hybrid.compose import System
 from hybrid.expr import ir
-from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
+from hybrid.expr.codegen import EVALUATION_ERRORS, CodeContext, EvalFailure, compile_function
 from hybrid.expr.dependencies import signals_read
 from hybrid.expr.rho import guard_to_rho, level_key, levels
 from hybrid.model import Automaton
@@ -66,7 +66,7 @@ __all__ = ["PARTS_FROM", "Part", "Parts", "signal_outputs", "uses_parts"]
 PARTS_FROM = 8
 """Systems of this many components or more are compiled part by part."""
 
-_ERRORS = (ArithmeticError, ValueError, TypeError)
+_ERRORS = EVALUATION_ERRORS  # an expression's failures, as the generated code catches them
 
 FLOW = "rhs_parts"
 """A mode's right-hand side records its failures as ``rhs_parts_K`` (the K-th mode built)."""

@@ -62,6 +62,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from hybrid.expr.codegen import EVALUATION_ERRORS
 from hybrid.simulation import boundary
 from hybrid.simulation.compiled import CompiledModel
 from hybrid.simulation.forms import CompiledMode, CompiledTransition, Part
@@ -69,7 +70,7 @@ from hybrid.simulation.parts import Parts
 
 __all__ = ["InstantMemo", "signals_after"]
 
-_ERRORS = (ArithmeticError, ValueError, TypeError)
+_ERRORS = EVALUATION_ERRORS  # an expression's failures, as the generated code catches them
 _NONE: frozenset[str] = frozenset()
 
 
