@@ -98,8 +98,13 @@ class ChunkStore:
                 "settings or points): remove it, or write the results elsewhere"
             )
         for chunk in sorted(self.folder.glob("chunk-*.jsonl")):
-            for line in chunk.read_text().splitlines():
-                row = json.loads(line)
+            try:
+                rows = [json.loads(line) for line in chunk.read_text().splitlines()]
+            except (OSError, ValueError) as exc:  # written whole, so damaged since
+                raise UsageError(
+                    f"{chunk}: cannot read it ({exc}): remove it, and --resume runs its runs again"
+                ) from None
+            for row in rows:
                 if row.get(LOST):
                     self.done.pop(int(row["run"]), None)  # run again (a later chunk may hold it)
                 else:

@@ -208,6 +208,12 @@ def combine(grid: Sequence[Point], samples: Sequence[Point] | None) -> list[Poin
     """Every grid point with every sample (the grid alone without samples)."""
     if samples is None:
         return [dict(p) for p in grid]
+    size = len(grid) * len(samples)
+    if size > MAX_POINTS:
+        raise UsageError(
+            f"the grid's {len(grid)} points times {len(samples)} samples are {size} runs, "
+            f"over the limit of {MAX_POINTS}"
+        )
     return [{**g, **s} for g in grid for s in samples]
 
 

@@ -464,6 +464,7 @@ def _fingerprint(
             "solver": sorted((k, repr(v)) for k, v in plan.solver.items()),
             "inputs": plan.inputs,
             "backend": plan.requested or plan.backend,
+            "timeout": plan.timeout,  # a row ends 'timeout' or not by it
             "columns": list(columns),
             "points": [[(k, repr(v)) for k, v in p.items()] for p in points],
         }
