@@ -77,6 +77,12 @@ class Falsification:
     complete: bool = True
 
     @property
+    def failed(self) -> list[dict[str, Any]]:
+        """The evaluations whose run failed (raised, timed out, a worker lost): their points
+        were not judged, so no violation found among them is no evidence of none."""
+        return [h for h in self.history if h.get("failed")]
+
+    @property
     def violated_at(self) -> float | None:
         """When the counterexample's run first violates the requirement."""
         if self.run is None or self.requirement not in self.run.requirements:
@@ -95,6 +101,7 @@ class Falsification:
             "budget": self.budget,
             "seed": self.seed,
             "complete": self.complete,
+            "failed": len(self.failed),
             "history": self.history,
         }
 
@@ -293,9 +300,10 @@ class _Search:
                 break
             for i, _, values in jobs:
                 robustness, violated = objective(rows[i], self.requirement)
-                self.history.append(
-                    {**values, "robustness": robustness, "violated": violated, "phase": "global"}
-                )
+                entry = {**values, "robustness": robustness, "violated": violated, "phase": "global"}
+                if rows[i].get(f"{self.requirement}.holds") is None:  # a run that failed
+                    entry["failed"] = f"{rows[i].get('cause')}: {rows[i].get('message', '')}"
+                self.history.append(entry)
                 if violated and self.found is None:
                     self.found = self.history[-1]
             if self.found is not None:
@@ -383,11 +391,16 @@ class _Search:
                 )
             except Exception:  # the run failed in the search too: no trajectory to show
                 run = None
+        found, robustness = self.found is not None, float(chosen["robustness"])
+        verdict = None if run is None else run.requirements.get(self.requirement)
+        if not found and verdict is not None and not verdict.holds:
+            # the point's run failed in the search (a timeout) but violates when run whole
+            found, robustness = True, float(verdict.robustness)
         return Falsification(
             self.requirement,
-            self.found is not None,
+            found,
             values,
-            float(chosen["robustness"]),
+            robustness,
             len(self.history),
             self.budget,
             self.seed,

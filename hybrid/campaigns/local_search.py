@@ -82,7 +82,10 @@ def local_search(
         values = values_of(unit)
         row = run_point(model, index, values, plan)
         robustness, violated = objective(row, requirement)
-        history.append({**values, "robustness": robustness, "violated": violated})
+        entry: dict[str, Any] = {**values, "robustness": robustness, "violated": violated}
+        if row.get(f"{requirement}.holds") is None:  # a run that failed: not judged
+            entry["failed"] = f"{row.get('cause')}: {row.get('message', '')}"
+        history.append(entry)
         if robustness < best["robustness"] or best["values"] is None:
             best.update(robustness=robustness, values=values, found=violated)
         if violated:

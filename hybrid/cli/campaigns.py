@@ -246,11 +246,17 @@ def run_falsify(args: argparse.Namespace) -> int:
         )
         return EXIT_FINDINGS
     stopped = "" if result.complete else " (interrupted)"
+    failed = result.failed
+    unjudged = (
+        f"; {len(failed)} of them failed and were not judged (the first: {failed[0]['failed']})"
+        if failed
+        else ""
+    )
     print(
         f"{args.file}: no violation of '{args.requirement}' in {result.evaluations} runs"
-        f"{stopped}; lowest robustness {result.robustness:.6g} at {shown}"
+        f"{stopped}; lowest robustness {result.robustness:.6g} at {shown}{unjudged}"
     )
-    return EXIT_OK if result.complete else EXIT_FINDINGS
+    return EXIT_OK if result.complete and not failed else EXIT_FINDINGS
 
 
 def _write_result(result: Any, out: Path) -> None:

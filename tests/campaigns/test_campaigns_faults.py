@@ -7,6 +7,7 @@ silent exit 0 (found by trying campaigns as a user would).
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -48,3 +49,44 @@ def test_a_damaged_chunk_is_named_not_a_traceback(tmp_path: Path) -> None:
     with pytest.raises(hybrid.UsageError, match=r"chunk-000000\.jsonl: cannot read it .*remove it"):
         ChunkStore(out, "print", resume=True)
     json.loads((store.folder / "campaign.json").read_text())  # the manifest is intact
+
+
+HEATER = """automaton: heater
+parameters: {k: 0.1}
+state: {x: {initial: 20.0}}
+locations: {cooling: {flow: {x: -k*x}}}
+requirements: [{name: warm, always: "x >= 20*exp(-0.95)"}]
+"""
+SLOW = {"t_end": 1.0, "max_step": 2e-5, "run_timeout": 0.01, "backend": "scipy", "workers": 0}
+"""50,000 steps a run: none ends within the run timeout, on any machine."""
+
+
+def test_runs_that_failed_are_not_evidence_of_no_violation(tmp_path: Path) -> None:
+    """x(1) = 20 exp(-k) is below 20 exp(-0.95) for every k > 0.95: each point violates.
+
+    Every run of the search times out; before, each counted as robustness +inf and the
+    falsification said 'no violation' (exit 0) while its own final run violated."""
+    heater = hybrid.load_text(HEATER, file="heater.yaml")
+    result = hybrid.falsify(heater, "warm", {"k": (0.96, 1.0)}, budget=3, seed=0, **SLOW)
+    assert len(result.failed) == result.evaluations == 3
+    assert all(h["failed"].startswith("timeout") for h in result.failed)
+    assert result.found and result.robustness < 0  # the point's run, whole, violates
+    k = result.values["k"]
+    assert result.robustness == pytest.approx(20 * math.exp(-k) - 20 * math.exp(-0.95), abs=1e-6)
+    assert result.as_dict()["failed"] == 3
+
+
+def test_a_search_whose_runs_failed_does_not_exit_0(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Where the requirement holds (k < 0.95) but every run times out: not 'no violation', exit 0."""
+    from support import main_in_process
+
+    spec = tmp_path / "heater.yaml"
+    spec.write_text(HEATER)
+    code = main_in_process("falsify", spec, "--t-end", "1", "--requirement", "warm", "--vary",
+                           "k=0.1:0.5", "--budget", "2", "--max-step", "2e-5", "--run-timeout",
+                           "0.01", "--backend", "scipy", "--workers", "0", "--quiet")  # fmt: skip
+    said = capsys.readouterr().out
+    assert code == 1, said
+    assert "2 of them failed and were not judged (the first: timeout" in said
