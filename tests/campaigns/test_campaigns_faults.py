@@ -90,3 +90,25 @@ def test_a_search_whose_runs_failed_does_not_exit_0(
     said = capsys.readouterr().out
     assert code == 1, said
     assert "2 of them failed and were not judged (the first: timeout" in said
+
+
+def test_a_compiled_campaign_does_not_count_loading_against_the_first_run() -> None:
+    """The first compiled run of a process loads its code for about 2 s (a warm cache):
+    with a run timeout of 0.5 s run 0 ended 'timeout' in every such campaign."""
+    pytest.importorskip("numba")
+    import subprocess
+    import sys
+
+    from support import REPO
+
+    code = (
+        "import hybrid\n"
+        "ball = hybrid.load('specs/bouncing_ball.yaml')\n"
+        "table = hybrid.sweep(ball, t_end=10.0, grid={'e': [0.5, 0.7, 0.9]}, workers=0,\n"
+        "                     backend='compiled', run_timeout=0.5)\n"
+        "print([row['cause'] for row in table.rows])\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=REPO, timeout=600, check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "timeout" not in done.stdout and done.stdout.count("'") == 6, done.stdout
