@@ -23,6 +23,7 @@ on the executor or the number of workers.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -37,6 +38,7 @@ from hybrid.campaigns.runs import (
     model_variant,
     requirement_columns,
     simulate_quietly,
+    watchdog,
 )
 from hybrid.campaigns.space import SAMPLERS, Axis, checked_seed, ranges_axes, unit_samples
 from hybrid.campaigns.sweep import campaign_backend, campaign_settings, executor_for, hard_limit
@@ -351,7 +353,10 @@ class _Search:
                 "history": [],
             }
 
-        if not executor.run(jobs, keep, failed, stop, None):
+        # a job is up to its share of runs, each bounded like a run of the global phase
+        per_run = hard_limit(self.plan.timeout)
+        limit = None if per_run is None else per_run * max(shares)
+        if not executor.run(jobs, keep, failed, stop, limit):
             self.complete = False
         for k in sorted(results):
             for entry in results[k]["history"]:
@@ -374,12 +379,14 @@ class _Search:
             chosen = {**self.values_of([0.0] * len(self.axes)), "robustness": math.inf}
         values = {n: float(chosen[n]) for n in names}
         run = None
-        if self.history:
+        if self.history and not chosen.get("failed"):  # a point whose run failed: not again
             over = split(values)
             from hybrid.simulation.inputs import ExpressionInput
 
             inputs: dict[str, Any] = {n: ExpressionInput(n, s) for n, s in self.plan.inputs}
             inputs.update({n: Constant(v) for n, v in over.inputs.items()})
+            timeout = self.plan.timeout
+            bound = None if timeout is None else watchdog(time.monotonic() + timeout, timeout)
             try:
                 run = simulate_quietly(
                     model_variant(self.model, over.parameters),
@@ -387,20 +394,16 @@ class _Search:
                     initial=over.initial or None,
                     inputs=inputs or None,
                     handle_sigint=False,
+                    progress=bound,  # the run timeout holds here too
                     **self.plan.solver,
                 )
             except Exception:  # the run failed in the search too: no trajectory to show
                 run = None
-        found, robustness = self.found is not None, float(chosen["robustness"])
-        verdict = None if run is None else run.requirements.get(self.requirement)
-        if not found and verdict is not None and not verdict.holds:
-            # the point's run failed in the search (a timeout) but violates when run whole
-            found, robustness = True, float(verdict.robustness)
         return Falsification(
             self.requirement,
-            found,
+            self.found is not None,
             values,
-            robustness,
+            float(chosen["robustness"]),
             len(self.history),
             self.budget,
             self.seed,

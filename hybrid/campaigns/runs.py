@@ -57,20 +57,7 @@ from hybrid.simulation.bounds import BoundsWarning
 from hybrid.simulation.result import Run
 from hybrid.simulation.watched import watched_requirements
 
-__all__ = [
-    "OUTCOME_COLUMNS",
-    "SUMMARY_KINDS",
-    "RunPlan",
-    "RunTimeout",
-    "Summary",
-    "failed_row",
-    "load_engine",
-    "model_variant",
-    "requirement_columns",
-    "run_point",
-    "run_points",
-    "simulate_quietly",
-]
+__all__ = ["OUTCOME_COLUMNS", "SUMMARY_KINDS", "RunPlan", "RunTimeout", "Summary", "failed_row", "load_engine", "model_variant", "requirement_columns", "run_point", "run_points", "simulate_quietly", "watchdog"]
 
 OUTCOME_COLUMNS = ("cause", "t", "j", "jumps", "zeno_time", "message")
 """How each run ended, after the run number and the varied values."""
@@ -258,7 +245,7 @@ def run_point(
             initial=over.initial or None,
             inputs=inputs or None,
             handle_sigint=False,
-            progress=None if deadline is None else _watchdog(deadline, plan.timeout),
+            progress=None if deadline is None else watchdog(deadline, plan.timeout),
             **plan.solver,
             **extra,
         )
@@ -360,7 +347,9 @@ def failed_row(
     return row
 
 
-def _watchdog(deadline: float, limit: float | None) -> Any:
+def watchdog(deadline: float, limit: float | None) -> Any:
+    """A ``progress`` for :func:`hybrid.simulate` that ends the run (``RunTimeout``) after
+    ``deadline`` (``time.monotonic``); ``limit`` is the timeout it names."""
     def check(status: object) -> None:
         if time.monotonic() > deadline:
             raise RunTimeout(f"the run took longer than the run timeout of {limit:g} s")
