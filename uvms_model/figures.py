@@ -161,7 +161,7 @@ def _shade(ax: object, result: MissionResult) -> None:
 
 
 def _save(fig: object, path: Path) -> Path:
-    from hybrid.export.atomic import atomic_write
+    from hybrid.files import atomic_write
 
     with atomic_write(path) as handle:
         fig.savefig(handle, format="png", dpi=100)  # type: ignore[attr-defined]
