@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from hybrid.campaigns.resumable import write_whole
-from hybrid.errors import UnknownName, UsageError
+from hybrid.errors import UnknownName, UsageError, did_you_mean
 from hybrid.version import install_hint
 
 __all__ = ["FAILED", "SweepTable", "column_type"]
@@ -106,8 +106,15 @@ class SweepTable:
         return [r for r in self.rows if r.get("cause") in FAILED]
 
     def violations(self, requirement: str) -> list[dict[str, Any]]:
-        """Rows of runs that violate ``requirement``."""
+        """Rows of runs that violate ``requirement`` (an :class:`UnknownName` if the table has
+        no such requirement: a misspelt one would otherwise read as none violated)."""
         key = f"{requirement}.holds"
+        if key not in self.columns:
+            known = [c[: -len(".holds")] for c in self.columns if c.endswith(".holds")]
+            raise UnknownName(
+                f"no requirement '{requirement}' in the table"
+                f"{did_you_mean(requirement, known, 0.5)} (requirements: {', '.join(known) or 'none'})"
+            )
         return [r for r in self.rows if r.get(key) is False]
 
     def csv_text(self) -> str:

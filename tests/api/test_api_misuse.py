@@ -412,3 +412,17 @@ def test_numpy_true_and_false_are_flags_and_plot_takes_names() -> None:
         run.plot(3)  # type: ignore[arg-type]
     with pytest.raises(hybrid.UsageError, match="names a file with a str or Path, got 3"):
         run.plot(path=3)  # type: ignore[arg-type]
+
+
+def test_a_table_asked_for_a_requirement_it_does_not_have_says_so() -> None:
+    heater = hybrid.load_text(
+        "automaton: heater\nparameters: {k: 0.1}\nstate: {x: {initial: 20.0}}\n"
+        "locations: {cooling: {flow: {x: -k*x}}}\n"
+        "requirements: [{name: warm, always: 'x >= 20*exp(-0.95)'}]\n",
+        file="heater.yaml",
+    )
+    table = hybrid.sweep(heater, t_end=1.0, grid={"k": [0.5, 1.0]}, workers=0)
+    assert [row["k"] for row in table.violations("warm")] == [1.0]  # 20 e^-k < 20 e^-0.95
+    with pytest.raises(hybrid.UsageError, match="no requirement 'wram' in the table; did you mean 'warm'") as caught:
+        table.violations("wram")
+    assert isinstance(caught.value, KeyError)
