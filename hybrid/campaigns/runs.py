@@ -57,7 +57,21 @@ from hybrid.simulation.bounds import BoundsWarning
 from hybrid.simulation.result import Run
 from hybrid.simulation.watched import watched_requirements
 
-__all__ = ["OUTCOME_COLUMNS", "SUMMARY_KINDS", "RunPlan", "RunTimeout", "Summary", "failed_row", "load_engine", "model_variant", "requirement_columns", "run_point", "run_points", "simulate_quietly", "watchdog"]
+__all__ = [
+    "OUTCOME_COLUMNS",
+    "SUMMARY_KINDS",
+    "RunPlan",
+    "RunTimeout",
+    "Summary",
+    "failed_row",
+    "load_engine",
+    "model_variant",
+    "requirement_columns",
+    "run_point",
+    "run_points",
+    "simulate_quietly",
+    "watchdog",
+]
 
 OUTCOME_COLUMNS = ("cause", "t", "j", "jumps", "zeno_time", "message")
 """How each run ended, after the run number and the varied values."""
