@@ -30,7 +30,7 @@ from typing import Any
 
 from hybrid.campaigns.choosing import settle
 from hybrid.campaigns.executors import Executor
-from hybrid.campaigns.local_search import objective
+from hybrid.campaigns.local_search import evaluation, objective
 from hybrid.campaigns.payload import pack
 from hybrid.campaigns.runs import (
     RunPlan,
@@ -301,12 +301,8 @@ class _Search:
                 self.complete = False
                 break
             for i, _, values in jobs:
-                robustness, violated = objective(rows[i], self.requirement)
-                entry = {**values, "robustness": robustness, "violated": violated, "phase": "global"}
-                if rows[i].get(f"{self.requirement}.holds") is None:  # a run that failed
-                    entry["failed"] = f"{rows[i].get('cause')}: {rows[i].get('message', '')}"
-                self.history.append(entry)
-                if violated and self.found is None:
+                self.history.append({**evaluation(values, rows[i], self.requirement), "phase": "global"})
+                if self.history[-1]["violated"] and self.found is None:
                     self.found = self.history[-1]
             if self.found is not None:
                 break

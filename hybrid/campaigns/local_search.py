@@ -41,7 +41,7 @@ from scipy.optimize import minimize
 from hybrid.campaigns.runs import RunPlan, run_point
 from hybrid.compose import System
 
-__all__ = ["local_search", "objective"]
+__all__ = ["evaluation", "local_search", "objective"]
 
 
 class _Found(Exception):
@@ -58,6 +58,16 @@ def objective(row: Mapping[str, Any], requirement: str) -> tuple[float, bool]:
     if math.isnan(value):
         return math.inf, False
     return value, holds is False
+
+
+def evaluation(values: Mapping[str, float], row: Mapping[str, Any], requirement: str) -> dict[str, Any]:
+    """A search's record of one run: its point, ``robustness`` and ``violated`` (its
+    :func:`objective`), and ``failed`` (cause and message) when the run failed: not judged."""
+    robustness, violated = objective(row, requirement)
+    entry: dict[str, Any] = {**values, "robustness": robustness, "violated": violated}
+    if row.get(f"{requirement}.holds") is None:
+        entry["failed"] = f"{row.get('cause')}: {row.get('message', '')}"
+    return entry
 
 
 def local_search(
@@ -81,10 +91,8 @@ def local_search(
             raise _Found  # out of budget: stop the same way
         values = values_of(unit)
         row = run_point(model, index, values, plan)
-        robustness, violated = objective(row, requirement)
-        entry: dict[str, Any] = {**values, "robustness": robustness, "violated": violated}
-        if row.get(f"{requirement}.holds") is None:  # a run that failed: not judged
-            entry["failed"] = f"{row.get('cause')}: {row.get('message', '')}"
+        entry = evaluation(values, row, requirement)
+        robustness, violated = entry["robustness"], entry["violated"]
         history.append(entry)
         if robustness < best["robustness"] or best["values"] is None:
             best.update(robustness=robustness, values=values, found=violated)
