@@ -175,7 +175,6 @@ def sample_points(axes: Sequence[Axis], n: int, seed: int, sampler: str = "lhs")
         raise UsageError(f"unknown sampler '{sampler}' (choose from {', '.join(SAMPLERS)})")
     if isinstance(n, bool) or not isinstance(n, numbers.Integral):
         raise UsageError(f"the number of samples must be a whole number, got {n!r}")
-    seed = checked_seed(seed)
     if n < 1 or n > MAX_POINTS:
         raise UsageError(f"the number of samples must be from 1 to {MAX_POINTS}, got {n}")
     if not axes:
