@@ -28,7 +28,15 @@ from typing import Protocol
 from hybrid.binding import input_problems, signal_cycle_problems
 from hybrid.errors import Position, SpecError, UsageError, did_you_mean
 from hybrid.expr.functions import Function
-from hybrid.model import Automaton, Properties, Range, Requirement, StateVar, check_overrides
+from hybrid.model import (
+    NAME,
+    Automaton,
+    Properties,
+    Range,
+    Requirement,
+    StateVar,
+    check_overrides,
+)
 
 __all__ = [
     "Component",
@@ -433,8 +441,7 @@ def compose(
     return system
 
 
-_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-"""A name, as specs write them (``|`` and ``.`` join names into qualified ones)."""
+_NAME = re.compile(NAME)
 
 
 def _check_name(value: object, what: str) -> None:

@@ -18,6 +18,7 @@ from hybrid.expr import ir
 from hybrid.expr.functions import Function
 
 __all__ = [
+    "NAME",
     "Automaton",
     "Edge",
     "Forbidden",
@@ -28,6 +29,10 @@ __all__ = [
     "StateVar",
     "check_overrides",
 ]
+
+NAME = r"[A-Za-z_][A-Za-z0-9_]*"
+"""A name in a spec (a state variable, a location, a component...): ASCII, as the
+contract fixes it; ``.`` and ``|`` join names into qualified and product ones."""
 
 
 def _frozen(mapping: Mapping[str, object] | None = None) -> Mapping[str, object]:

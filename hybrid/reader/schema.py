@@ -22,6 +22,8 @@ from pydantic import (
     WithJsonSchema,
 )
 
+from hybrid.model import NAME
+
 __all__ = [
     "AutomatonSpec",
     "ChecksSpec",
@@ -40,8 +42,8 @@ __all__ = [
     "SystemSpec",
 ]
 
-NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_]*$"
-QUALIFIED_PATTERN = r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)?$"
+NAME_PATTERN = rf"^{NAME}$"
+QUALIFIED_PATTERN = rf"^{NAME}(\.{NAME})?$"
 
 Name = Annotated[str, StringConstraints(pattern=NAME_PATTERN, max_length=128)]
 QualifiedName = Annotated[str, StringConstraints(pattern=QUALIFIED_PATTERN, max_length=257)]
