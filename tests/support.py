@@ -33,9 +33,21 @@ edges:
 """
 """Climbs at known rates with declared bounds (the bounds tests of simulate and simulate_many)."""
 
+RELAY = """
+automaton: relay
+inputs: [u]
+state: {x: {initial: 0.0}}
+locations:
+  low: {flow: {x: 0}}
+  high: {flow: {x: 0}}
+edges:
+  - {name: up, from: low, to: high, guard: u >= 0.5}
+  - {name: down, from: high, to: low, guard: u <= -0.5}
+"""
+"""A relay with hysteresis driven by its input ``u``: up when u reaches 1/2, down at -1/2."""
+
 Simulate = Callable[..., Any]
 """The ``simulate`` fixture of tests/simulation: ``hybrid.simulate`` on the test's backend."""
-
 
 def import_source(path: Path, text: str) -> ModuleType:
     """``text`` written to ``path`` and imported as a module (a generated module's plain

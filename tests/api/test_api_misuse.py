@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from support import SPECS
+from support import RELAY, SPECS
 
 import hybrid
 from hybrid.errors import CannotWrite, OutOfRange
@@ -318,17 +318,6 @@ def test_simulate_many_refuses_a_table_it_cannot_run(kwargs: dict[str, Any], mes
     assert str(caught.value) == message
 
 
-RELAY = """
-automaton: relay
-inputs: [u]
-state: {x: {initial: 0.0}}
-locations:
-  low: {flow: {x: 0}}
-  high: {flow: {x: 0}}
-edges:
-  - {name: up, from: low, to: high, guard: u >= 0.5}
-  - {name: down, from: high, to: low, guard: u <= -0.5}
-"""
 
 
 @pytest.mark.parametrize(

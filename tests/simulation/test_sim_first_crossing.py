@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 import pytest
-from support import Simulate
+from support import RELAY, Simulate
 
 import hybrid
 from hybrid.simulation import METHODS
@@ -31,18 +31,6 @@ edges:
   - {name: go, from: waiting, to: fired, guard: sin(t) <= -0.5}
 """
 
-# A relay with hysteresis driven by an input: up when u reaches 1/2, down at -1/2.
-RELAY = """
-automaton: relay
-inputs: [u]
-state: {x: {initial: 0.0}}
-locations:
-  low: {flow: {x: 0}}
-  high: {flow: {x: 0}}
-edges:
-  - {name: up, from: low, to: high, guard: u >= 0.5}
-  - {name: down, from: high, to: low, guard: u <= -0.5}
-"""
 T_END = 20.0
 
 
