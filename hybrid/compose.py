@@ -26,7 +26,7 @@ from types import MappingProxyType
 from typing import Protocol
 
 from hybrid.binding import input_problems, signal_cycle_problems
-from hybrid.errors import Position, SpecError, UsageError, did_you_mean
+from hybrid.errors import Position, SpecError, UsageError, brief, did_you_mean
 from hybrid.expr.functions import Function
 from hybrid.model import (
     NAME,
@@ -344,13 +344,8 @@ def expect_model(value: object, caller: str) -> None:
         )
     raise UsageError(
         f"{caller}() takes a model from hybrid.load() or hybrid.load_text(), "
-        f"got {type(value).__name__}: {_shown(value)}"
+        f"got {type(value).__name__}: {brief(value)}"
     )
-
-
-def _shown(value: object) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def as_system(model: Automaton | System) -> System:

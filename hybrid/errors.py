@@ -28,6 +28,7 @@ __all__ = [
     "SpecError",
     "UnknownName",
     "UsageError",
+    "brief",
     "did_you_mean",
 ]
 
@@ -208,6 +209,18 @@ class CannotWrite(UsageError, OSError):
         error = cls(f"cannot write '{path}': {exc.strerror or exc}{hint}")
         error.errno, error.strerror, error.filename = exc.errno, exc.strerror, str(path)
         return error
+
+
+def brief(value: object, width: int = 60) -> str:
+    """``repr(value)`` for a message, cut to ``width`` characters.
+
+    Examples
+    --------
+    >>> brief("x" * 100)[-5:], len(brief("x" * 100))
+    ('xx...', 60)
+    """
+    text = repr(value)
+    return text if len(text) <= width else text[: width - 3] + "..."
 
 
 def did_you_mean(name: str, candidates: Iterable[str], cutoff: float = 0.6) -> str:

@@ -19,7 +19,7 @@ from pydantic import ValidationError
 
 from hybrid.allocation import gc_paused
 from hybrid.compose import System
-from hybrid.errors import Position, SpecError, UsageError
+from hybrid.errors import Position, SpecError, UsageError, brief
 from hybrid.model import Automaton
 from hybrid.reader.build import build_automaton
 from hybrid.reader.messages import closest, validation_problems
@@ -77,10 +77,9 @@ def _path_given(path: object) -> str | Path:
     if isinstance(path, os.PathLike):
         path = Path(os.fspath(path))
     if not isinstance(path, str | Path):
-        shown = repr(path)
-        shown = shown if len(shown) <= 60 else shown[:57] + "..."
         raise UsageError(
-            f"load() takes the path of a spec file (a str or Path), got {type(path).__name__}: {shown}"
+            f"load() takes the path of a spec file (a str or Path), got {type(path).__name__}: "
+            f"{brief(path)}"
         )
     return path
 
