@@ -157,8 +157,8 @@ class StayIntegrator:
                     t,
                     x,
                     "solver stopped advancing: its step size fell below the spacing of "
-                    f"floating-point numbers at t={t:.9g} (largest |state| {peak:.3g}; the "
-                    "solution may blow up here, or try another --method)",
+                    f"floating-point numbers at t={t:.9g} "
+                    f"({solver_advice(t, self.settings, peak)})",
                 )
             h = t1 - t
             longest = max(longest, h)
@@ -278,9 +278,32 @@ class StayIntegrator:
             "nonfinite" if nonfinite else "solver_failure",
             t,
             x,
-            f"{why} (largest |state| {peak:.3g}; the solution may blow up here, or try another "
-            "--method or tighter tolerances)",
+            f"{why} ({solver_advice(t, self.settings, peak)})",
         )
+
+
+def solver_advice(t: float, settings: Settings, peak: float) -> str:
+    """What to say after a solver gave up at ``t`` with ``peak`` the largest ``|state|``.
+
+    Far from 0, time itself is coarse: a run whose clock starts at 1e17 cannot take
+    a step shorter than 10 spacings of the doubles there (16 apart), whatever the flow.
+
+    >>> solver_advice(5.0, Settings(t_end=10.0), 3.0)
+    'largest |state| 3; the solution may blow up here, or try another --method or tighter tolerances'
+    >>> solver_advice(1e17, Settings(t_start=1e17, t_end=1e17 + 1e4), 20.0)  # doctest: +ELLIPSIS
+    'largest |state| 20; at t=1e+17 consecutive floating-point times are 16 apart, ...'
+    """
+    spacing = math.ulp(t)
+    if spacing > 1024 * math.ulp(settings.t_end - settings.t_start):
+        return (
+            f"largest |state| {peak:.3g}; at t={t:.9g} consecutive floating-point times are "
+            f"{spacing:.3g} apart, so no step shorter than {10 * spacing:.3g} can be taken: "
+            "count time from nearer 0 (a smaller t_start)"
+        )
+    return (
+        f"largest |state| {peak:.3g}; the solution may blow up here, or try another --method "
+        "or tighter tolerances"
+    )
 
 
 def one_line(message: Any) -> str:

@@ -116,3 +116,17 @@ edges: [{name: e, from: A, to: B, guard: x <= 0.5, reset: {x: 1/(x - 0.5)}}]
     term = hybrid.simulate(hybrid.load_text(reset), t_end=1.0).termination
     assert term.cause == "nonfinite" and term.t == pytest.approx(0.5)
     assert "the reset of e failed: 1 / 0" in term.message
+
+
+def test_a_clock_far_from_zero_is_named_as_the_cause(simulate: Simulate) -> None:
+    """At t = 1e17 doubles are 2**(56-52) = 16 apart (2**56 < 1e17 < 2**57): no step below
+    10 spacings is possible, so a flow with time constant 10 cannot be stepped at all."""
+    decay = hybrid.load_text(
+        "automaton: decay\nstate: {x: {initial: 20.0}}\nlocations:\n  A: {flow: {x: -x / 10}}\n"
+    )
+    run = simulate(decay, t_start=1e17, t_end=1e17 + 1e4)
+    term = run.termination
+    assert (term.cause, term.t) == ("solver_failure", 1e17)
+    assert "16 apart" in term.message and "shorter than 160" in term.message
+    assert "t_start" in term.message and "blow up" not in term.message
+    assert run.t.tolist() == [1e17] and run["x"].tolist() == [20.0]

@@ -364,22 +364,8 @@ def _termination(native: NativeModel, layout: Layout, model: System,
             message += f"; the solution leaves the domain of the flow after t={t:.9g}"
         if detail == b.D_EVAL:
             t = fail_t
-    elif detail in (b.D_STEP_TOO_SMALL, b.D_STATE_NONFINITE):
-        why = (
-            "solver stopped: Required step size is less than spacing between numbers."
-            if detail == b.D_STEP_TOO_SMALL
-            else "the state became non-finite"
-        )
-        message = (
-            f"{why} (largest |state| {float(buf.of[b.F_PEAK]):.3g}; the solution may blow up "
-            "here, or try another --method or tighter tolerances)"
-        )
-    elif detail == b.D_NOT_ADVANCING:
-        message = (
-            "solver stopped advancing: its step size fell below the spacing of floating-point "
-            f"numbers at t={t:.9g} (largest |state| {float(buf.of[b.F_PEAK]):.3g}; the solution "
-            "may blow up here, or try another --method)"
-        )
+    elif detail in (b.D_STEP_TOO_SMALL, b.D_STATE_NONFINITE, b.D_NOT_ADVANCING):
+        message = _gave_up_message(detail, t, settings, float(buf.of[b.F_PEAK]))
     elif detail == b.D_CRAWL:
         message = _crawl_message(settings, t, buf)
     elif detail == b.D_FLOW_START:
@@ -391,6 +377,24 @@ def _termination(native: NativeModel, layout: Layout, model: System,
     else:
         message = "interrupted by the user"
     return Termination(cause, t, j, message, zeno_time=zeno_time, location=mode.name)
+
+
+def _gave_up_message(detail: int, t: float, settings: Settings, peak: float) -> str:
+    """The message of a stay whose integrator gave up (the reference's words)."""
+    from hybrid.simulation.stay import solver_advice
+
+    advice = solver_advice(t, settings, peak)
+    if detail == b.D_NOT_ADVANCING:
+        return (
+            "solver stopped advancing: its step size fell below the spacing of floating-point "
+            f"numbers at t={t:.9g} ({advice})"
+        )
+    why = (
+        "solver stopped: Required step size is less than spacing between numbers."
+        if detail == b.D_STEP_TOO_SMALL
+        else "the state became non-finite"
+    )
+    return f"{why} ({advice})"
 
 
 def _crawl_message(settings: Settings, t: float, buf: b.RunArrays) -> str:
