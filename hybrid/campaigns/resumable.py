@@ -12,6 +12,11 @@ settings or points) is refused, and so is a folder found without ``resume``
 (nothing is overwritten by accident). When the campaign is complete, the
 results file is written and the folder removed.
 
+While a campaign writes the folder it holds a lock on its ``lock`` file (an
+advisory ``flock``, released by the system when the process ends, ``kill -9``
+included), so a second campaign given the same results file is refused instead
+of writing over the first one's chunks.
+
 A row the executor made for a run it lost (a worker process that died, a Dask
 task that failed: :data:`LOST` is set in it) is kept in the chunks, so the
 campaign's record is whole, but it is not *done*: a resumed campaign runs that
@@ -24,6 +29,10 @@ Examples
 >>> store = ChunkStore(out, "abc", resume=False)
 >>> store.add({"run": 0, "x": 0.1})
 >>> store.flush()
+>>> ChunkStore(out, "abc", resume=True)  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+hybrid.errors.UsageError: ...: another campaign is writing these results now (process ...)...
+>>> store.close()  # the campaign ends (or its process does)
 >>> sorted(ChunkStore(out, "abc", resume=True).done)
 [0]
 """
@@ -31,13 +40,19 @@ Examples
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 from hybrid.errors import CannotWrite, UsageError
 from hybrid.files import atomic_write
+
+try:
+    import fcntl
+except ImportError:  # Windows: no advisory locks; campaigns there are not guarded
+    fcntl = None  # type: ignore[assignment]
 
 __all__ = ["CHUNK_ROWS", "CHUNK_SECONDS", "LOST", "ChunkStore", "parts_dir", "write_whole"]
 
@@ -72,20 +87,29 @@ class ChunkStore:
         self.waiting: list[dict[str, Any]] = []
         self.oldest = 0.0
         self.next_chunk = 0
-        if self.folder.exists():
-            if not resume:
+        self._lock: BinaryIO | None = None
+        try:
+            self.folder.mkdir()
+            created = True
+        except FileExistsError:
+            created = False
+        except OSError as exc:  # a read-only place, /proc
+            raise CannotWrite.of(self.folder, exc) from None
+        self._lock = _hold(self.folder)
+        try:
+            if created:
+                manifest = {"fingerprint": fingerprint, "created": time.time()}
+                write_whole(self.folder / "campaign.json", json.dumps(manifest).encode())
+            elif not resume:
                 raise UsageError(
                     f"{self.folder} holds the results of an unfinished campaign: add --resume "
                     "to finish it (only the missing runs are run), or remove the folder"
                 )
-            self._read()
-        else:
-            try:
-                self.folder.mkdir()
-            except OSError as exc:  # a read-only place, /proc
-                raise CannotWrite.of(self.folder, exc) from None
-            manifest = {"fingerprint": fingerprint, "created": time.time()}
-            write_whole(self.folder / "campaign.json", json.dumps(manifest).encode())
+            else:
+                self._read()
+        except BaseException:
+            self.close()
+            raise
 
     def _read(self) -> None:
         try:
@@ -133,3 +157,38 @@ class ChunkStore:
     def remove(self) -> None:
         """Delete the folder (the results file has been written)."""
         shutil.rmtree(self.folder, ignore_errors=True)
+        self.close()
+
+    def close(self) -> None:
+        """Let another campaign write the folder (the lock is released)."""
+        if self._lock is not None:
+            self._lock.close()
+            self._lock = None
+
+
+def _hold(folder: Path) -> BinaryIO | None:
+    """Lock ``folder`` for this campaign: the open lock file (closing it, or dropping it,
+    releases the lock), or a UsageError if another campaign holds it; None where the
+    system has no advisory locks."""
+    if fcntl is None:
+        return None
+    path = folder / "lock"
+    try:
+        handle = open(path, "a+b")  # noqa: SIM115 (held open for the campaign)
+    except OSError as exc:
+        raise CannotWrite.of(path, exc) from None
+    try:
+        fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        handle.seek(0)
+        holder = handle.read(32).decode(errors="replace").strip()
+        handle.close()
+        who = f" (process {holder})" if holder.isdigit() else ""
+        raise UsageError(
+            f"{folder}: another campaign is writing these results now{who}: wait for it to "
+            "end, or write the results elsewhere"
+        ) from None
+    handle.truncate(0)
+    handle.write(str(os.getpid()).encode())
+    handle.flush()
+    return handle

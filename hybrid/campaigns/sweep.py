@@ -324,56 +324,60 @@ def run_campaign(
     if out is not None:
         fingerprint = _fingerprint(payload.digest, plan, columns, points)
         store = ChunkStore(out, fingerprint, resume=resume)
-    rows: dict[int, dict[str, Any]] = dict(store.done) if store is not None else {}
-    resumed = len(rows)
-    jobs = [(i, "run", p) for i, p in enumerate(points) if i not in rows]
-    tracker = Tracker("sweep", total=len(points), unit="runs", report=reporter(progress))
-    counts = {"violations": 0, "failed": 0}
-    for row in rows.values():
-        _count(row, requirements, counts)
+    try:  # the results folder stays locked until the table is written
+        rows: dict[int, dict[str, Any]] = dict(store.done) if store is not None else {}
+        resumed = len(rows)
+        jobs = [(i, "run", p) for i, p in enumerate(points) if i not in rows]
+        tracker = Tracker("sweep", total=len(points), unit="runs", report=reporter(progress))
+        counts = {"violations": 0, "failed": 0}
+        for row in rows.values():
+            _count(row, requirements, counts)
 
-    def on_result(index: int, row: dict[str, Any]) -> None:
-        rows[index] = row
-        _count(row, requirements, counts)
+        def on_result(index: int, row: dict[str, Any]) -> None:
+            rows[index] = row
+            _count(row, requirements, counts)
+            if store is not None:
+                store.add(row)
+            tracker.update(len(rows), **counts)
+
+        def failed(job: tuple[int, str, Any], cause: str, message: str) -> dict[str, Any]:
+            row = {"run": job[0], **job[2], **failed_row(model, plan, cause, message)}
+            if cause == "error":  # the executor lost the run (a worker died): not the run's end
+                row[LOST] = True
+            return row
+
+        with sigint_watch(handle_sigint) as interrupts, executor:
+            if jobs:
+                executor.start(payload, plan)
+                stop = lambda: interrupts.requested  # noqa: E731
+                limit = hard_limit(plan.timeout)
+                complete = executor.run(jobs, on_result, failed, stop, limit)
+                lost = [job for job in jobs if rows.get(job[0], {}).get(LOST)] if complete else []
+                if lost:  # once more, on the workers that are left (or new ones)
+                    complete = executor.run(lost, on_result, failed, stop, limit)
+            else:
+                complete = True
+        lost_rows = sum(1 for row in rows.values() if row.get(LOST))
         if store is not None:
-            store.add(row)
-        tracker.update(len(rows), **counts)
-
-    def failed(job: tuple[int, str, Any], cause: str, message: str) -> dict[str, Any]:
-        row = {"run": job[0], **job[2], **failed_row(model, plan, cause, message)}
-        if cause == "error":  # the executor lost the run (a worker died): not the run's end
-            row[LOST] = True
-        return row
-
-    with sigint_watch(handle_sigint) as interrupts, executor:
-        if jobs:
-            executor.start(payload, plan)
-            stop = lambda: interrupts.requested  # noqa: E731
-            limit = hard_limit(plan.timeout)
-            complete = executor.run(jobs, on_result, failed, stop, limit)
-            lost = [job for job in jobs if rows.get(job[0], {}).get(LOST)] if complete else []
-            if lost:  # once more, on the workers that are left (or new ones)
-                complete = executor.run(lost, on_result, failed, stop, limit)
-        else:
-            complete = True
-    lost_rows = sum(1 for row in rows.values() if row.get(LOST))
-    if store is not None:
-        store.flush()
-    tracker.finish(len(rows), **counts)
-    table = SweepTable(
-        columns,
-        list(rows.values()),
-        names,
-        requirements,
-        complete=complete and not lost_rows,
-        total=len(points),
-        resumed=resumed,
-        lost=lost_rows,
-    )
-    if table.complete and out is not None and store is not None:
-        table.write(out)
-        store.remove()
-    return table
+            store.flush()
+        tracker.finish(len(rows), **counts)
+        table = SweepTable(
+            columns,
+            list(rows.values()),
+            names,
+            requirements,
+            complete=complete and not lost_rows,
+            total=len(points),
+            resumed=resumed,
+            lost=lost_rows,
+        )
+        if table.complete and out is not None and store is not None:
+            table.write(out)
+            store.remove()
+        return table
+    finally:
+        if store is not None:
+            store.close()
 
 
 def executor_for(workers: int | None, scheduler: Any, batch: int | None = None) -> Executor:

@@ -8,10 +8,14 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
-from support import SPECS
+from support import SPECS, run_cli
 
 import hybrid
 from hybrid.campaigns.resumable import ChunkStore
@@ -44,11 +48,60 @@ def test_a_damaged_chunk_is_named_not_a_traceback(tmp_path: Path) -> None:
     store.flush()
     (chunk,) = sorted(store.folder.glob("chunk-*.jsonl"))
     assert len(chunk.read_text().splitlines()) == 3
+    store.close()  # its campaign is over: another may resume the folder
     assert sorted(ChunkStore(out, "print", resume=True).done) == [0, 1, 2]  # read back whole
     chunk.write_text(chunk.read_text()[:25])  # cut short, as a partial copy of the folder
     with pytest.raises(hybrid.UsageError, match=r"chunk-000000\.jsonl: cannot read it .*remove it"):
         ChunkStore(out, "print", resume=True)
     json.loads((store.folder / "campaign.json").read_text())  # the manifest is intact
+
+
+
+def test_a_second_campaign_on_the_same_results_is_refused_while_the_first_writes(
+    tmp_path: Path,
+) -> None:
+    """Two sweeps given one --out wrote chunks of the same numbers over each other."""
+    out = tmp_path / "table.csv"
+    first = ChunkStore(out, "print", resume=False)
+    first.add({"run": 0, "cause": "t_end"})
+    first.flush()
+    busy = rf"another campaign is writing these results now \(process {os.getpid()}\)"
+    for resume in (True, False):
+        with pytest.raises(hybrid.UsageError, match=busy):
+            ChunkStore(out, "print", resume=resume)
+    with pytest.raises(hybrid.UsageError, match=busy):
+        hybrid.sweep(BALL, t_end=1.0, grid={"e": [0.5]}, workers=0, out=out, resume=True)
+    first.add({"run": 1, "cause": "t_end"})
+    first.flush()  # the first campaign's chunks are its own
+    first.close()
+    again = ChunkStore(out, "print", resume=True)
+    assert sorted(again.done) == [0, 1] and again.next_chunk == 2
+
+
+HOLDER = """import sys
+from hybrid.campaigns.resumable import ChunkStore
+store = ChunkStore(sys.argv[1], "print", resume=False)
+print("holding", flush=True)
+sys.stdin.read()
+"""
+
+
+def test_a_campaign_process_holds_its_results_until_it_ends_even_by_kill_9(tmp_path: Path) -> None:
+    out = tmp_path / "table.csv"
+    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(out)], stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE, text=True)  # fmt: skip
+    try:
+        assert holder.stdout is not None and holder.stdout.readline() == "holding\n"
+        refused = run_cli("sweep", SPECS / "bouncing_ball.yaml", "--t-end", "1", "--grid",
+                          "e=0.5:0.9:2", "--workers", "0", "--out", out, "--resume")  # fmt: skip
+        assert refused.returncode == 2, refused.stderr
+        assert f"writing these results now (process {holder.pid})" in refused.stderr
+        assert "Traceback" not in refused.stderr
+        assert not out.exists()
+    finally:
+        holder.send_signal(signal.SIGKILL)
+        holder.wait(timeout=60)
+    assert ChunkStore(out, "print", resume=True).done == {}  # the system released the lock
 
 
 HEATER = """automaton: heater

@@ -141,7 +141,10 @@ def test_a_lost_row_is_kept_but_not_done(tmp_path: Path) -> None:
     store.add({"run": 1, "cause": "error", "message": "worker died", LOST: True})
     store.add({"run": 2, "cause": "error", "message": "a run's own error"})
     store.flush()
-    assert sorted(ChunkStore(out, "fp", resume=True).done) == [0, 2]
-    store.add({"run": 1, "cause": "t_end"})  # run again later: done from then on
-    store.flush()
+    store.close()
+    resumed = ChunkStore(out, "fp", resume=True)
+    assert sorted(resumed.done) == [0, 2]
+    resumed.add({"run": 1, "cause": "t_end"})  # run again when resumed: done from then on
+    resumed.flush()
+    resumed.close()
     assert sorted(ChunkStore(out, "fp", resume=True).done) == [0, 1, 2]
