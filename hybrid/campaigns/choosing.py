@@ -33,9 +33,9 @@ from typing import Any
 from hybrid.campaigns.executors import Executor, InProcess, LocalPool
 from hybrid.campaigns.runs import RunPlan, load_engine, run_point
 from hybrid.campaigns.targets import split
-from hybrid.errors import Note
+from hybrid.errors import Note, UsageError
 
-__all__ = ["BackendNote", "resolve_backend", "settle"]
+__all__ = ["BackendNote", "refuse_compiled", "resolve_backend", "settle"]
 
 
 class BackendNote(Note):
@@ -68,6 +68,45 @@ def resolve_backend(model: Any, points: Sequence[dict[str, float]], plan: RunPla
     return replace(plan, backend=choice.backend, requested="auto")
 
 
+def refuse_compiled(model: Any, points: Sequence[dict[str, float]], plan: RunPlan) -> None:
+    """Refuse, before any run, a campaign asked for on the compiled backend that every one of
+    its runs would refuse: another method, inputs driven by expressions, points that hold
+    an input (``auto`` chooses scipy for these).
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> from hybrid.campaigns.runs import RunPlan
+    >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+    >>> refuse_compiled(ball, [{"e": 0.5}], RunPlan(t_end=3.0, solver={"method": "RK23"}))
+    Traceback (most recent call last):
+    ...
+    hybrid.errors.UsageError: the compiled backend integrates with RK45 (Dormand–Prince 5(4)); method 'RK23' needs backend 'scipy' (or 'auto', which chooses it)
+    """
+    from hybrid.compose import as_system
+    from hybrid.simulation.native.features import METHOD, refuse_unsupported
+
+    instead = "backend 'scipy' (or 'auto', which chooses it)"
+    method = plan.solver.get("method", METHOD)
+    if method != METHOD:
+        raise UsageError(
+            f"the compiled backend integrates with {METHOD} (Dormand–Prince 5(4)); method "
+            f"'{method}' needs {instead}"
+        )
+    if plan.inputs:
+        raise UsageError(
+            f"the compiled backend cannot drive input '{plan.inputs[0][0]}' with an expression "
+            f"(--input, inputs=): use {instead}"
+        )
+    held = next((name for point in points for name in split(point).inputs), None)
+    if held is not None:
+        raise UsageError(
+            f"the compiled backend cannot hold input '{held}' at a point's value "
+            f"(input.{held}): use {instead}"
+        )
+    refuse_unsupported(as_system(model))
+
+
 def settle(model: Any, points: Sequence[dict[str, float]], plan: RunPlan, executor: Executor,
            runs: int | None = None, announce: bool = True) -> tuple[RunPlan, Executor]:  # fmt: skip
     """The plan (``auto`` resolved, :func:`resolve_backend`) and the executor that runs it.
@@ -78,6 +117,8 @@ def settle(model: Any, points: Sequence[dict[str, float]], plan: RunPlan, execut
     compiled code first (a sweep of 1,000 thermostat points took 2.9 s on two
     warm workers, 0.24 s of CPU here). A Dask scheduler is kept as it is.
     """
+    if plan.backend == "compiled":
+        refuse_compiled(model, points, plan)
     plan = resolve_backend(model, points, plan, runs, announce)
     if plan.backend == "compiled" and isinstance(executor, LocalPool):
         return plan, InProcess()

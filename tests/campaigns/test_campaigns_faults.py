@@ -167,3 +167,48 @@ def test_a_compiled_campaign_does_not_count_loading_against_the_first_run() -> N
                           cwd=REPO, timeout=600, check=False)  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert "timeout" not in done.stdout and done.stdout.count("'") == 6, done.stdout
+
+
+DRIFT = """automaton: drift
+state: {x: {initial: [0, 2]}}
+inputs: {u: {range: [1, 3]}}
+locations: {go: {flow: {x: u}}}
+requirements: [{name: bounded, always: "x <= 20"}]
+"""
+
+
+@pytest.mark.parametrize(
+    ("options", "refusal"),
+    [
+        ({"grid": {"input.u": [1.0, 3.0]}}, r"cannot hold input 'u' at a point's value \(input\.u\)"),
+        ({"grid": {"init.x": [0.0, 2.0]}, "inputs": {"u": "sin(t)"}},
+         r"cannot drive input 'u' with an expression \(--input, inputs=\)"),
+        ({"grid": {"init.x": [0.0, 2.0]}, "method": "RK23"}, r"method 'RK23' needs backend 'scipy'"),
+    ],
+)  # fmt: skip
+def test_a_compiled_campaign_its_runs_would_all_refuse_is_refused_before_it_runs(
+    options: dict[str, object], refusal: str
+) -> None:
+    """Each of these ran the whole campaign, every row an error, and exited 1; the contract
+    says a construct the compiled backend lacks is refused (exit 2 on the command line)."""
+    drift = hybrid.load_text(DRIFT, file="drift.yaml")
+    with pytest.raises(hybrid.UsageError, match=refusal):
+        hybrid.sweep(drift, t_end=4.0, workers=0, backend="compiled", **options)  # type: ignore[arg-type]
+    with pytest.raises(hybrid.UsageError, match=refusal):
+        ranges = {name: (min(values), max(values)) for name, values in options["grid"].items()}  # type: ignore[attr-defined]
+        hybrid.falsify(drift, "bounded", ranges, budget=2, workers=0, t_end=4.0,
+                       backend="compiled", **{k: v for k, v in options.items() if k != "grid"})  # fmt: skip
+    table = hybrid.sweep(drift, t_end=4.0, workers=0, backend="auto", **options)  # type: ignore[arg-type]
+    assert [row["cause"] for row in table.rows] == ["t_end", "t_end"]  # auto runs them on scipy
+
+
+def test_the_command_line_refuses_it_with_exit_2(tmp_path: Path) -> None:
+    spec = tmp_path / "drift.yaml"
+    spec.write_text(DRIFT)
+    out = tmp_path / "table.csv"
+    done = run_cli("sweep", spec, "--t-end", "4", "--grid", "input.u=1:3:3", "--backend",
+                   "compiled", "--workers", "0", "--out", out)  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert "drift.yaml: the compiled backend cannot hold input 'u'" in done.stderr
+    assert not out.exists() and not (tmp_path / "table.csv.parts").exists()
+
