@@ -5,9 +5,9 @@
 kernel are in the compiled cache, or when the campaign's runs save more than
 compiling costs, one scipy run of its first point timed to know), and warns a
 :class:`BackendNote` with the choice and its reason (the command line prints
-it as ``hybrid: note: backend auto: ...``). The table's metadata and a resumed
-campaign's fingerprint keep ``auto``: a campaign resumed once the model is
-cached may finish on the other backend.
+it as ``hybrid: note: backend auto: ...``). A resumed campaign's fingerprint
+keeps ``auto``: a campaign resumed once the model is cached may finish on the
+other backend. ``table.backend`` says which one ran.
 
 Examples
 --------
@@ -46,8 +46,8 @@ def resolve_backend(model: Any, points: Sequence[dict[str, float]], plan: RunPla
                     runs: int | None = None, announce: bool = True) -> RunPlan:  # fmt: skip
     """``plan`` with ``backend="auto"`` resolved (others as they are); ``runs``: how many
     the campaign makes (default: one per point); ``announce``: warn the choice (a
-    :class:`BackendNote`; off when ``auto`` is the default nobody asked for: the table's
-    metadata still says which ran)."""
+    :class:`BackendNote`; off when ``auto`` is the default nobody asked for:
+    ``table.backend`` still says which ran)."""
     if plan.backend != "auto":
         return plan
     from hybrid.simulation.native.choice import choose

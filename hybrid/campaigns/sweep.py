@@ -95,7 +95,7 @@ def campaign_backend(backend: str | None, chosen: Settings) -> tuple[str, bool]:
     """The backend of a campaign's runs, and whether it was asked for.
 
     The keyword wins, then the settings' backend; neither gives ``"auto"``, the
-    default, whose choice is then not announced (the table's metadata says it).
+    default, whose choice is then not announced (``table.backend`` says it).
 
     Examples
     --------
@@ -370,6 +370,7 @@ def run_campaign(
             total=len(points),
             resumed=resumed,
             lost=lost_rows,
+            backend=plan.backend,
         )
         if table.complete and out is not None and store is not None:
             table.write(out)

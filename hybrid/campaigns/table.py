@@ -77,6 +77,7 @@ class SweepTable:
         total: int | None = None,
         resumed: int = 0,
         lost: int = 0,
+        backend: str | None = None,
     ) -> None:
         self.columns = list(columns)
         self.rows = sorted((dict(r) for r in rows), key=lambda r: int(r["run"]))
@@ -88,6 +89,10 @@ class SweepTable:
         """Rows read back from an earlier, interrupted run of the campaign (not run again)."""
         self.lost = lost
         """Rows of runs the executor lost (a worker died) even when tried twice: not done."""
+        self.backend = backend
+        """The backend of the runs this campaign made, ``"scipy"`` or ``"compiled"`` (``auto``
+        resolved; a resumed campaign's earlier rows may have run on the other); also in
+        the Parquet file's metadata, key ``hybrid.backend``."""
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -138,7 +143,10 @@ class SweepTable:
             kind = column_type(name, self.varied)
             values = [_plain(r.get(name), kind) for r in self.rows]
             arrays[name] = pa.array(values, type=kinds[kind])
-        return pa.table(arrays)
+        table = pa.table(arrays)
+        if self.backend is not None:
+            table = table.replace_schema_metadata({"hybrid.backend": self.backend})
+        return table
 
     def to_pandas(self) -> Any:
         """The table as a ``pandas.DataFrame`` (nullable integer and boolean columns)."""
