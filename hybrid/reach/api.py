@@ -239,7 +239,8 @@ def _decide(
     if not contacts and complete:
         message = f"forbidden state '{name}' is never reached {horizon}"
         return PropertyResult(entry, "proved", message, condition=cond)
-    first = min(s.t[0] for s in contacts) if contacts else None
+    # a set's time span is widened by rounding below 0, where no run is
+    first = max(0.0, min(s.t[0] for s in contacts)) if contacts else None
     reads_inputs = entry.when is not None and bool(ir.names_in(entry.when, ir.INPUT))
     if witness and contacts and not reads_inputs:
         quick = _quick(model, forms, entry, t_end, max_jumps, step, first)

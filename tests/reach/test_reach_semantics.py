@@ -96,3 +96,19 @@ properties: {forbidden: [{location: b, when: x > 2.5}, {location: b, when: x < 1
     assert 1.5 <= (reached.witness_time or 0.0) <= 2.0
     # in b, x starts at 2 (the guard x >= 1 is met at 1, widened by 1e-7): never below 1.9
     assert below.verdict == "proved"
+
+
+GRAZE = """
+automaton: osc
+state: {x: {initial: [0.9, 1.1]}, y: {initial: 0}}
+locations: {a: {flow: {x: y, y: -x}}}
+properties: {forbidden: [{when: x >= 1.1000001}]}
+"""
+
+
+def test_the_first_contact_is_never_before_the_start() -> None:
+    """x = x0 cos t never exceeds 1.1, but the initial box widened by rounding meets the
+    entry at once: 'meets it from t = -5e-12' was reported, before any run begins."""
+    (entry,) = hybrid.reach(hybrid.load_text(GRAZE), 6.0, step=0.05).properties
+    assert entry.verdict == "unknown"
+    assert entry.first_contact == 0.0 and "meets it from t = 0," in entry.message
