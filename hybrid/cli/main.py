@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
+import select
 import sys
 import warnings
 from collections.abc import Iterator, Sequence
@@ -357,14 +358,23 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _reader_gone(stream: TextIO) -> bool:
-    """Whether writing to ``stream`` fails because its reader has closed it."""
+    """Whether writing to ``stream`` fails because its reader has closed it.
+
+    Its buffer may be empty by now (the write that failed dropped it): then the
+    pipe itself says so, an error condition on its writing end.
+    """
     try:
         stream.flush()
+        fd = stream.fileno()
     except BrokenPipeError:
         return True
     except (OSError, ValueError):
         return False
-    return False
+    if not hasattr(select, "poll"):  # Windows: no pipe to ask
+        return False
+    poller = select.poll()
+    poller.register(fd, select.POLLOUT)
+    return any(event & select.POLLERR for _, event in poller.poll(0))
 
 
 def _validate(files: Sequence[str]) -> int:

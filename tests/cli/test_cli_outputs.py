@@ -133,3 +133,21 @@ def test_a_write_that_fails_at_the_end_keeps_the_output_elsewhere(
     first_bounce = (2 * 10 / 9.81) ** 0.5
     assert any(abs(float(r["t"]) - first_bounce) < 1e-6 for r in rows)
     assert float(rows[-1]["t"]) == pytest.approx(3.0)
+
+
+def test_a_reader_that_stops_early_is_not_a_broken_worker() -> None:
+    """``hybrid check --format junit specs/*.yaml | head -1`` said 'a connection broke (a
+    worker process died?)' and exited 1: the reader had all it wanted, no worker is involved."""
+    import subprocess
+    import sys
+
+    from support import REPO
+
+    specs = sorted(str(p) for p in SPECS.glob("*.yaml"))
+    writer = subprocess.Popen([sys.executable, "-m", "hybrid", "check", "--format", "junit", *specs],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=REPO)  # fmt: skip
+    assert writer.stdout is not None and writer.stderr is not None
+    writer.stdout.close()  # before the report is written: every write of it fails
+    said = writer.stderr.read().decode()
+    assert writer.wait(timeout=300) == 0, said
+    assert said == ""
