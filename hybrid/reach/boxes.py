@@ -9,7 +9,11 @@ Conditions are widened by :data:`SLACK` relative to their magnitude over the
 box: the simulator decides a guard or an invariant up to a band and finds event
 points up to its tolerance (docs/semantics.md), so a run may jump or stop a
 hair outside the exact condition. Widening a condition only adds states: the
-over-approximation stays sound.
+over-approximation stays sound. The simulator's band grows with the largest
+``|x_i|`` of the whole state, not only of the variables a condition reads
+(``1e-10 (1 + max_i |x_i|)``): a run with one variable near 1e9 takes a guard
+``y >= 0`` at ``y = -0.05``. The caller gives that band (:func:`band`) of each
+box; it is added to every row.
 
 Examples
 --------
@@ -30,15 +34,44 @@ from numpy.typing import NDArray
 
 from hybrid.reach.affine import Condition, Rows
 
-__all__ = ["SLACK", "affine_image", "contract", "contract_many", "meets", "meets_many"]
+__all__ = [
+    "BAND",
+    "SLACK",
+    "affine_image",
+    "band",
+    "contract",
+    "contract_many",
+    "meets",
+    "meets_many",
+]
 
 Array = NDArray[np.float64]
 SLACK = 1e-7
 """Relative widening of a condition's right-hand side (see the module docstring)."""
+BAND = 1e-10
+"""The simulator's boundary band per unit of the state's largest magnitude (docs/semantics.md)."""
 
 
-def contract(lo: Array, hi: Array, rows: Rows, passes: int = 3) -> tuple[Array, Array] | None:
-    """The box ``[lo, hi]`` narrowed to the rows ``mat @ x <= vec``; ``None`` if none meets them.
+def band(lo: Array, hi: Array, columns: int) -> Array:
+    """The simulator's band ``BAND (1 + max_i |x_i|)`` over each box's first ``columns``
+    columns (the state; later ones, such as time, are not in it), at least.
+
+    Examples
+    --------
+    >>> [round(b, 12) for b in band(np.array([[-1e9, 0.0, 5.0]]), np.array([[2.0, 1.0, 6.0]]), 2)]
+    [0.1000000001]
+    """
+    if columns == 0:
+        return np.full(lo.shape[:-1], BAND)
+    big: Array = np.maximum(np.abs(lo[..., :columns]), np.abs(hi[..., :columns])).max(axis=-1)
+    return BAND * (1.0 + big) * (1.0 + 4e-16)
+
+
+def contract(
+    lo: Array, hi: Array, rows: Rows, passes: int = 3, widen: float = 0.0
+) -> tuple[Array, Array] | None:
+    """The box ``[lo, hi]`` narrowed to the rows ``mat @ x <= vec + widen``; ``None`` if none
+    meets them.
 
     Each pass bounds every variable of every row by the row's right-hand side
     minus the least value of the row's other terms over the box: a point of
@@ -52,7 +85,7 @@ def contract(lo: Array, hi: Array, rows: Rows, passes: int = 3) -> tuple[Array, 
     neg = mat < 0.0
     for _ in range(passes):
         scale = np.abs(mat) @ np.maximum(np.abs(lo), np.abs(hi))
-        vec = rows.vec + SLACK * (1.0 + scale + np.abs(rows.vec))
+        vec = rows.vec + SLACK * (1.0 + scale + np.abs(rows.vec)) + widen
         low_terms = np.where(pos, mat * lo, np.where(neg, mat * hi, 0.0))
         least = low_terms.sum(axis=1)
         if np.any(least > vec):
@@ -69,8 +102,11 @@ def contract(lo: Array, hi: Array, rows: Rows, passes: int = 3) -> tuple[Array, 
     return lo, hi
 
 
-def contract_many(lo: Array, hi: Array, rows: Rows, passes: int = 3) -> tuple[Array, Array, Array]:
-    """:func:`contract` of each box ``lo[k], hi[k]`` at once: ``(lo, hi, nonempty)``.
+def contract_many(
+    lo: Array, hi: Array, rows: Rows, passes: int = 3, widen: Array | float = 0.0
+) -> tuple[Array, Array, Array]:
+    """:func:`contract` of each box ``lo[k], hi[k]`` at once (widened by ``widen[k]``):
+    ``(lo, hi, nonempty)``.
 
     Examples
     --------
@@ -84,8 +120,9 @@ def contract_many(lo: Array, hi: Array, rows: Rows, passes: int = 3) -> tuple[Ar
     if rows.mat.shape[0] == 0:
         return lo, hi, ok
     cols = np.flatnonzero(np.any(rows.mat != 0.0, axis=0))
+    extra = np.broadcast_to(np.asarray(widen, dtype=float), lo.shape[:1])
     c_lo, c_hi, ok = _contract_columns(
-        lo[:, cols], hi[:, cols], rows.mat[:, cols], rows.vec, passes
+        lo[:, cols], hi[:, cols], rows.mat[:, cols], rows.vec, passes, extra
     )
     lo, hi = lo.copy(), hi.copy()
     lo[:, cols], hi[:, cols] = c_lo, c_hi
@@ -93,7 +130,7 @@ def contract_many(lo: Array, hi: Array, rows: Rows, passes: int = 3) -> tuple[Ar
 
 
 def _contract_columns(
-    lo: Array, hi: Array, full: Array, rhs: Array, passes: int
+    lo: Array, hi: Array, full: Array, rhs: Array, passes: int, widen: Array
 ) -> tuple[Array, Array, Array]:
     """:func:`contract_many` on the columns the rows read (the others do not change)."""
     ok = np.ones(lo.shape[0], dtype=bool)
@@ -105,6 +142,7 @@ def _contract_columns(
     for _ in range(passes):
         scale = np.maximum(np.abs(lo), np.abs(hi)) @ np.abs(rows.mat).T
         vec = rows.vec[None, :] + SLACK * (1.0 + scale + np.abs(rows.vec)[None, :])
+        vec = vec + widen[:, None]
         low_terms = np.where(pos, mat * lo[:, None, :], np.where(neg, mat * hi[:, None, :], 0.0))
         least = low_terms.sum(axis=2)
         ok &= ~np.any(least > vec, axis=1)
@@ -117,24 +155,29 @@ def _contract_columns(
     return lo, hi, ok
 
 
-def meets_many(lo: Array, hi: Array, condition: Condition) -> tuple[Array, Array, Array]:
-    """:func:`meets` of each box at once: ``(lo, hi, nonempty)``."""
+def meets_many(
+    lo: Array, hi: Array, condition: Condition, widen: Array | float = 0.0
+) -> tuple[Array, Array, Array]:
+    """:func:`meets` of each box at once (widened by ``widen[k]``): ``(lo, hi, nonempty)``."""
     out_lo = np.full_like(lo, np.inf)
     out_hi = np.full_like(hi, -np.inf)
     any_ok = np.zeros(lo.shape[0], dtype=bool)
     for case in condition:
-        c_lo, c_hi, ok = contract_many(lo, hi, case)
+        c_lo, c_hi, ok = contract_many(lo, hi, case, widen=widen)
         out_lo = np.where(ok[:, None], np.minimum(out_lo, c_lo), out_lo)
         out_hi = np.where(ok[:, None], np.maximum(out_hi, c_hi), out_hi)
         any_ok |= ok
     return out_lo, out_hi, any_ok
 
 
-def meets(lo: Array, hi: Array, condition: Condition) -> tuple[Array, Array] | None:
-    """The hull of the box contracted by each case of ``condition``; ``None`` if no case meets it."""
+def meets(
+    lo: Array, hi: Array, condition: Condition, widen: float = 0.0
+) -> tuple[Array, Array] | None:
+    """The hull of the box contracted by each case of ``condition`` (its rows widened by
+    ``widen``); ``None`` if no case meets it."""
     found: tuple[Array, Array] | None = None
     for case in condition:
-        box = contract(lo, hi, case)
+        box = contract(lo, hi, case, widen=widen)
         if box is None:
             continue
         found = (

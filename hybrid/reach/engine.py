@@ -47,7 +47,7 @@ from hybrid.compose import System
 from hybrid.errors import Position, UsageError
 from hybrid.model import Edge
 from hybrid.reach.affine import TIME, Condition, Forms, Rows
-from hybrid.reach.boxes import affine_image, meets, meets_many
+from hybrid.reach.boxes import affine_image, band, meets, meets_many
 from hybrid.reach.flowpipe import Overflow, flowpipe
 
 __all__ = [
@@ -293,9 +293,10 @@ def explore(
         # the entry box itself, unclipped: a run may enter outside the invariant (it
         # then ends blocked there, or jumps on at once: jumps take precedence)
         segments = [(lo, hi)]
-        start = meets(lo, hi, mode.invariant)
+        entry = float(band(lo, hi, t_index))  # the band an invariant is disarmed with there
+        start = meets(lo, hi, mode.invariant, widen=entry)
         if start is not None:
-            segments += _segments(mode, forms, start, t_end, step, t_index)
+            segments += _segments(mode, forms, start, t_end, step, t_index, entry)
         for seg_lo, seg_hi in segments:
             sets.append(
                 ReachSet(
@@ -310,23 +311,36 @@ def explore(
         if jumps >= max_jumps:
             continue
         for tr in mode.transitions:
-            for box in _clusters(segments, tr.guard):
+            for box in _clusters(segments, tr.guard, t_index, entry):
                 image = affine_image(*box, tr.rmat, tr.smat, tr.rvec, forms.u_lo, forms.u_hi)
                 waiting.append((modes.get(tr.target), image[0], image[1], jumps + 1))
     return sets, True
 
 
 def _segments(
-    mode: Mode, forms: Forms, start: tuple[Array, Array], t_end: float, step: float, t_index: int
+    mode: Mode,
+    forms: Forms,
+    start: tuple[Array, Array],
+    t_end: float,
+    step: float,
+    t_index: int,
+    entry: float,
 ) -> list[tuple[Array, Array]]:
-    """The mode's segment boxes, clipped to its invariant, until it is left or ``t_end``."""
+    """The mode's segment boxes, clipped to its invariant, until it is left or ``t_end``.
+
+    The invariant is widened by the simulator's band over each segment's box, and at
+    least by ``entry``, the band at the stay's entry: an invariant met on its boundary
+    there is watched from that band on.
+    """
     if mode.urgent:
         return [start]
     steps = max(1, math.ceil((t_end - float(start[0][t_index])) / step - 1e-9))
     kept: list[tuple[Array, Array]] = []
 
     def keep(k: int, lo: Array, hi: Array) -> int:
-        c_lo, c_hi, ok = meets_many(lo, hi, mode.invariant)
+        c_lo, c_hi, ok = meets_many(
+            lo, hi, mode.invariant, widen=np.maximum(band(lo, hi, t_index), entry)
+        )
         count = len(ok) if bool(ok.all()) else int(np.argmin(ok))
         kept.extend(zip(c_lo[:count], c_hi[:count], strict=True))
         return count
@@ -359,12 +373,15 @@ def _fastest_flow(forms: Forms, mode: Mode, row: int) -> Position | None:
     return None
 
 
-def _clusters(segments: list[tuple[Array, Array]], guard: Condition) -> list[tuple[Array, Array]]:
-    """Boxes of the segments' states in the guard: one per stretch of consecutive contact."""
+def _clusters(
+    segments: list[tuple[Array, Array]], guard: Condition, t_index: int, entry: float
+) -> list[tuple[Array, Array]]:
+    """Boxes of the segments' states in the guard (widened by the simulator's band over
+    each, at least ``entry``'s): one per stretch of consecutive contact."""
     stretches: list[tuple[Array, Array]] = []
     previous = -2
     for k, (lo, hi) in enumerate(segments):
-        box = meets(lo, hi, guard)
+        box = meets(lo, hi, guard, widen=max(float(band(lo, hi, t_index)), entry))
         if box is None:
             continue
         if k == previous + 1 and stretches:

@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import pytest
 
@@ -112,3 +113,46 @@ def test_the_first_contact_is_never_before_the_start() -> None:
     (entry,) = hybrid.reach(hybrid.load_text(GRAZE), 6.0, step=0.05).properties
     assert entry.verdict == "unknown"
     assert entry.first_contact == 0.0 and "meets it from t = 0," in entry.message
+
+
+# One variable near 1e9 makes the simulator's boundary band 0.1 (1e-10 (1 + max |x_i|)):
+# it takes y >= 0 at y = -0.05 (moving into it), and keeps y <= 0 until y = 0.1.
+BIG_GUARD = """
+automaton: band
+state: {big: {initial: 1.0e9}, y: {initial: -0.05}}
+locations: {a: {flow: {y: 1}}, b: {flow: {y: 1}}}
+edges: [{from: a, to: b, guard: y >= 0}]
+properties: {forbidden: [{location: b, when: y <= -0.01}]}
+"""
+BIG_INVARIANT = """
+automaton: band_inv
+state: {pos: {initial: 10000.0}, y: {initial: -1.0e-6}}
+locations: {a: {flow: {pos: 0, y: 5.0e-7}, invariant: y <= 0}}
+properties: {forbidden: [{location: a, when: y >= 5.0e-7}]}
+"""
+
+
+@pytest.mark.parametrize(
+    ("text", "location", "forbidden"),
+    [(BIG_GUARD, "b", lambda y: y <= -0.01), (BIG_INVARIANT, "a", lambda y: y >= 5e-7)],
+    ids=["guard", "invariant"],
+)
+def test_the_simulator_s_band_over_the_whole_state_is_covered(
+    text: str, location: str, forbidden: Callable[[float], bool]
+) -> None:
+    """Both were 'proved' while the simulator's own run enters the forbidden set: reach
+    widened a condition only by the size of the variables it reads."""
+    model = hybrid.load_text(text)
+    run = hybrid.simulate(model, 10.0, handle_sigint=False)
+    places = run.location.tolist()
+    assert any(p == location and forbidden(y) for p, y in zip(places, run["y"].tolist(), strict=True))
+    result = hybrid.reach(model, 10.0, step=0.01)
+    assert result.properties[0].verdict != "proved"
+    # every stored point of the run lies in a set of its location, at its time
+    for k, place in enumerate(places):
+        t, x = float(run.t[k]), run.states[k]
+        assert any(
+            s.location == place and s.t[0] <= t <= s.t[1] and all(s.lo <= x) and all(x <= s.hi)
+            for s in result.sets
+        ), (t, x)
+
