@@ -167,7 +167,10 @@ def _overrides(p: PropertyResult) -> dict[str, Any]:
     return {
         "entry": p.entry.text(),
         "reached_at": p.witness_time,
-        "initial": {"state": p.witness_initial},
+        "initial": {
+            **({"location": p.witness_location} if p.witness_location is not None else {}),
+            "state": p.witness_initial,
+        },
         "inputs": inputs,
     }
 

@@ -58,10 +58,13 @@ DNF_CAP = 64
 
 @dataclass(frozen=True)
 class Rows:
-    """A conjunction ``mat @ x <= vec`` over the reach vector (no rows: true)."""
+    """A conjunction ``mat @ x <= vec`` over the reach vector (no rows: true); where ``strict``
+    (a flag per row) is given, its rows that are strict are ``mat @ x < vec`` (sets use the
+    closure; a witness's points are held to the condition as written)."""
 
     mat: Array
     vec: Array
+    strict: NDArray[np.bool_] | None = None
 
 
 Condition = tuple[Rows, ...]
@@ -249,7 +252,7 @@ class Forms:
             raise SpecError(f"{what} has more than {DNF_CAP} cases once split", position)
         result: list[Rows] = []
         for case in cases:
-            rows: list[tuple[Array, float]] = []
+            rows: list[tuple[Array, float, bool]] = []
             false = False
             for cmp in case:
                 if isinstance(cmp, ir.BoolConst):
@@ -264,26 +267,28 @@ class Forms:
             if false:
                 continue
             n = len(self.variables)
-            mat = np.array([r for r, _ in rows], dtype=float).reshape(len(rows), n)
-            vec = np.array([v for _, v in rows], dtype=float)
-            result.append(Rows(mat, vec))
+            mat = np.array([r for r, _, _ in rows], dtype=float).reshape(len(rows), n)
+            vec = np.array([v for _, v, _ in rows], dtype=float)
+            result.append(Rows(mat, vec, np.array([s for _, _, s in rows], dtype=bool)))
         return tuple(result)
 
     def _rows(
         self, cmp: ir.Cmp, comp: int, mode: ModeKey, position: Position, what: str, for_all: bool
-    ) -> list[tuple[Array, float]]:
+    ) -> list[tuple[Array, float, bool]]:
         forms = [self.affine(o, comp, mode, position, what) for o in cmp.operands]
-        out: list[tuple[Array, float]] = []
+        out: list[tuple[Array, float, bool]] = []
         for i, op in enumerate(cmp.ops):
             left, right = forms[i], forms[i + 1]
+            strict = op in ("<", ">")
             if op in ("<", "<="):
-                out.extend(self._project(left - right, False, for_all))
+                rows = self._project(left - right, False, for_all)
             elif op in (">", ">="):
-                out.extend(self._project(right - left, False, for_all))
+                rows = self._project(right - left, False, for_all)
             elif op == "==":
-                out.extend(self._project(left - right, True, for_all))
+                rows = self._project(left - right, True, for_all)
             else:
                 raise SpecError(f"{what}: '!=' is not a convex condition", position)
+            out.extend((row, vec, strict) for row, vec in rows)
         return out
 
     def _project(self, form: Affine, equal: bool, for_all: bool) -> list[tuple[Array, float]]:

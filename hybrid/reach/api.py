@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -262,6 +263,7 @@ def _decide(
                 witness_time=at,
                 witness_initial=candidate.initial,
                 witness_inputs=dict(candidate.inputs),
+                witness_location=_location_of(model, candidate.location),
                 condition=cond,
             )
     if first is None:
@@ -293,7 +295,7 @@ def _quick(
         found = refute(forms, mode_of(forms, key), lo, hi, every, t_end=t_end, step=step)
         if found is None:
             continue
-        candidate = found.candidate
+        candidate = replace(found.candidate, location=key)
 
         def replay(candidate: Candidate = candidate) -> Run | None:
             return simulate_candidate(model, forms, candidate, max_jumps)
@@ -307,10 +309,23 @@ def _quick(
             witness_time=found.at,
             witness_initial=candidate.initial,
             witness_inputs=dict(candidate.inputs),
+            witness_location=_location_of(model, candidate.location),
             condition=_condition(forms, entry, key),
             replay=replay,
         )
     return None
+
+
+def _location_of(
+    model: Automaton | System, key: tuple[str, ...] | None
+) -> str | dict[str, str] | None:
+    """A witness's initial location as a spec gives it: a name (an automaton), or a name per
+    component (a system)."""
+    if key is None:
+        return None
+    if isinstance(model, Automaton):
+        return key[0]
+    return {c.name: name for c, name in zip(model.components, key, strict=True)}
 
 
 def _witness(
@@ -337,6 +352,7 @@ def _witness(
     candidates = candidates[:6]
     candidates.extend(corner_candidates(forms, x_lo[:-1], x_hi[:-1], t_end))
     candidates.extend(random_candidates(forms, x_lo[:-1], x_hi[:-1], t_end, RANDOM_RUNS))
+    candidates = [replace(c, location=mode0) for c in candidates]
     for candidate in candidates:
         run = simulate_candidate(model, forms, candidate, max_jumps)
         if run is None:

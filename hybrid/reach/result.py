@@ -62,6 +62,8 @@ class PropertyResult:
     witness_time: float | None = None
     witness_initial: dict[str, float] = field(default_factory=dict, repr=False)
     witness_inputs: dict[str, Any] = field(default_factory=dict, repr=False)
+    witness_location: str | dict[str, str] | None = None
+    """Where the witness starts: its initial location (a name per component in a system)."""
     condition: Condition = field(default=(), repr=False)
     replay: Callable[[], Run | None] | None = field(default=None, repr=False, compare=False)
 
@@ -86,6 +88,7 @@ class PropertyResult:
             "first_contact": self.first_contact,
             "witness_time": self.witness_time,
             "witness_initial": self.witness_initial or None,
+            "witness_location": self.witness_location,
         }
 
 

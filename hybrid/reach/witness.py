@@ -22,7 +22,7 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -70,6 +70,8 @@ class Candidate:
     inputs: dict[str, Callable[[float], float]]
     t_end: float
     how: str
+    location: tuple[str, ...] | None = None
+    """The initial location of each component (None: the model's first initial mode)."""
 
 
 def support_candidate(
@@ -148,6 +150,8 @@ def simulate_candidate(
     inputs: dict[str, Callable[[float], float]] = dict(candidate.inputs)
     for name in forms.unbounded:
         inputs.setdefault(name, PiecewiseConstant(np.zeros(1), np.zeros(1)))
+    if candidate.location is not None:
+        model = starting_in(model, candidate.location)
     try:
         return simulate(
             model,
@@ -163,14 +167,25 @@ def simulate_candidate(
         return None
 
 
+def starting_in(model: Automaton | System, location: tuple[str, ...]) -> Automaton | System:
+    """``model`` with each component starting in its location of ``location``."""
+    if isinstance(model, Automaton):
+        return model.with_initial(location[0])
+    parts = tuple(
+        replace(c, automaton=c.automaton.with_initial(name))
+        for c, name in zip(model.components, location, strict=True)
+    )
+    return replace(model, components=parts)
+
+
 def reaches(run: Run, forms: Forms, conditions: Mapping[str, Condition]) -> float | None:
     """The first time a stored point of ``run`` is in the forbidden set, or ``None``.
 
     ``conditions`` gives the entry's condition per mode name (``run.location``) of
     the modes in the entry's locations (a location may define the signals it
     reads its own way); a point is in the set when its mode is one of them and
-    every row of one case holds up to :data:`WITNESS_TOL` relative to the row's
-    magnitude.
+    every row of one case holds as written, a strict row strictly: a point on the
+    boundary of ``x > 1``, or a hair below ``x >= 1 + 5e-10``, is not a witness.
     """
     locations = run.location.tolist()
     points = np.column_stack([run.states, run.t])
@@ -181,8 +196,9 @@ def reaches(run: Run, forms: Forms, conditions: Mapping[str, Condition]) -> floa
             continue
         for case in condition:
             lhs = points @ case.mat.T
-            scale = np.abs(points) @ np.abs(case.mat).T + np.abs(case.vec)[None, :]
-            ok = np.all(lhs <= case.vec[None, :] + WITNESS_TOL * (1.0 + scale), axis=1)
+            vec = case.vec[None, :]
+            strict = np.zeros(len(case.vec), dtype=bool) if case.strict is None else case.strict
+            ok = np.all(np.where(strict[None, :], lhs < vec, lhs <= vec), axis=1)
             hits |= ok & here
     if not hits.any():
         return None

@@ -156,3 +156,29 @@ def test_the_simulator_s_band_over_the_whole_state_is_covered(
             for s in result.sets
         ), (t, x)
 
+
+def test_a_witness_holds_the_condition_as_written() -> None:
+    """x stays exactly 1: 'x > 1' and 'x >= 1 + 5e-10' were refuted by points within 1e-9."""
+    level = hybrid.load_text(
+        "automaton: level\nstate: {x: {initial: 1}}\nlocations: {a: {flow: {x: 0}}}\n"
+        "properties: {forbidden: [{when: x > 1}, {when: x >= 1.0000000005}, {when: x >= 1}]}\n"
+    )
+    strict, above, closed = hybrid.reach(level, 1.0, step=0.01).properties
+    assert strict.verdict == above.verdict == "unknown"
+    assert closed.verdict == "refuted" and closed.witness_time == 0.0
+
+
+def test_a_witness_starts_in_the_initial_location_it_was_found_from() -> None:
+    """Found from 'b' (x' = 1 from 0.5), the witness was replayed from 'a' (x' = 0) and
+    never entered the set; its overrides left the location out."""
+    multi = hybrid.load_text(
+        "automaton: multi\nstate: {x: {initial: [0, 0.5]}}\n"
+        "locations: {a: {flow: {x: 0}}, b: {flow: {x: 1}}}\ninitial: {location: [a, b]}\n"
+        "properties: {forbidden: [{location: b, when: x >= 1}]}\n"
+    )
+    (entry,) = hybrid.reach(multi, 2.0, step=0.01).properties
+    assert entry.verdict == "refuted" and entry.witness_location == "b"
+    run = entry.witness
+    assert run is not None and set(run.location.tolist()) == {"b"}
+    assert run["x"][-1] >= 1.0 and entry.witness_time == pytest.approx(0.5, abs=0.02)
+
