@@ -149,6 +149,7 @@ def enabled_region(
     *,
     side: Side | None = None,
     entry: bool = False,
+    snapped: bool = False,
 ) -> ir.Expr:
     """A condition holding at every point where the simulator may find ``guard`` enabled.
 
@@ -166,7 +167,9 @@ def enabled_region(
 
     - ``entry``: at an entry point (or where a stay starts) the flow keeps the
       state on the level, ``d' == 0``: a state that starts on the level and
-      leaves it has not reached it;
+      leaves it has not reached it; with ``snapped`` too, anywhere on the level
+      (an entry at the instant the last stay stopped, where a level that stay
+      reached and no jump has used is snapped: docs/semantics.md);
     - ``side`` given, while flowing: the level is reached from the side the
       state is on. Where the state keeps ``d >= 0`` while flowing (``side(d) ==
       1``: the closure of the invariant implies it), the level is reached with
@@ -191,6 +194,8 @@ def enabled_region(
     'x == 0.0 and y <= 0.0'
     >>> to_source(enabled_region(level, circle, entry=True), names)
     'x == 0.0 and y == 0.0'
+    >>> to_source(enabled_region(level, circle, entry=True, snapped=True), names)
+    'x == 0.0'
     """
     signals = signals or {}
     terms = dnf(guard)
@@ -208,7 +213,8 @@ def enabled_region(
             if rate is None:
                 continue
             if entry:
-                conds.append(ir.Cmp(("==",), (rate, _ZERO)))
+                if not snapped:
+                    conds.append(ir.Cmp(("==",), (rate, _ZERO)))
             elif side is not None and (way := side(difference)) != 0:
                 conds.append(ir.Cmp(("<=",) if way > 0 else (">=",), (rate, _ZERO)))
         regions = [_atom_regions(atom, flow, signals, opaque) for atom in others]

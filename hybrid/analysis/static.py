@@ -55,6 +55,7 @@ from hybrid.analysis.linear import structural_key
 from hybrid.analysis.solve import Box, Env, closure, conjoin, contract, negate, satisfiable
 from hybrid.expr import ir
 from hybrid.expr.interval import ENTIRE, Interval
+from hybrid.expr.rho import levels
 from hybrid.expr.transform import bind_parameters
 from hybrid.model import Automaton, Edge
 
@@ -107,6 +108,31 @@ class LocationFacts:
     region: Box | None
     exits: tuple[ir.Expr, ...]
     can_be_left: bool
+
+
+def _may_snap(automaton: Automaton) -> list[bool]:
+    """Per edge, whether an equality atom of its guard may be snapped at an entry of its
+    source: the entry comes at the instant a stay stopped (jumps take no time), where a
+    level reached and not used by the jump taken counts as reached (docs/semantics.md,
+    "a level reached stays reached"). Not where every edge into the source uses each of
+    the guard's levels (reads an equality atom over the same variables)."""
+    params = automaton.parameters
+
+    def keys(edge: Edge) -> set[frozenset[str]]:
+        guard = bind_parameters(edge.guard, params)
+        return {
+            frozenset(ir.names_in(d) - ir.names_in(d, ir.PARAM) - ir.names_in(d, ir.CONST))
+            for d in levels(guard)
+        }
+
+    read = [keys(edge) for edge in automaton.edges]
+    into: dict[str, list[int]] = {}
+    for i, edge in enumerate(automaton.edges):
+        into.setdefault(edge.target, []).append(i)
+    return [
+        bool(read[k]) and any(read[k] - read[i] for i in into.get(edge.source, []))
+        for k, edge in enumerate(automaton.edges)
+    ]
 
 
 def initial_box(automaton: Automaton) -> dict[str, Interval]:
@@ -200,7 +226,8 @@ class AutomatonFacts:
         """Every edge's enabled regions, entry boxes of every location, then liveness."""
         params = automaton.parameters
         guards, resets, enabled, at_entry, flowing = [], [], [], [], []
-        for edge in automaton.edges:
+        snaps = _may_snap(automaton)
+        for k, edge in enumerate(automaton.edges):
             src = self.locations[edge.source]
             guard = bind_parameters(edge.guard, params)
             signals = src.env.signals
@@ -209,7 +236,9 @@ class AutomatonFacts:
             guards.append(guard)
             resets.append({k: bind_parameters(v, params) for k, v in edge.reset.items()})
             enabled.append(region)
-            at_entry.append(enabled_region(guard, src.flow, signals, self.opaque, entry=True))
+            at_entry.append(
+                enabled_region(guard, src.flow, signals, self.opaque, entry=True, snapped=snaps[k])
+            )
             # while flowing the state is in the closure of the invariant, within the bounds
             flowing.append(
                 None

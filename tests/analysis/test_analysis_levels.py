@@ -176,3 +176,32 @@ properties: {deadlock_free: true}
     assert run.termination.t == pytest.approx(1.0, abs=1e-12)
     (violation,) = check(model).by_rule("property-unproved")
     assert "deadlock_free" in violation.message and "'a'" in violation.message
+
+
+SNAP = """
+automaton: snap
+state: {x: {initial: 0}, y: {initial: 0}}
+locations:
+  l1: {flow: {x: 1, y: 1}}
+  l2: {flow: {x: 1, y: 0}, invariant: x >= 1}
+  l3: {flow: {x: 0, y: 0}}
+edges:
+  - {from: l1, to: l2, guard: y >= 1}
+  - {from: l2, to: l3, guard: x == 1}
+properties: {forbidden: [{location: l3}]}
+"""
+
+
+def test_a_level_reached_when_the_last_stay_stopped_is_snapped_on_entry() -> None:
+    """At t = 1 the stay in l1 stops with x = 1 and y = 1: l1 -> l2 is taken, and at the
+    same instant x == 1 is a level that stay reached and no jump used, so l2 -> l3 fires
+    although x' = 1 leaves it. check called l3 unreachable, the edge dead and the
+    forbidden entry proved, 'for every run'."""
+    model = hybrid.load_text(SNAP)
+    run = hybrid.simulate(model, 3.0, handle_sigint=False)
+    assert [j.target for j in run.jumps] == ["l2", "l3"]
+    assert run.jumps[1].t == pytest.approx(1.0)
+    report = hybrid.check(model, reach_t_end=3.0)
+    rules = {f.rule for f in report.findings}
+    assert not rules & {"dead-edge", "unreachable-location"}
+    assert "property-violated" in rules  # reach refutes it with a simulated run
