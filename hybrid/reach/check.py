@@ -10,6 +10,12 @@ the arguments here), :func:`check` runs :func:`hybrid.reach` on those entries:
   run that reaches it;
 - unknown: it stays ``property-unproved``, with reach's earliest contact.
 
+With a horizon, the entries the analysis did prove are put to reach too: the
+analysis decides conditions exactly, the simulator within a band that grows with
+the largest variable of the state (docs/check.md, "a known gap"). A run that
+reaches one of them is reported (``property-violated``); reach's "unknown"
+there leaves the analysis's proof standing.
+
 A model reach cannot handle (not affine) keeps the analysis's findings, with
 a sentence saying why reach was not used. This module sits above
 ``analysis/`` and ``simulation/`` (a witness is a simulated run).
@@ -109,7 +115,7 @@ def check(
         for f in report.findings
         if f.rule == "property-unproved" and f.where.startswith("forbidden: ")
     ]
-    if t_end is None or not unproved:
+    if t_end is None or not props.forbidden:
         return report
     max_jumps = reach_max_jumps if reach_max_jumps is not None else props.reach_max_jumps
     step = reach_step if reach_step is not None else props.reach_step
@@ -132,6 +138,13 @@ def check(
     verdicts = {f"forbidden: {p.entry.text()}": p for p in result.properties}
     silenced = set(ignore) | set(props.ignore)
     kept: list[Finding] = []
+    reported = {f.where for f in report.findings}
+    for where, verdict in verdicts.items():  # proved by the analysis, reached by a run
+        if (where not in reported and verdict.verdict == "refuted"
+                and "property-violated" not in silenced):  # fmt: skip
+            kept.append(
+                Finding.at("property-violated", verdict.entry.position, verdict.message, where=where)
+            )
     for f in report.findings:
         p = verdicts.get(f.where) if f in unproved else None
         if p is None:

@@ -182,3 +182,12 @@ def test_a_witness_starts_in_the_initial_location_it_was_found_from() -> None:
     assert run is not None and set(run.location.tolist()) == {"b"}
     assert run["x"][-1] >= 1.0 and entry.witness_time == pytest.approx(0.5, abs=0.02)
 
+
+def test_check_reports_a_run_that_reaches_what_its_analysis_proved() -> None:
+    """The analysis decides y >= 0 exactly, so b is entered with y >= 0 and 'b with
+    y <= -0.01' was proved, check ok; the simulator's run enters b at y = -0.05."""
+    model = hybrid.load_text(BIG_GUARD, file="band.yaml")
+    assert hybrid.check(model).ok  # the analysis alone: its proof stands, as docs/check.md says
+    (violated,) = [f for f in hybrid.check(model, reach_t_end=1.0).findings]
+    assert (violated.rule, violated.line) == ("property-violated", 6)
+    assert "reached at t = 0 by a simulated run" in violated.message
