@@ -113,6 +113,25 @@ class Forms:
         merged = {**aut.signals, **aut.locations[location].signals}
         return {k: bind_parameters(v, aut.parameters) for k, v in merged.items()}
 
+    def _read_signals(self, node: ir.Expr, comp: int, mode: tuple[str, ...]) -> dict[str, ir.Expr]:
+        """The signals ``node`` of component ``comp`` may read: its own, as ``mode`` defines
+        them, and those of other components it names (a system's condition), as their
+        owners define them in ``mode``, with the ones those read in turn."""
+        signals = self._signals(comp, mode[comp])
+        pending = list(ir.names_in(node, ir.SIGNAL) - signals.keys())
+        while pending:
+            name = pending.pop()
+            owner = self._owner.get(name)
+            if owner is None or name in signals:
+                continue
+            if name in self.system.components[owner].automaton.vector_sizes:
+                continue
+            definition = self._signals(owner, mode[owner]).get(name)
+            if definition is not None:
+                signals[name] = definition
+                pending.extend(ir.names_in(definition, ir.SIGNAL) - signals.keys())
+        return signals
+
     def affine(
         self,
         node: ir.Expr,
@@ -125,7 +144,7 @@ class Forms:
         """The affine form of ``node`` (component ``comp`` in ``mode``), or a SpecError there."""
         aut = self.system.components[comp].automaton
         bound = bind_parameters(node, aut.parameters)
-        lin = Linearizer(IntervalEvaluator({}, self._signals(comp, mode[comp])))
+        lin = Linearizer(IntervalEvaluator({}, self._read_signals(bound, comp, mode)))
         form = lin.affine(bound)
         if any(k.startswith("#") for k in form.coeffs):
             raise SpecError(self._not_affine(bound, lin, what), position.shifted(_col(bound, lin)))

@@ -162,6 +162,7 @@ def simulate_candidate(
             initial=candidate.initial,
             inputs=inputs,
             handle_sigint=False,
+            dense=True,  # where the run enters the set, between its stored points
         )
     except HybridError:
         return None
@@ -179,27 +180,54 @@ def starting_in(model: Automaton | System, location: tuple[str, ...]) -> Automat
 
 
 def reaches(run: Run, forms: Forms, conditions: Mapping[str, Condition]) -> float | None:
-    """The first time a stored point of ``run`` is in the forbidden set, or ``None``.
+    """The time ``run`` enters the forbidden set, or ``None`` if no stored point is in it.
 
     ``conditions`` gives the entry's condition per mode name (``run.location``) of
     the modes in the entry's locations (a location may define the signals it
     reads its own way); a point is in the set when its mode is one of them and
     every row of one case holds as written, a strict row strictly: a point on the
     boundary of ``x > 1``, or a hair below ``x >= 1 + 5e-10``, is not a witness.
+    The time is the first stored point's in the set, or, with the run's dense
+    output, where the interpolant enters it after the point stored before
+    (bisection in the same stay).
     """
-    locations = run.location.tolist()
+    locations = [str(loc) for loc in run.location.tolist()]
     points = np.column_stack([run.states, run.t])
     hits = np.zeros(len(points), dtype=bool)
     for name, condition in conditions.items():
-        here = np.array([str(loc) == name for loc in locations], dtype=bool)
-        if not here.any():
-            continue
-        for case in condition:
-            lhs = points @ case.mat.T
-            vec = case.vec[None, :]
-            strict = np.zeros(len(case.vec), dtype=bool) if case.strict is None else case.strict
-            ok = np.all(np.where(strict[None, :], lhs < vec, lhs <= vec), axis=1)
-            hits |= ok & here
+        here = np.array([loc == name for loc in locations], dtype=bool)
+        if here.any():
+            hits |= here & _inside(points, condition)
     if not hits.any():
         return None
-    return float(run.t[int(np.argmax(hits))])
+    k = int(np.argmax(hits))
+    t = float(run.t[k])
+    if k == 0 or run.j[k] != run.j[k - 1]:
+        return t
+    curve = next((c for j, t0, t1, c in run.segments if j == run.j[k] and t0 <= run.t[k - 1]
+                  and t <= t1), None)  # fmt: skip
+    if curve is None:
+        return t
+    condition = conditions[locations[k]]
+    before = float(run.t[k - 1])
+    for _ in range(200):
+        middle = 0.5 * (before + t)
+        if not before < middle < t:
+            break
+        point = np.append(np.asarray(curve(middle), dtype=float), middle)
+        if _inside(point[None, :], condition)[0]:
+            t = middle
+        else:
+            before = middle
+    return t
+
+
+def _inside(points: NDArray[np.float64], condition: Condition) -> NDArray[np.bool_]:
+    """Which ``points`` (rows: state, then time) satisfy a case of ``condition`` exactly."""
+    found = np.zeros(len(points), dtype=bool)
+    for case in condition:
+        lhs = points @ case.mat.T
+        vec = case.vec[None, :]
+        strict = np.zeros(len(case.vec), dtype=bool) if case.strict is None else case.strict
+        found |= np.all(np.where(strict[None, :], lhs < vec, lhs <= vec), axis=1)
+    return found

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
@@ -94,7 +95,8 @@ properties: {forbidden: [{location: b, when: x > 2.5}, {location: b, when: x < 1
     reached, below = result.properties
     assert reached.verdict == "refuted" and reached.witness is not None
     assert reached.witness.jumps and reached.witness.jumps[0].target == "b"
-    assert 1.5 <= (reached.witness_time or 0.0) <= 2.0
+    # where the run enters the set: half a second after its jump (x = 2 + (t - t_jump))
+    assert reached.witness_time == pytest.approx(reached.witness.jumps[0].t + 0.5, abs=1e-9)
     # in b, x starts at 2 (the guard x >= 1 is met at 1, widened by 1e-7): never below 1.9
     assert below.verdict == "proved"
 
@@ -191,3 +193,26 @@ def test_check_reports_a_run_that_reaches_what_its_analysis_proved() -> None:
     (violated,) = [f for f in hybrid.check(model, reach_t_end=1.0).findings]
     assert (violated.rule, violated.line) == ("property-violated", 6)
     assert "reached at t = 0 by a simulated run" in violated.message
+
+
+def test_an_entry_reads_a_signal_of_any_component_and_is_reached_where_it_enters(
+    tmp_path: Path,
+) -> None:
+    """A system's 'qs >= 4' (qs = 5 q in b, q' = 1) was refused as 'not affine: qs' (qs is
+    the second component's), and the witness said 'reached at t = 1', its first stored
+    point inside, where the run enters at t = 4/5."""
+    (tmp_path / "sig1.yaml").write_text(
+        "automaton: sig1\nstate: {p: {initial: 0}}\nsignals: {ps: p}\nlocations: {a: {flow: {p: 1}}}\n"
+    )
+    (tmp_path / "sig2.yaml").write_text(
+        "automaton: sig2\nstate: {q: {initial: 0}}\nsignals: {qs: 3 * q}\n"
+        "locations: {b: {flow: {q: 1}, signals: {qs: 5 * q}}}\n"
+    )
+    (tmp_path / "sys.yaml").write_text(
+        "system: sigsys\ncomponents: [{spec: sig1.yaml}, {spec: sig2.yaml}]\n"
+        "properties: {forbidden: [{when: qs >= 4}, {locations: {sig1: a}, when: qs >= 4.5}]}\n"
+    )
+    first, second = hybrid.reach(hybrid.load(tmp_path / "sys.yaml"), 1.0, step=0.01).properties
+    assert first.verdict == second.verdict == "refuted"
+    assert first.witness_time == pytest.approx(0.8, abs=1e-9)
+    assert second.witness_time == pytest.approx(0.9, abs=1e-9)
