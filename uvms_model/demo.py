@@ -77,7 +77,13 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     out.mkdir(parents=True, exist_ok=True)
     status = 0
-    print("== specs ==")
+    shown: list[str] = []
+
+    def say(text: str) -> None:  # the summary: on stdout, and kept for out/summary.txt
+        print(text)
+        shown.append(text)
+
+    say("== specs ==")
     for path in sorted(specs_dir().glob("*.yaml")):
         try:
             model = hybrid.load(path)
@@ -86,8 +92,8 @@ def main(argv: list[str] | None = None) -> int:
             status = 2
             continue
         report = _check(model)
-        print(f"{path.name}: valid; {report}")
-    print("\n== missions ==")
+        say(f"{path.name}: valid; {report}")
+    say("\n== missions ==")
     results: dict[str, MissionResult] = {}
     for name in MISSIONS:
         result = run_mission(name, dt=DEMO_DT)
@@ -100,25 +106,26 @@ def main(argv: list[str] | None = None) -> int:
             figures = write_figures(result, out, name)
         except ImportError:
             figures = []
-            print(f"  (matplotlib missing: no figures; {install_hint('plot')})")
-        print(result.summary())
+            say(f"  (matplotlib missing: no figures; {install_hint('plot')})")
+        say(result.summary())
         for fig in figures:
-            print(f"  figure: {fig}")
+            say(f"  figure: {fig}")
         if not result.run.termination.ok:
             status = max(status, 1)
-    print("\n== vehicle effort: the strategy vs an always-on vehicle ==")
+    say("\n== vehicle effort: the strategy vs an always-on vehicle ==")
     effort = effort_table(results)
-    print(effort)
-    print("\n== ablations (mission 2) ==")
+    say(effort)
+    say("\n== ablations (mission 2) ==")
     table = ablation_table()
-    print(table)
-    print("\n== the comparison's headline (mission 2; python -m uvms_model.compare: all) ==")
+    say(table)
+    say("\n== the comparison's headline (mission 2; python -m uvms_model.compare: all) ==")
     from uvms_model.compare import headline
 
     head = headline()
-    print(head)
+    say(head)
     (out / "ablations.md").write_text(table + "\n\n" + effort + "\n\n" + head + "\n")
-    print(f"\noutputs in {out}/")
+    say(f"\noutputs in {out}/ (this summary: {out / 'summary.txt'})")
+    (out / "summary.txt").write_text("\n".join(shown) + "\n")
     return status
 
 
