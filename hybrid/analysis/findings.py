@@ -253,6 +253,9 @@ class Report:
     file: str = ""
     repeated: int = 0
     """Findings left out because an earlier report of the same run had them."""
+    bounded: str = ""
+    """What a proof by reach held for (``"forbidden states: within t <= 4 and 10 jumps"``),
+    shown beside ``ok``: those proofs say nothing of a run past the horizon."""
 
     @property
     def ok(self) -> bool:

@@ -83,7 +83,7 @@ def text(reports: Sequence[Report], strict: bool = False) -> str:
         if report.repeated and not report.findings:
             lines.append(f"{report.file}: {report.repeated} finding(s), shown above")
         elif not report.findings:
-            lines.append(f"{report.file}: ok")
+            lines.append(f"{report.file}: ok" + (f" ({report.bounded})" if report.bounded else ""))
     return "\n".join(lines)
 
 

@@ -28,6 +28,7 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from typing import TextIO
 
 from hybrid.analysis import system_graph
@@ -118,7 +119,7 @@ def run_check(
                 line.clear()
         if tracker is not None:
             tracker.finish()
-        reports.append(Report(report.findings, report.name, file))
+        reports.append(replace(report, file=file))
     text = write(fmt, once(reports), strict=strict)
     if text:
         print(text, file=out)
@@ -176,9 +177,7 @@ def once(reports: Sequence[Report]) -> list[Report]:
             if key not in seen:
                 seen.add(key)
                 kept.append(f)
-        result.append(
-            Report(tuple(kept), report.name, report.file, len(report.findings) - len(kept))
-        )
+        result.append(replace(report, findings=tuple(kept), repeated=len(report.findings) - len(kept)))
     return result
 
 

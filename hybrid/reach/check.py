@@ -136,6 +136,8 @@ def check(
         }
         return Report(tuple(notes.get(id(f), f) for f in report.findings), report.name, report.file)
     verdicts = {f"forbidden: {p.entry.text()}": p for p in result.properties}
+    jumps = 10 if max_jumps is None else max_jumps
+    bounded = f"forbidden states: within t <= {t_end:g} and {jumps} jumps"
     silenced = set(ignore) | set(props.ignore)
     kept: list[Finding] = []
     reported = {f.where for f in report.findings}
@@ -158,7 +160,7 @@ def check(
                 )
         elif p.verdict == "unknown":
             kept.append(replace(f, message=f"{f.message}; reach: {p.message}"))
-    return Report(tuple(kept), report.name, report.file)
+    return Report(tuple(kept), report.name, report.file, report.repeated, bounded)
 
 
 def _check_arguments(max_states: object, max_bytes: object, progress: object,

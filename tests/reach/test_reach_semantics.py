@@ -216,3 +216,20 @@ def test_an_entry_reads_a_signal_of_any_component_and_is_reached_where_it_enters
     assert first.verdict == second.verdict == "refuted"
     assert first.witness_time == pytest.approx(0.8, abs=1e-9)
     assert second.witness_time == pytest.approx(0.9, abs=1e-9)
+
+
+def test_an_ok_bounded_by_the_horizon_says_so(tmp_path: Path) -> None:
+    """x = t reaches 5 at t = 5: within t <= 4 the entry is proved, and check said only 'ok'."""
+    from support import run_cli
+
+    spec = tmp_path / "horizon.yaml"
+    spec.write_text(
+        "automaton: horizon\nstate: {x: {initial: 0}}\nlocations: {a: {flow: {x: 1}}}\n"
+        "checks: {reach: {t_end: 4}}\nproperties: {forbidden: [{when: x >= 5}]}\n"
+    )
+    done = run_cli("check", spec)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == f"{spec}: ok (forbidden states: within t <= 4 and 10 jumps)"
+    later = run_cli("check", spec, "--reach-t-end", "6")
+    assert later.returncode == 1 and "property-violated" in later.stdout
+    assert "reached at t = 5 " in later.stdout
