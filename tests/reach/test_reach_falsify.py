@@ -95,11 +95,16 @@ properties: {forbidden: [{when: x >= 1.5}]}
     result = hybrid.reach(model, 1.0, max_jumps=0, step=0.01, refute_first=True)
     (entry,) = result.properties
     assert entry.verdict == "refuted" and entry.witness_time is not None
+    # the witness enters where its run reaches 1.5 (x = 1 + (1 + u) t), before any block
+    u = entry.witness_inputs["u"](0.0) if entry.witness_inputs else 0.5
+    assert entry.witness_time == pytest.approx(0.5 / (1 + u), abs=1e-7)
     replay = hybrid.simulate(
         model,
-        entry.witness_time,
+        1.0,
         initial=entry.witness_initial,
         inputs=entry.witness_inputs,
         handle_sigint=False,
+        rtol=1e-10,
+        atol=1e-12,
     )
-    assert replay.termination.cause == "t_end" and replay["x"].max() >= 1.5
+    assert replay["x"].max() >= 1.5 and replay.termination.t > entry.witness_time  # not blocked
