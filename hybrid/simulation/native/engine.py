@@ -208,7 +208,10 @@ def _structure_key(model: System) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
     )
     names = tuple((c.name, c.automaton.name) for c in model.components)
     single = model.single
-    key = (model.name, single, names, tuple(id(o) for trio in objects for o in trio))
+    # the modes generated are those reachable from the initial one: another start is
+    # another structure (with_initial keeps the locations objects)
+    key = (model.name, single, names, model.initial_mode,
+           tuple(id(o) for trio in objects for o in trio))  # fmt: skip
     return key, objects
 
 

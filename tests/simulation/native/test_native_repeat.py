@@ -372,3 +372,33 @@ def test_a_run_in_the_main_thread_is_stopped_by_ctrl_c_through_the_watcher() -> 
         signal.set_wakeup_fd(old)
         os.close(theirs_read)
         os.close(theirs_write)
+
+
+def test_a_system_started_in_another_mode_is_another_structure(tmp_path: Any) -> None:
+    """The modes generated are those reachable from the initial one: the structure of
+    (c4, d2) has no (c1, d1), and a run started there raised KeyError once the other had
+    been compiled in the process. Closed forms (no edges): x = t in c1 and 0 in c4,
+    y = 2 t in d1 and -t in d2."""
+    (tmp_path / "c.yaml").write_text(
+        "automaton: c\nstate: {x: {initial: 0}}\n"
+        "locations: {c1: {flow: {x: 1}}, c4: {flow: {x: 0}}}\ninitial: {location: [c1, c4]}\n"
+    )
+    (tmp_path / "d.yaml").write_text(
+        "automaton: d\nstate: {y: {initial: 0}}\n"
+        "locations: {d1: {flow: {y: 2}}, d2: {flow: {y: -1}}}\ninitial: {location: [d1, d2]}\n"
+    )
+    (tmp_path / "cd.yaml").write_text("system: cd\ncomponents: [{spec: c.yaml}, {spec: d.yaml}]\n")
+    from dataclasses import replace
+
+    system = hybrid.load(tmp_path / "cd.yaml")
+
+    def starting(c: str, d: str) -> Any:
+        parts = (replace(system.components[0], automaton=system.components[0].automaton.with_initial(c)),
+                 replace(system.components[1], automaton=system.components[1].automaton.with_initial(d)))  # fmt: skip
+        return replace(system, components=parts)
+
+    late = hybrid.simulate(starting("c4", "d2"), 3.0, backend="compiled")
+    early = hybrid.simulate(starting("c1", "d1"), 3.0, backend="compiled")
+    assert (late["x"][-1], late["y"][-1]) == (0.0, pytest.approx(-3.0))
+    assert (early["x"][-1], early["y"][-1]) == (pytest.approx(3.0), pytest.approx(6.0))
+    assert early.location[-1] == "c.c1|d.d1"
