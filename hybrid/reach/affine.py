@@ -66,6 +66,14 @@ class Rows:
     vec: Array
     strict: NDArray[np.bool_] | None = None
 
+    def bound(self, lhs: Array) -> NDArray[np.bool_]:
+        """Per point (a row of ``lhs``, the rows' left-hand sides there) and row, whether the
+        row holds as written: ``<=``, or ``<`` where it is strict."""
+        vec = self.vec[None, :]
+        if self.strict is None:
+            return lhs <= vec
+        return np.where(self.strict[None, :], lhs < vec, lhs <= vec)
+
 
 Condition = tuple[Rows, ...]
 """A disjunction of conjunctions; ``()`` is false."""

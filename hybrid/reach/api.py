@@ -208,7 +208,12 @@ def _within(cond: Condition, forms: Forms, t_end: float) -> Condition:
     row = np.zeros(len(forms.variables))
     row[forms.index[TIME]] = 1.0
     return tuple(
-        Rows(np.vstack([c.mat, row[None, :]]), np.concatenate([c.vec, [t_end]])) for c in cond
+        Rows(
+            np.vstack([c.mat, row[None, :]]),
+            np.concatenate([c.vec, [t_end]]),
+            None if c.strict is None else np.append(c.strict, False),
+        )
+        for c in cond
     )
 
 

@@ -29,9 +29,10 @@ returns is checked exactly, without a simulation:
   between-step bounds for one point and one input value,
   :mod:`hybrid.reach.flowpipe`; zero on a coordinate whose flow is a constant,
   as a clock's). On every such box the location's invariant holds for every
-  input value (up to :data:`~hybrid.reach.witness.WITNESS_TOL`, a boundary
-  touched) and every guard of an edge out of it fails for every input value: no
-  jump is forced and time may pass. ``cond`` itself must be read ``for all u``
+  input value, as written, and every guard of an edge out of it fails for
+  every input value, by more than the simulator's band: no jump is forced and
+  time may pass. Conditions on clocks (``t`` among them) hold as written too,
+  a strict one strictly. ``cond`` itself must be read ``for all u``
   (:meth:`hybrid.reach.affine.Forms.condition`): the end point is in it
   whatever the input's value there. A
   location that is urgent, or a run that may meet a guard, is left to the
@@ -155,7 +156,8 @@ def _split(case: Rows, fixed: NDArray[np.bool_]) -> tuple[Array, float, Rows] | 
     state = np.flatnonzero(~side)
     if len(state) != 1:
         return None
-    return case.mat[state[0]], float(case.vec[state[0]]), Rows(case.mat[side], case.vec[side])
+    strict = None if case.strict is None else case.strict[side]
+    return case.mat[state[0]], float(case.vec[state[0]]), Rows(case.mat[side], case.vec[side], strict)
 
 
 @dataclass(frozen=True)
@@ -168,14 +170,12 @@ class _Clocks:
     rate: Array
 
     def hold(self, t: Array) -> NDArray[np.bool_]:
-        """Which times ``t`` satisfy the rows (an equality up to WITNESS_TOL)."""
+        """Which times ``t`` satisfy the rows as written (a strict row strictly: ``c > 1``
+        with ``c`` held at 1 never holds, nor ``t > 3`` at ``t = 3``)."""
         if len(self.rows.vec) == 0:
             return np.ones(len(t), dtype=bool)
         values = self.x0[None, :] + t[:, None] * self.rate[None, :]
-        lhs = values @ self.rows.mat.T
-        scale = np.abs(values) @ np.abs(self.rows.mat).T + np.abs(self.rows.vec)[None, :]
-        vec = self.rows.vec[None, :]
-        ok: NDArray[np.bool_] = np.all(lhs <= vec + WITNESS_TOL * (1.0 + scale), axis=1)
+        ok: NDArray[np.bool_] = np.all(self.rows.bound(values @ self.rows.mat.T), axis=1)
         return ok
 
 
@@ -294,7 +294,9 @@ def _legal(mode: Mode, pts: Array, u: Array, h: float, t_index: int) -> bool:
         lo, hi = lo - err, hi + err
     pad = FP_MARGIN * np.maximum(np.abs(lo), np.abs(hi))
     lo, hi = lo - pad, hi + pad
-    if not any(bool(np.all(_top(r, lo, hi) <= _bound(r, lo, hi))) for r in mode.invariant_all):
+    # the invariant held as written on every segment (not within a tolerance: past the
+    # simulator's band a run that leaves it by a hair is blocked)
+    if not any(bool(np.all(r.bound(_top(r, lo, hi)))) for r in mode.invariant_all):
         return False  # the invariant may fail on some segment
     # the simulator takes a guard within its band of the boundary: failing by more is failing
     near = band(lo, hi, t_index)[:, None]

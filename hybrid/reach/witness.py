@@ -226,8 +226,5 @@ def _inside(points: NDArray[np.float64], condition: Condition) -> NDArray[np.boo
     """Which ``points`` (rows: state, then time) satisfy a case of ``condition`` exactly."""
     found = np.zeros(len(points), dtype=bool)
     for case in condition:
-        lhs = points @ case.mat.T
-        vec = case.vec[None, :]
-        strict = np.zeros(len(case.vec), dtype=bool) if case.strict is None else case.strict
-        found |= np.all(np.where(strict[None, :], lhs < vec, lhs <= vec), axis=1)
+        found |= np.all(case.bound(points @ case.mat.T), axis=1)
     return found

@@ -108,3 +108,31 @@ properties: {forbidden: [{when: x >= 1.5}]}
         atol=1e-12,
     )
     assert replay["x"].max() >= 1.5 and replay.termination.t > entry.witness_time  # not blocked
+
+
+CLOCKED = """
+automaton: clk
+state: {c: {initial: 1}, y: {initial: [0, 0.1]}}
+locations: {a: {flow: {c: 0, y: 1}}}
+properties: {forbidden: [{when: y >= 0.5 and c > 1}, {when: y >= 0.5 and t > 3}]}
+"""
+PINNED = """
+automaton: biginv
+state: {x: {initial: 999999.0}, y: {initial: [0, 0.001]}}
+locations: {a: {flow: {x: 1, y: 1}, invariant: x <= 1.0e6}}
+properties: {forbidden: [{when: y >= 1.0022}]}
+"""
+
+
+def test_an_exact_refutation_holds_clock_rows_and_invariants_as_written() -> None:
+    """c stays 1 (c' = 0), so 'c > 1' never holds; t > 3 does not hold at t = 3; and x
+    reaches its invariant's 1e6 at t = 1, where y <= 1.001 < 1.0022. All three were
+    refuted by the exact path: clock rows within 1e-9 and strictness dropped, the
+    invariant within 1e-9 (1 + 2e6), twenty times the simulator's band."""
+    clocked = hybrid.reach(hybrid.load_text(CLOCKED), 3.0, step=0.01, refute_first=True)
+    assert [p.verdict for p in clocked.properties] == ["unknown", "unknown"]
+    pinned = hybrid.load_text(PINNED)
+    (entry,) = hybrid.reach(pinned, 3.0, step=0.01, refute_first=True).properties
+    assert entry.verdict != "refuted"
+    run = hybrid.simulate(pinned, 3.0, initial={"y": 0.001}, handle_sigint=False)
+    assert run.termination.cause == "blocked" and run["y"].max() < 1.0022
