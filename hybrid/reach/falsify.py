@@ -29,9 +29,9 @@ returns is checked exactly, without a simulation:
   between-step bounds for one point and one input value,
   :mod:`hybrid.reach.flowpipe`; zero on a coordinate whose flow is a constant,
   as a clock's). On every such box the location's invariant holds for every
-  input value, as written, and every guard of an edge out of it fails for
-  every input value, by more than the simulator's band: no jump is forced and
-  time may pass. Conditions on clocks (``t`` among them) hold as written too,
+  input value, up to the simulator's band (a boundary touched, not passed), and
+  every guard of an edge out of it fails for every input value, by more than
+  that band: no jump is forced and time may pass. Conditions on clocks (``t`` among them) hold as written too,
   a strict one strictly. ``cond`` itself must be read ``for all u``
   (:meth:`hybrid.reach.affine.Forms.condition`): the end point is in it
   whatever the input's value there. A
@@ -294,12 +294,12 @@ def _legal(mode: Mode, pts: Array, u: Array, h: float, t_index: int) -> bool:
         lo, hi = lo - err, hi + err
     pad = FP_MARGIN * np.maximum(np.abs(lo), np.abs(hi))
     lo, hi = lo - pad, hi + pad
-    # the invariant held as written on every segment (not within a tolerance: past the
-    # simulator's band a run that leaves it by a hair is blocked)
-    if not any(bool(np.all(r.bound(_top(r, lo, hi)))) for r in mode.invariant_all):
-        return False  # the invariant may fail on some segment
-    # the simulator takes a guard within its band of the boundary: failing by more is failing
+    # the simulator decides the invariant and the guards within its band of their boundary:
+    # a run that touches the invariant's boundary (within the band) holds it there, one
+    # that goes further is blocked; a guard failing by more than the band is failing
     near = band(lo, hi, t_index)[:, None]
+    if not any(bool(np.all(_top(r, lo, hi) <= r.vec[None, :] + near)) for r in mode.invariant_all):
+        return False  # the invariant may fail on some segment
     for tr in mode.transitions:
         for rows in tr.guard:
             # every segment needs a row of the case that fails throughout it
