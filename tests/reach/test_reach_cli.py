@@ -185,9 +185,10 @@ def test_check_decides_forbidden_entries_with_reach(tmp_path: Path) -> None:
     plain = run_cli("check", proved)
     assert plain.returncode == 0 and "warning property-unproved" in plain.stdout
     with_reach = run_cli("check", proved, "--reach-t-end", "6")
-    assert with_reach.returncode == 0 and with_reach.stdout.strip() == f"{proved}: ok"
+    bounded = "ok (forbidden states: within t <= 6 and 10 jumps)"
+    assert with_reach.returncode == 0 and with_reach.stdout.strip() == f"{proved}: {bounded}"
     in_spec = _spec(tmp_path, proved.read_text() + "checks: {reach: {t_end: 6}}\n", "s.yaml")
-    assert run_cli("check", in_spec).stdout.strip() == f"{in_spec}: ok"
+    assert run_cli("check", in_spec).stdout.strip() == f"{in_spec}: {bounded}"
     refuted = _spec(tmp_path, REFUTED + "checks: {reach: {t_end: 6}}\n", "r.yaml")
     done = run_cli("check", refuted)
     assert done.returncode == 1
