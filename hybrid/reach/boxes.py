@@ -58,7 +58,7 @@ def band(lo: Array, hi: Array, columns: int) -> Array:
 
     Examples
     --------
-    >>> [round(b, 12) for b in band(np.array([[-1e9, 0.0, 5.0]]), np.array([[2.0, 1.0, 6.0]]), 2)]
+    >>> band(np.array([[-1e9, 0.0, 5.0]]), np.array([[2.0, 1.0, 6.0]]), 2).round(12).tolist()
     [0.1000000001]
     """
     if columns == 0:

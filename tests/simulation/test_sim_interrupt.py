@@ -24,6 +24,7 @@ locations:
 LAUNCHER = """
 import sys
 import hybrid.cli.main, hybrid.cli.simulate, hybrid.simulation.engine, hybrid.export.trajectory, hybrid.reader.loader
+import hybrid.simulation.reference  # the scipy engine, which simulate imports on its first run
 print("ready", flush=True)
 sys.exit(hybrid.cli.main(sys.argv[1:]))
 """
