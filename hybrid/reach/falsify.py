@@ -31,8 +31,8 @@ returns is checked exactly, without a simulation:
   as a clock's). On every such box the location's invariant holds for every
   input value, up to the simulator's band (a boundary touched, not passed), and
   every guard of an edge out of it fails for every input value, by more than
-  that band: no jump is forced and time may pass. Conditions on clocks (``t`` among them) hold as written too,
-  a strict one strictly. ``cond`` itself must be read ``for all u``
+  that band: no jump is forced and time may pass. Conditions on clocks (``t``
+  among them) hold as written too, a strict one strictly. ``cond`` itself must be read ``for all u``
   (:meth:`hybrid.reach.affine.Forms.condition`): the end point is in it
   whatever the input's value there. A
   location that is urgent, or a run that may meet a guard, is left to the
@@ -72,7 +72,7 @@ from hybrid.reach.affine import TIME, Condition, Forms, Rows
 from hybrid.reach.boxes import band
 from hybrid.reach.engine import Mode
 from hybrid.reach.flowpipe import FP_MARGIN, exp_matrices
-from hybrid.reach.witness import WITNESS_TOL, Candidate, PiecewiseConstant
+from hybrid.reach.witness import Candidate, PiecewiseConstant
 
 __all__ = ["BLOCK", "ENTER", "MARGIN", "Refutation", "refute"]
 
@@ -84,6 +84,9 @@ MARGIN = 1e-8
 ENTER = 1e-6
 """Relative margin of the support over the case's bound at the step aimed at: a hundred
 times :data:`MARGIN`, and a thousand times the tolerances a replay is simulated with."""
+GUARD_TOL = 1e-9
+"""Relative widening of a guard's bound, on top of the simulator's band, before a run's
+segment counts as failing it (rounding of the propagated points)."""
 
 
 @dataclass(frozen=True)
@@ -322,6 +325,6 @@ def _bottom(rows: Rows, lo: Array, hi: Array) -> Array:
 
 
 def _bound(rows: Rows, lo: Array, hi: Array) -> Array:
-    """Per box and row, ``vec`` widened by WITNESS_TOL relative to the row's magnitude."""
+    """Per box and row, ``vec`` widened by :data:`GUARD_TOL` relative to the row's magnitude."""
     size = np.maximum(np.abs(lo), np.abs(hi)) @ np.abs(rows.mat).T
-    return rows.vec[None, :] + WITNESS_TOL * (1.0 + size + np.abs(rows.vec)[None, :])
+    return rows.vec[None, :] + GUARD_TOL * (1.0 + size + np.abs(rows.vec)[None, :])

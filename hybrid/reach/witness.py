@@ -46,8 +46,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-WITNESS_TOL = 1e-9
-"""Relative tolerance of a stored point on a forbidden set's boundary (an equality ``t == 20``)."""
 
 
 @dataclass(frozen=True)
