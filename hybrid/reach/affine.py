@@ -74,6 +74,17 @@ class Rows:
             return lhs <= vec
         return np.where(self.strict[None, :], lhs < vec, lhs <= vec)
 
+    def conjoin(self, other: Rows) -> Rows:
+        """These rows and ``other``'s, each keeping whether it is strict."""
+        strict = None
+        if self.strict is not None or other.strict is not None:
+            strict = np.concatenate([part.flags() for part in (self, other)])
+        return Rows(np.vstack([self.mat, other.mat]), np.concatenate([self.vec, other.vec]), strict)
+
+    def flags(self) -> NDArray[np.bool_]:
+        """Which rows are strict (all False where none is said to be)."""
+        return np.zeros(len(self.vec), dtype=bool) if self.strict is None else self.strict
+
 
 Condition = tuple[Rows, ...]
 """A disjunction of conjunctions; ``()`` is false."""

@@ -207,14 +207,8 @@ def _within(cond: Condition, forms: Forms, t_end: float) -> Condition:
     """The condition cut to ``t <= t_end`` (contact beyond the horizon does not count)."""
     row = np.zeros(len(forms.variables))
     row[forms.index[TIME]] = 1.0
-    return tuple(
-        Rows(
-            np.vstack([c.mat, row[None, :]]),
-            np.concatenate([c.vec, [t_end]]),
-            None if c.strict is None else np.append(c.strict, False),
-        )
-        for c in cond
-    )
+    cut = Rows(row[None, :], np.array([t_end]))
+    return tuple(c.conjoin(cut) for c in cond)
 
 
 def _decide(

@@ -234,20 +234,7 @@ def mode_of(forms: Forms, key: tuple[str, ...]) -> Mode:
 
 
 def _and(left: Condition, right: Condition) -> Condition:
-    return tuple(
-        Rows(np.vstack([p.mat, q.mat]), np.concatenate([p.vec, q.vec]), _strict(p, q))
-        for p in left
-        for q in right
-    )
-
-
-def _strict(*parts: Rows) -> NDArray[np.bool_] | None:
-    """The strict flags of rows stacked from ``parts`` (None: every row non-strict)."""
-    if all(p.strict is None for p in parts):
-        return None
-    return np.concatenate(
-        [np.zeros(len(p.vec), dtype=bool) if p.strict is None else p.strict for p in parts]
-    )
+    return tuple(p.conjoin(q) for p in left for q in right)
 
 
 def initial_boxes(forms: Forms) -> list[tuple[tuple[str, ...], Array, Array]]:
