@@ -55,7 +55,7 @@ from hybrid.analysis.linear import structural_key
 from hybrid.analysis.solve import Box, Env, closure, conjoin, contract, negate, satisfiable
 from hybrid.expr import ir
 from hybrid.expr.interval import ENTIRE, Interval
-from hybrid.expr.rho import levels
+from hybrid.expr.rho import level_key, levels
 from hybrid.expr.transform import bind_parameters
 from hybrid.model import Automaton, Edge
 
@@ -118,12 +118,8 @@ def _may_snap(automaton: Automaton) -> list[bool]:
     the guard's levels (reads an equality atom over the same variables)."""
     params = automaton.parameters
 
-    def keys(edge: Edge) -> set[frozenset[str]]:
-        guard = bind_parameters(edge.guard, params)
-        return {
-            frozenset(ir.names_in(d) - ir.names_in(d, ir.PARAM) - ir.names_in(d, ir.CONST))
-            for d in levels(guard)
-        }
+    def keys(edge: Edge) -> set[str]:  # the simulator's identity of a level, one automaton
+        return {level_key(d, ()) for d in levels(bind_parameters(edge.guard, params))}
 
     read = [keys(edge) for edge in automaton.edges]
     into: dict[str, list[int]] = {}
