@@ -118,6 +118,7 @@ def check(
     if t_end is None or not props.forbidden:
         return report
     max_jumps = reach_max_jumps if reach_max_jumps is not None else props.reach_max_jumps
+    jumps = 10 if max_jumps is None else max_jumps
     step = reach_step if reach_step is not None else props.reach_step
     from hybrid.reach.api import reach
 
@@ -125,7 +126,7 @@ def check(
         result = reach(
             model,
             t_end,
-            max_jumps=10 if max_jumps is None else max_jumps,
+            max_jumps=jumps,
             step=step,
             refute_first=True,  # only the verdicts are needed: no sets for a refuted entry
         )
@@ -134,9 +135,8 @@ def check(
         notes = {
             id(f): replace(f, message=f"{f.message}; reach was not used: {why}") for f in unproved
         }
-        return Report(tuple(notes.get(id(f), f) for f in report.findings), report.name, report.file)
+        return replace(report, findings=tuple(notes.get(id(f), f) for f in report.findings))
     verdicts = {f"forbidden: {p.entry.text()}": p for p in result.properties}
-    jumps = 10 if max_jumps is None else max_jumps
     bounded = f"forbidden states: within t <= {t_end:g} and {jumps} jumps"
     silenced = set(ignore) | set(props.ignore)
     kept: list[Finding] = []
@@ -160,7 +160,7 @@ def check(
                 )
         elif p.verdict == "unknown":
             kept.append(replace(f, message=f"{f.message}; reach: {p.message}"))
-    return Report(tuple(kept), report.name, report.file, report.repeated, bounded)
+    return replace(report, findings=tuple(kept), bounded=bounded)
 
 
 def _check_arguments(max_states: object, max_bytes: object, progress: object,
