@@ -84,15 +84,10 @@ def refuse_compiled(model: Any, points: Sequence[dict[str, float]], plan: RunPla
     hybrid.errors.UsageError: the compiled backend integrates with RK45 (Dormand–Prince 5(4)); method 'RK23' needs backend 'scipy' (or 'auto', which chooses it)
     """
     from hybrid.compose import as_system
-    from hybrid.simulation.native.features import METHOD, refuse_unsupported
+    from hybrid.simulation.native.features import METHOD, refuse_method, refuse_unsupported
 
     instead = "backend 'scipy' (or 'auto', which chooses it)"
-    method = plan.solver.get("method", METHOD)
-    if method != METHOD:
-        raise UsageError(
-            f"the compiled backend integrates with {METHOD} (Dormand–Prince 5(4)); method "
-            f"'{method}' needs {instead}"
-        )
+    refuse_method(str(plan.solver.get("method", METHOD)), instead)
     if plan.inputs:
         raise UsageError(
             f"the compiled backend cannot drive input '{plan.inputs[0][0]}' with an expression "

@@ -7,7 +7,9 @@ list, all here: a method other than RK45 and inputs given as Python functions
 (:func:`refuse_unsupported`), more than :data:`MAX_MODES` modes
 (:func:`too_many_modes`), a library function without a compiled form
 (:func:`no_compiled_form`), and requirements in an ensemble
-(:func:`refuse_requirements`); :func:`refusal` says any of the first three in words.
+(:func:`refuse_requirements`); :func:`refusal` says any of the first three in words. A
+campaign asked to run compiled is refused the same way before its first run
+(:func:`hybrid.campaigns.choosing.refuse_compiled`).
 Everything not refused here runs as the scipy backend runs it (the agreement
 tests of ``tests/simulation/native`` show each construct).
 
@@ -48,6 +50,7 @@ __all__ = [
     "check_supported",
     "no_compiled_form",
     "refusal",
+    "refuse_method",
     "refuse_requirements",
     "refuse_unsupported",
     "too_many_modes",
@@ -65,15 +68,21 @@ run meets."""
 
 def check_supported(settings: Settings, inputs: Mapping[str, Any] | None) -> None:
     """Refuse the settings and inputs the compiled backend does not take, naming them."""
-    if settings.method != METHOD:
-        raise UsageError(
-            f"the compiled backend integrates with RK45 (Dormand–Prince 5(4)); method "
-            f"'{settings.method}' needs backend='scipy'"
-        )
+    refuse_method(settings.method)
     if inputs:
         raise UsageError(
             "the compiled backend cannot call external inputs given as Python functions "
             "(inputs=...); use backend='scipy'"
+        )
+
+
+def refuse_method(method: str, instead: str = "backend='scipy'") -> None:
+    """Raise :class:`UsageError` for a ``method`` other than :data:`METHOD`, pointing at
+    ``instead``."""
+    if method != METHOD:
+        raise UsageError(
+            f"the compiled backend integrates with {METHOD} (Dormand–Prince 5(4)); method "
+            f"'{method}' needs {instead}"
         )
 
 
