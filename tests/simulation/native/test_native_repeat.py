@@ -388,17 +388,11 @@ def test_a_system_started_in_another_mode_is_another_structure(tmp_path: Any) ->
         "locations: {d1: {flow: {y: 2}}, d2: {flow: {y: -1}}}\ninitial: {location: [d1, d2]}\n"
     )
     (tmp_path / "cd.yaml").write_text("system: cd\ncomponents: [{spec: c.yaml}, {spec: d.yaml}]\n")
-    from dataclasses import replace
+    from hybrid.reach.witness import starting_in
 
     system = hybrid.load(tmp_path / "cd.yaml")
-
-    def starting(c: str, d: str) -> Any:
-        parts = (replace(system.components[0], automaton=system.components[0].automaton.with_initial(c)),
-                 replace(system.components[1], automaton=system.components[1].automaton.with_initial(d)))  # fmt: skip
-        return replace(system, components=parts)
-
-    late = hybrid.simulate(starting("c4", "d2"), 3.0, backend="compiled")
-    early = hybrid.simulate(starting("c1", "d1"), 3.0, backend="compiled")
+    late = hybrid.simulate(starting_in(system, ("c4", "d2")), 3.0, backend="compiled")
+    early = hybrid.simulate(starting_in(system, ("c1", "d1")), 3.0, backend="compiled")
     assert (late["x"][-1], late["y"][-1]) == (0.0, pytest.approx(-3.0))
     assert (early["x"][-1], early["y"][-1]) == (pytest.approx(3.0), pytest.approx(6.0))
     assert early.location[-1] == "c.c1|d.d1"
