@@ -57,6 +57,8 @@ SAFETY = 0.9
 MIN_FACTOR = 0.2
 MAX_FACTOR = 10.0
 ERROR_EXPONENT = -1.0 / 5.0
+TEN_EPS = 2.220446049250313e-15
+"""``10 * 2**-52``, exactly: ``10 * spacing(t) <= TEN_EPS * |t|`` for every normal ``t``."""
 
 C2, C3, C4, C5 = 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0
 A21 = 1.0 / 5.0
@@ -148,13 +150,18 @@ def rk45_step(
     z = wf[wi[W_YTMP] : wi[W_YTMP] + d]
     p_c = at(p, 0)
     k_at = wi[W_K]  # K[s, i] at wf[k_at + s * d + i] (flat: a reshape calls numba's runtime)
-    min_step = 10.0 * abs(np.nextafter(t, math.inf) - t)
+    # scipy's minimum step, 10 * spacing(t), is at most ``above``: worked out only below it
+    # (``nextafter`` is a call into the C library, a twentieth of a short run's step)
+    above = TEN_EPS * abs(t) + 1e-300
+    min_step = 10.0 * abs(np.nextafter(t, math.inf) - t) if h_abs < above else 0.0
     if h_abs > max_step:
         h_abs = max_step
     elif h_abs < min_step:
         h_abs = min_step
     rejected = False
     while True:
+        if h_abs < above and min_step == 0.0:
+            min_step = 10.0 * abs(np.nextafter(t, math.inf) - t)
         if h_abs < min_step:
             return False, t, h_abs, 0.0
         t_new = t + h_abs

@@ -164,6 +164,41 @@ def test_the_integrator_is_scipys_rk45() -> None:
     np.testing.assert_array_equal(integrator.ERROR, e)
 
 
+def test_the_minimum_step_is_worked_out_wherever_it_can_bind() -> None:
+    # the step works out scipy's minimum, 10 * spacing(t), only when the step is below
+    # TEN_EPS * |t| + 1e-300: that must bound it for every t (numpy's spacing, the truth)
+    rng = np.random.default_rng(7)
+    ts = np.concatenate([
+        2.0 ** np.arange(-1074, 1024, dtype=np.float64),  # every power of two, subnormals too
+        np.nextafter(2.0 ** np.arange(-1022, 1023, dtype=np.float64), 0.0),  # just below them
+        rng.uniform(-1e6, 1e6, 10_000), rng.lognormal(0.0, 50.0, 10_000), [0.0, 5e-324, 1e308],
+    ])  # fmt: skip
+    ts = np.concatenate([ts, -ts])
+    minimum = 10.0 * np.abs(np.nextafter(ts, np.inf) - ts)
+    assert np.all(minimum <= integrator.TEN_EPS * np.abs(ts) + 1e-300)
+    assert integrator.TEN_EPS == 10 * 2.0**-52
+
+
+def test_a_collapsing_step_ends_the_run_as_on_scipy() -> None:
+    # x' = x**2 from 1 blows up at t = 1: both backends' steps collapse just before it, after
+    # as many steps, where the step falls below scipy's minimum (10 * spacing(t))
+    blowup = hybrid.load_text(
+        "automaton: blowup\nstate: {x: {initial: 1.0}}\n"
+        "locations:\n  run: {flow: {x: x**2}}\ninitial: {location: run}\n"
+    )
+    tolerances = {"rtol": 1e-10, "atol": 1e-12}
+    runs = [
+        hybrid.simulate(blowup, t_end=2.0, backend=backend, handle_sigint=False, **tolerances)
+        for backend in ("scipy", "compiled")
+    ]
+    for run in runs:
+        assert run.termination.cause == "solver_failure"
+        assert "step size is less than spacing" in run.termination.message
+        assert 1.0 - 1e-10 < run.termination.t < 1.0
+    assert len(runs[0].t) == len(runs[1].t)
+    assert abs(runs[1].termination.t - runs[0].termination.t) < 1e-13
+
+
 def test_small_models_compile_as_one_function_large_ones_apart() -> None:
     from hybrid.simulation.native.source import INLINE_LINES, generate
     from hybrid.simulation.native.structure import NativeModel
