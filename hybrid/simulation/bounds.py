@@ -122,18 +122,25 @@ def bound_excursions(
     *,
     rtol: float,
     atol: float,
+    extremes: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> tuple[BoundExcursion, ...]:
     """Per bounded state variable, the first stored point beyond its bounds (tolerance above).
 
     A non-finite value is not an excursion: the run ends ``nonfinite`` and says so.
+    ``extremes``: each state's smallest and largest value over the points (NaN
+    left out), where the run kept them (``run.stored_extremes()``); else
+    they are worked out here, a column at a time.
     """
     found: list[BoundExcursion] = []
     for k, var, low, high in _checks(declared, names, rtol, atol):
         column = states[:, k]
         # its extremes (NaN left out) within: no point beyond (half the cost); an infinite
         # side cannot be passed, so its extreme is not looked for
-        if column.size == 0 or not ((low != -math.inf and _FMIN(column) < low)
-                                    or (high != math.inf and _FMAX(column) > high)):  # fmt: skip
+        if extremes is not None:
+            if not (extremes[0][k] < low or extremes[1][k] > high):
+                continue
+        elif column.size == 0 or not ((low != -math.inf and _FMIN(column) < low)
+                                      or (high != math.inf and _FMAX(column) > high)):  # fmt: skip
             continue
         below = column < low
         above = column > high

@@ -173,8 +173,9 @@ def simulate(
         run = simulate_reference(model, settings, initial, inputs, handle_sigint, progressed)
     run.settings["start"] = start
     run.out_of_bounds = bound_excursions(
-        model.states, run.state_names, *run.checked_columns(), rtol=settings.rtol, atol=settings.atol
-    )
+        model.states, run.state_names, *run.checked_columns(), rtol=settings.rtol,
+        atol=settings.atol, extremes=run.stored_extremes(),
+    )  # fmt: skip
     if run.out_of_bounds:
         warn_excursions(run.out_of_bounds)
     if tracker is not None:

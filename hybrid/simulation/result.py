@@ -189,6 +189,11 @@ class Run:
         making its columns): rows in order, ``j`` as numbers."""
         return self.t, self.j, self.states
 
+    def stored_extremes(self) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+        """The smallest and largest value of each state over the points, NaNs left out, where
+        the run kept them as it went (a compiled run); else None (not worked out here)."""
+        return None
+
     @property
     def columns(self) -> tuple[str, ...]:
         return (*self.state_names, *self.signal_names)

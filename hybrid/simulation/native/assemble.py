@@ -555,8 +555,18 @@ def run_from(
         requirements={},
         _rows=buf.pts[:n].copy(),
         _names=layout.mode_names,
+        _extremes=_extremes(buf, d),
     )  # the fields a Run's __init__ sets, defaults included; not the columns yet
     return run
+
+
+def _extremes(buf: b.RunArrays, d: int) -> NDArray[np.float64] | None:
+    """The states' smallest, then largest values the loop kept in the run's scratch (None
+    where the scratch is not kept: an ensemble's rows)."""
+    if buf.wi.shape[0] <= b.W_EXTREMES:
+        return None
+    at = int(buf.wi[b.W_EXTREMES])
+    return buf.wf[at : at + 2 * d].copy()
 
 
 _COLUMNS = frozenset(("t", "j", "location", "states", "signals"))
@@ -596,7 +606,15 @@ class RecordedRun(Run):
 
     def __reduce__(self) -> tuple[Any, ...]:
         self._unpack()
-        return (_plain_run, (dict(self.__dict__),))
+        fields = {k: v for k, v in self.__dict__.items() if k != "_extremes"}
+        return (_plain_run, (fields,))
+
+    def stored_extremes(self) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+        extremes = self.__dict__.get("_extremes")
+        if extremes is None:
+            return None
+        d = len(self.state_names)
+        return extremes[:d], extremes[d:]
 
     def checked_columns(self) -> tuple[NDArray[np.float64], Any, NDArray[np.float64]]:
         rows = self.__dict__.get("_rows")

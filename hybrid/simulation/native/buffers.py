@@ -155,6 +155,7 @@ __all__ = [
     "W_ARMV",
     "W_D",
     "W_ENABLED",
+    "W_EXTREMES",
     "W_F",
     "W_FAILI",
     "W_FAILX",
@@ -245,7 +246,8 @@ W_TRARMED, W_ENABLED, W_INVARMED, W_FAILI, W_SIGFAIL = 20, 21, 22, 23, 24
 W_NPE, W_X = 25, 26  # W_X: the run's state (a float piece)
 W_USED = 27  # keys of the levels used at this instant: count, then keys
 W_REACHED = 28  # the state where the last stay stopped (a float piece)
-WI_HEADER = 29
+W_EXTREMES = 29  # the smallest, then the largest value of each state over the stored points
+WI_HEADER = 30
 # scalars in wf from wi[W_SCAL]
 # (S_B0: the band at the start of the stay, the shift of the watch's disarmed terms;
 # S_REACHED_T: when the last stay stopped, where W_REACHED holds the state)

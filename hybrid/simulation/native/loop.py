@@ -73,6 +73,7 @@ from hybrid.simulation.native.buffers import (
     W_ARMV,
     W_D,
     W_ENABLED,
+    W_EXTREMES,
     W_F,
     W_FAILI,
     W_FAILX,
@@ -156,6 +157,7 @@ def lay_out_work(tab: Ints, wi: Ints) -> tuple[int, int]:
         (W_RATE, d), (W_AHEAD, d), (W_XNEW, d), (W_TERMS, max_tr + max_inv),
         (W_ARMV, max_tr + max_lv), (W_ZENO, ZENO_SIZE), (W_FAILX, d), (W_FLOWX, d),
         (W_SIGX, d), (W_SCAL, N_SCALARS), (W_PE, n_pe), (W_X, d), (W_REACHED, d),
+        (W_EXTREMES, 2 * d),
     )  # fmt: skip
     at = 0
     for slot, size in sizes:
@@ -198,6 +200,10 @@ def start_work(tab: Ints, p: Array, wf: Array, wi: Ints) -> None:
         wf[sc + i] = math.nan
     wf[sc + S_FLOW_FAIL] = 0.0
     wf[sc + S_GEN] = 0.0
+    ext = wi[W_EXTREMES]
+    for i in range(wi[W_D]):
+        wf[ext + i] = math.inf
+        wf[ext + wi[W_D] + i] = -math.inf
 
 
 def zeno_update(z: Array, t: float) -> float:

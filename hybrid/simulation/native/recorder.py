@@ -55,6 +55,7 @@ from hybrid.simulation.native.buffers import (
     T_MODE_TR,
     W_D,
     W_ENABLED,
+    W_EXTREMES,
     W_FAILI,
     W_FAILX,
     W_PE,
@@ -86,8 +87,13 @@ def record_point(fns: Fns, pts: Array2, oi: Ints, t: float, j: int, m: int, x: A
     row[P_J] = j
     row[P_M] = m
     d = x.shape[0]
+    ext = wi[W_EXTREMES]
     for i in range(d):
         row[P_X + i] = x[i]
+        if x[i] < wf[ext + i]:  # a NaN is neither: left out, as np.fmin leaves it
+            wf[ext + i] = x[i]
+        if x[i] > wf[ext + d + i]:
+            wf[ext + d + i] = x[i]
     signals = row[P_X + d :]
     fns(OP_OUTPUTS, m, t, at(x, 0), at(wf, wi[W_PE]), at(signals, 0))
     for c in range(signals.shape[0]):

@@ -87,6 +87,28 @@ def test_bounds_are_checked_without_making_the_columns() -> None:
     assert reference.out_of_bounds[0].variable == "v"
 
 
+@pytest.mark.parametrize(
+    ("spec", "options"),
+    [
+        ("bouncing_ball.yaml", {"t_end": 3.0, "initial": {"h": 30.0}}),
+        ("bouncing_ball.yaml", {"t_end": 30.0, "dt": 0.01}),  # points outgrow the first room
+        ("thermostat.yaml", {"t_end": 1e4, "max_jumps": 300}),
+    ],
+)
+def test_the_extremes_kept_by_the_loop_are_those_of_the_points(spec: str, options: dict) -> None:
+    model = hybrid.load(SPECS / spec)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", hybrid.BoundsWarning)
+        run = hybrid.simulate(model, backend="compiled", **options, **TOL)
+        reference = hybrid.simulate(model, backend="scipy", **options, **TOL)
+    low, high = run.stored_extremes()
+    assert len(run) > (256 if "dt" in options else 0)  # 256: the first room for points
+    np.testing.assert_array_equal(low, np.fmin.reduce(run.states, axis=0))
+    np.testing.assert_array_equal(high, np.fmax.reduce(run.states, axis=0))
+    assert reference.stored_extremes() is None  # worked out from the columns instead
+    assert [e.variable for e in run.out_of_bounds] == [e.variable for e in reference.out_of_bounds]
+
+
 @pytest.mark.parametrize("how", ["pickle", "copy", "deepcopy"])
 def test_copies_and_pickles_are_plain_runs_with_the_same_columns(how: str) -> None:
     run = hybrid.simulate(BALL, t_end=3.0, backend="compiled", **TOL)
