@@ -251,6 +251,18 @@ class Watch:
         )
         self.generation += 1
 
+    def far_edge_left(self, t: float, x: Any) -> str | None:
+        """The name of a disarmed invariant whose far-edge term ``-rho + b0`` is the watch's
+        least at ``(t, x)``, where a crossing stopped the stay (docs/semantics.md,
+        "Re-arming": at that event the invariant is being left); None if there is none."""
+        if self.value is None:
+            return None
+        least = max(float(self.value(t, x)), 0.0)
+        for inv, armed in zip(self.mode.invariants, self.inv_armed, strict=True):
+            if not armed and self.width - inv.rho(t, x) <= least:
+                return inv.name
+        return None
+
     def arm(self, t: float, x: Any, width: float) -> bool:
         """Arm each disarmed term that is beyond ``width`` on its safe side, and orient each
         level atom read on its level (0) that the state is beyond ``width`` of; True if one was."""

@@ -237,6 +237,10 @@ class EventLoop:
             return self._eval_failure(t, j, mode)
         chosen = boundary.choose(enabled)
         if chosen is None:
+            far = watch.far_edge_left(t, x) if end.kind == "crossing" else None
+            if far is not None:  # a disarmed invariant reached the far edge of its band: left
+                message = f"invariant of {far} is about to be left and no transition is enabled"
+                return Termination("blocked", t, j, message, location=mode.name)
             blocked = self._blocked(mode, t, x, j, "is about to be left")
             if blocked is not None:
                 return blocked

@@ -92,6 +92,8 @@ class StayEnd:
     t: float
     x: np.ndarray
     message: str = ""
+    kind: str = ""
+    """For ``event``: how the search found it, ``crossing`` or ``touch`` (crossing.Found.kind)."""
 
 
 class StayIntegrator:
@@ -180,7 +182,7 @@ class StayIntegrator:
             if event is not None:
                 record.step(curve, event.t)
                 record.close(event.t, event.x)
-                return StayEnd("event", event.t, event.x)
+                return StayEnd("event", event.t, event.x, kind=event.kind)
             flow_failure.clear()  # only at trial points the solver rejected: it stepped around them
             finished = solver.status == "finished"
             if finished or interrupts.requested:

@@ -72,6 +72,39 @@ def test_an_invariant_sitting_on_its_boundary_is_left_at_second_order(
     assert float(run["x"][-1]) - level == pytest.approx(b0, rel=1e-3)
 
 
+WIDE_BAND_INVARIANT = """
+automaton: band_inv
+state:
+  big: {initial: 1.0e9}
+  y: {initial: -0.001}
+locations:
+  a:
+    flow: {y: 0.01}
+    invariant: y <= 0
+"""
+
+
+def test_an_invariant_sitting_in_a_wide_band_is_left_at_its_far_edge(backend: str) -> None:
+    # b0 = 1e-10 (1 + 1e9) = 0.1000000001 (big sets the band). At t = 0, rho = y = -0.001 is
+    # within the band and so is its slope 0.01: sitting, `y <= 0` holds within the band, so
+    # the invariant holds and is disarmed, watched as b0 - y. That term reaches 0 where
+    # y = b0, at t = (b0 + 0.001) / 0.01 = 10.10000001: there the invariant is being left
+    # ("Re-arming"), nothing is enabled, and the run is blocked. The slope test alone still
+    # read it as sitting there: scipy stopped 1000 times at that instant and ended
+    # solver_failure, the compiled backend went on to its next sample (t = 10.1199, y 2e-4
+    # past the far edge) and ended blocked there
+    model = hybrid.load_text(WIDE_BAND_INVARIANT)
+    run = hybrid.simulate(model, t_end=20.0, backend=backend, handle_sigint=False)
+    end = run.termination
+    b0 = band(1e9, 0.001)
+    assert end.cause == "blocked", end
+    assert end.message == "invariant of a is about to be left and no transition is enabled"
+    assert end.t == pytest.approx((b0 + 0.001) / 0.01, rel=1e-12)
+    assert float(run["y"][-1]) == pytest.approx(b0, rel=1e-12)
+    assert float(np.max(run["y"])) <= b0 * (1 + 1e-12)  # never past the far edge of the band
+    assert len(run.jumps) == 0
+
+
 def test_a_strict_guard_sitting_on_its_boundary_fires_when_entered_at_second_order(
     backend: str,
 ) -> None:

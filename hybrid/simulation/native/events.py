@@ -217,6 +217,22 @@ def watch_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Int
     return v
 
 
+def far_edge_left(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints) -> int:
+    """``Watch.far_edge_left``: the place in its mode of a disarmed invariant whose far-edge term
+    ``b0 - rho`` is the watch's least at ``(t, x)`` (a crossing stopped the stay there); -1: none."""
+    watch_terms(fns, m, t, x, wf, wi)
+    least = watch_value(tab, m, t, x, wf, wi)
+    if least < 0.0:
+        least = 0.0
+    n_tr = tab[tab[T_MODE_TR] + m + 1] - tab[tab[T_MODE_TR] + m]
+    inv0 = tab[tab[T_MODE_INV] + m]
+    b0 = wf[wi[W_SCAL] + S_B0]
+    for k in range(tab[tab[T_MODE_INV] + m + 1] - inv0):
+        if wi[wi[W_INVARMED] + k] == 0 and b0 - wf[wi[W_TERMS] + n_tr + k] <= least:
+            return k
+    return -1
+
+
 def arm_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints) -> bool:
     """Arm the disarmed terms beyond the band on their safe side at ``(t, x)``, and orient the
     levels read on them (0) that the state is beyond the band of; True if one was.

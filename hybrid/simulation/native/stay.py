@@ -79,8 +79,8 @@ from hybrid.simulation.native.buffers import (
     W_Y,
     W_YNEW,
 )
-from hybrid.simulation.native.crossing import EV_FAILED, EV_NONE
-from hybrid.simulation.native.events import watch_terms, watch_value
+from hybrid.simulation.native.crossing import EV_CROSSING, EV_FAILED, EV_NONE
+from hybrid.simulation.native.events import far_edge_left, watch_terms, watch_value
 from hybrid.simulation.native.integrator import dense_eval, initial_step
 from hybrid.simulation.native.kernel_types import (
     Array,
@@ -291,7 +291,9 @@ def flow_stay(fns: Fns, step: StepFn, search: SearchFn, decide: DecideFn, tab: I
                 end_run(oi, of, C_NONFINITE, t_event, j, m, D_EVAL, 0, math.nan, wf, wi)
                 return STAY_DONE, t_event, -1
             if chosen < 0:
-                left = decide(ASK_LEFT, fns, tab, m, t_event, x, wf, wi)
+                left = far_edge_left(fns, tab, m, t_event, x, wf, wi) if kind == EV_CROSSING else -1
+                if left < 0:
+                    left = decide(ASK_LEFT, fns, tab, m, t_event, x, wf, wi)
                 if left >= 0:
                     finish(oi, of, C_BLOCKED, t_event, j, m, D_BLOCKED_FLOW, left, math.nan, wf, wi)
                     return STAY_DONE, t_event, -1
