@@ -251,13 +251,27 @@ class Watch:
         )
         self.generation += 1
 
+    def far_edge_guards(self, t: float, x: Any) -> list[CompiledTransition]:
+        """The disarmed guards whose far-edge term ``rho + b0`` is the watch's least at
+        ``(t, x)``, where a crossing stopped the stay (docs/semantics.md, "Re-arming": a
+        band beyond its boundary, such a guard holds)."""
+        least = self._least(t, x)
+        return [
+            tr for tr, side in zip(self.mode.transitions, self.signs, strict=True)
+            if side is None and tr.rho(t, x) + self.width <= least
+        ]  # fmt: skip
+
+    def _least(self, t: float, x: Any) -> float:
+        """The watch at ``(t, x)``, at least 0 (the root finder may land on either side of 0)."""
+        return max(float(self.value(t, x)), 0.0) if self.value is not None else math.inf
+
     def far_edge_left(self, t: float, x: Any) -> str | None:
         """The name of a disarmed invariant whose far-edge term ``-rho + b0`` is the watch's
         least at ``(t, x)``, where a crossing stopped the stay (docs/semantics.md,
         "Re-arming": at that event the invariant is being left); None if there is none."""
         if self.value is None:
             return None
-        least = max(float(self.value(t, x)), 0.0)
+        least = self._least(t, x)
         for inv, armed in zip(self.mode.invariants, self.inv_armed, strict=True):
             if not armed and self.width - inv.rho(t, x) <= least:
                 return inv.name

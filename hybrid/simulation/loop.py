@@ -236,6 +236,11 @@ class EventLoop:
         if self._failed() is not None:
             return self._eval_failure(t, j, mode)
         chosen = boundary.choose(enabled)
+        if chosen is None and end.kind == "crossing":  # a disarmed guard a band beyond holds
+            enabled = watch.far_edge_guards(t, x)
+            if self._failed() is not None:
+                return self._eval_failure(t, j, mode)
+            chosen = boundary.choose(enabled)
         if chosen is None:
             far = watch.far_edge_left(t, x) if end.kind == "crossing" else None
             if far is not None:  # a disarmed invariant reached the far edge of its band: left

@@ -105,6 +105,38 @@ def test_an_invariant_sitting_in_a_wide_band_is_left_at_its_far_edge(backend: st
     assert len(run.jumps) == 0
 
 
+WIDE_BAND_GUARD = """
+automaton: band_guard
+state:
+  big: {initial: 1.0e9}
+  y: {initial: 0.001}
+locations:
+  a: {flow: {y: -0.01}}
+  b: {flow: {y: 0}}
+edges:
+  - {name: go, from: a, to: b, guard: y < 0}
+"""
+
+
+def test_a_strict_guard_sitting_in_a_wide_band_fires_at_its_far_edge(backend: str) -> None:
+    # the mirror of the invariant above: b0 = 0.1000000001, y = 0.001 - 0.01 t. At t = 0
+    # rho = y is within the band, slope -0.01 too: the strict guard sits and does not hold,
+    # so it is disarmed and watched as y + b0, which reaches 0 where y = -b0, at
+    # t = (0.001 + b0) / 0.01. A band beyond its boundary the guard holds and fires there.
+    # The slope test alone read it as sitting again: scipy stopped 1000 times at that
+    # instant and ended solver_failure, the compiled backend jumped at its next sample
+    # (t = 10.1199, y = -0.1002)
+    model = hybrid.load_text(WIDE_BAND_GUARD)
+    run = hybrid.simulate(model, t_end=20.0, backend=backend, handle_sigint=False)
+    b0 = band(1e9, 0.001)
+    assert run.termination.cause == "t_end", run.termination
+    (jump,) = run.jumps
+    assert jump.edge == "go" and jump.target == "b"
+    assert jump.t == pytest.approx((0.001 + b0) / 0.01, rel=1e-12)
+    assert jump.before["y"] == pytest.approx(-b0, rel=1e-12)
+    assert float(np.min(run["y"])) >= -b0 * (1 + 1e-12)  # never past the far edge
+
+
 def test_a_strict_guard_sitting_on_its_boundary_fires_when_entered_at_second_order(
     backend: str,
 ) -> None:

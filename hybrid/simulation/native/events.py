@@ -48,6 +48,7 @@ from hybrid.simulation.native.buffers import (
     W_AHEAD,
     W_ARMV,
     W_D,
+    W_ENABLED,
     W_INVARMED,
     W_PE,
     W_SCAL,
@@ -56,7 +57,7 @@ from hybrid.simulation.native.buffers import (
 )
 from hybrid.simulation.native.kernel_types import Array, Fns, Ints, at
 
-__all__ = ["arm_at", "orient_by_slope", "orientation", "pending", "watch_at", "watch_min", "watch_start", "watch_terms",
+__all__ = ["arm_at", "far_edge_guards", "far_edge_left", "orient_by_slope", "orientation", "pending", "watch_at", "watch_min", "watch_start", "watch_terms",
            "watch_value"]
 
 # --- kernel ---
@@ -217,13 +218,32 @@ def watch_at(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Int
     return v
 
 
+def _least(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints) -> float:
+    """The watch at ``(t, x)``, at least 0 (the root finder may land on either side of 0)."""
+    watch_terms(fns, m, t, x, wf, wi)
+    least = watch_value(tab, m, t, x, wf, wi)
+    return least if least > 0.0 else 0.0
+
+
+def far_edge_guards(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints) -> bool:
+    """``Watch.far_edge_guards``: flag (``W_ENABLED``) each disarmed guard whose far-edge term
+    ``rho + b0`` is the watch's least at ``(t, x)`` (a crossing stopped the stay there, nothing
+    else enabled); True if one was. The terms are left in ``W_TERMS``."""
+    least = _least(fns, tab, m, t, x, wf, wi)
+    n_tr = tab[tab[T_MODE_TR] + m + 1] - tab[tab[T_MODE_TR] + m]
+    b0 = wf[wi[W_SCAL] + S_B0]
+    found = False
+    for k in range(n_tr):
+        if wi[wi[W_TRARMED] + k] == 0 and wf[wi[W_TERMS] + k] + b0 <= least:
+            wi[wi[W_ENABLED] + k] = 1
+            found = True
+    return found
+
+
 def far_edge_left(fns: Fns, tab: Ints, m: int, t: float, x: Array, wf: Array, wi: Ints) -> int:
     """``Watch.far_edge_left``: the place in its mode of a disarmed invariant whose far-edge term
     ``b0 - rho`` is the watch's least at ``(t, x)`` (a crossing stopped the stay there); -1: none."""
-    watch_terms(fns, m, t, x, wf, wi)
-    least = watch_value(tab, m, t, x, wf, wi)
-    if least < 0.0:
-        least = 0.0
+    least = _least(fns, tab, m, t, x, wf, wi)
     n_tr = tab[tab[T_MODE_TR] + m + 1] - tab[tab[T_MODE_TR] + m]
     inv0 = tab[tab[T_MODE_INV] + m]
     b0 = wf[wi[W_SCAL] + S_B0]

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 
-from hybrid.simulation.native.boundary import note_failure
+from hybrid.simulation.native.boundary import choose, note_failure
 from hybrid.simulation.native.buffers import (
     ASK_EVENT,
     ASK_LEFT,
@@ -80,7 +80,12 @@ from hybrid.simulation.native.buffers import (
     W_YNEW,
 )
 from hybrid.simulation.native.crossing import EV_CROSSING, EV_FAILED, EV_NONE
-from hybrid.simulation.native.events import far_edge_left, watch_terms, watch_value
+from hybrid.simulation.native.events import (
+    far_edge_guards,
+    far_edge_left,
+    watch_terms,
+    watch_value,
+)
 from hybrid.simulation.native.integrator import dense_eval, initial_step
 from hybrid.simulation.native.kernel_types import (
     Array,
@@ -282,6 +287,9 @@ def flow_stay(fns: Fns, step: StepFn, search: SearchFn, decide: DecideFn, tab: I
                 end_run(oi, of, C_NONFINITE, t_event, j, m, D_EVAL, 0, math.nan, wf, wi)
                 return STAY_DONE, t_event, -1
             chosen = decide(ASK_EVENT, fns, tab, m, t_event, x, wf, wi)
+            if chosen < 0 and kind == EV_CROSSING and far_edge_guards(fns, tab, m, t_event, x, wf,
+                                                                      wi):  # fmt: skip
+                chosen = choose(tab, m, wi)  # a disarmed guard a band beyond its boundary holds
             if failed(wi) or wf[sc + S_FLOW_FAIL] != 0.0:
                 if wi[fail] == 0 and wi[wi[W_SIGFAIL]] == 0:  # a flow failure at a trial point
                     wi[fail], wi[fail + 1], wi[fail + 2] = F_FLOW, m, m
