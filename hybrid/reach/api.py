@@ -56,6 +56,9 @@ DEFAULT_STEPS = 4000
 """Steps over the horizon when no step is given (``step = t_end / DEFAULT_STEPS``)."""
 RANDOM_RUNS = 4
 """Seeded random runs tried for a witness after the support and corner candidates."""
+INITIAL_MODES = 16
+"""Initial modes a witness is searched from (in ``initial_boxes`` order): the support and
+corner candidates of each, the random runs from the first."""
 
 
 def reach(
@@ -299,13 +302,15 @@ def _quick(
         def replay(candidate: Candidate = candidate) -> Run | None:
             return simulate_candidate(model, forms, candidate, max_jumps)
 
+        at = _entry_time(replay(), forms, {forms.system.mode_name(key): _condition(forms, entry, key)},
+                         found.at)  # fmt: skip
         return PropertyResult(
             entry,
             "refuted",
-            f"forbidden state '{entry.text()}' is reached at t = {found.at:.9g} "
+            f"forbidden state '{entry.text()}' is reached at t = {at:.9g} "
             f"by a run of the model ({candidate.how})",
             first_contact=first,
-            witness_time=found.at,
+            witness_time=at,
             witness_initial=candidate.initial,
             witness_inputs=dict(candidate.inputs),
             witness_location=_location_of(model, candidate.location),
@@ -313,6 +318,16 @@ def _quick(
             replay=replay,
         )
     return None
+
+
+def _entry_time(run: Run | None, forms: Forms, conditions: dict[str, Condition], at: float) -> float:
+    """When the simulated run of an exact refutation enters the set, bisected on its dense
+    output (the exact walk finds the step it is in by, up to a step late); ``at``, the walk's
+    time, if the simulator's run is not seen in the set by then."""
+    if run is None:
+        return at
+    entered = reaches(run, forms, conditions)
+    return entered if entered is not None and entered <= at else at
 
 
 def _location_of(
@@ -338,20 +353,21 @@ def _witness(
     step: float,
 ) -> tuple[Run, float, Candidate] | None:
     candidates: list[Candidate] = []
-    starts = initial_boxes(forms)
-    mode0, x_lo, x_hi = starts[0]
-    direct = [s for s in contacts if s.jumps == 0 and s.mode == mode0]
-    if direct:
-        a, b, _ = forms.flow(mode0)
-        for direction in _directions(cond, forms):
-            for target in _target_steps(direct, direction, step, t_end):
-                candidates.append(
-                    support_candidate(forms, a, b, x_lo, x_hi, direction, step, target)
-                )
-    candidates = candidates[:6]
-    candidates.extend(corner_candidates(forms, x_lo[:-1], x_hi[:-1], t_end))
-    candidates.extend(random_candidates(forms, x_lo[:-1], x_hi[:-1], t_end, RANDOM_RUNS))
-    candidates = [replace(c, location=mode0) for c in candidates]
+    for k, (mode, x_lo, x_hi) in enumerate(initial_boxes(forms)[:INITIAL_MODES]):
+        # from each initial mode (the first one's candidates first, as many random runs
+        # from it only): a set may be reached from one initial mode and not another
+        direct = [s for s in contacts if s.jumps == 0 and s.mode == mode]
+        here: list[Candidate] = []
+        if direct:
+            a, b, _ = forms.flow(mode)
+            for direction in _directions(cond, forms):
+                for target in _target_steps(direct, direction, step, t_end):
+                    here.append(support_candidate(forms, a, b, x_lo, x_hi, direction, step, target))
+        here = here[:6]
+        here.extend(corner_candidates(forms, x_lo[:-1], x_hi[:-1], t_end))
+        if k == 0:
+            here.extend(random_candidates(forms, x_lo[:-1], x_hi[:-1], t_end, RANDOM_RUNS))
+        candidates.extend(replace(c, location=mode) for c in here)
     for candidate in candidates:
         run = simulate_candidate(model, forms, candidate, max_jumps)
         if run is None:

@@ -177,17 +177,24 @@ def starting_in(model: Automaton | System, location: tuple[str, ...]) -> Automat
     return replace(model, components=parts)
 
 
+BETWEEN = 8
+"""Parts each interval between two stored points of a witness is cut into, to find a visit of
+the forbidden set that leaves it again before the next point (the run's interpolant)."""
+
+
 def reaches(run: Run, forms: Forms, conditions: Mapping[str, Condition]) -> float | None:
-    """The time ``run`` enters the forbidden set, or ``None`` if no stored point is in it.
+    """The time ``run`` enters the forbidden set, or ``None`` if it is not seen in it.
 
     ``conditions`` gives the entry's condition per mode name (``run.location``) of
     the modes in the entry's locations (a location may define the signals it
     reads its own way); a point is in the set when its mode is one of them and
     every row of one case holds as written, a strict row strictly: a point on the
     boundary of ``x > 1``, or a hair below ``x >= 1 + 5e-10``, is not a witness.
-    The time is the first stored point's in the set, or, with the run's dense
-    output, where the interpolant enters it after the point stored before
-    (bisection in the same stay).
+    The run is looked at in its stored points and, with its dense output, at
+    :data:`BETWEEN` parts of each interval between them (a visit between two
+    points counts); the time is where the interpolant enters the set, bisected
+    after the last point seen outside it (in the same stay), else the first
+    stored point's in the set.
     """
     locations = [str(loc) for loc in run.location.tolist()]
     points = np.column_stack([run.states, run.t])
@@ -196,18 +203,49 @@ def reaches(run: Run, forms: Forms, conditions: Mapping[str, Condition]) -> floa
         here = np.array([loc == name for loc in locations], dtype=bool)
         if here.any():
             hits |= here & _inside(points, condition)
-    if not hits.any():
+    first = int(np.argmax(hits)) if hits.any() else len(points)
+    sampled = _sampled_entry(run, locations, conditions, first)
+    if sampled is not None:
+        return _bisect(*sampled)
+    if first == len(points):
         return None
-    k = int(np.argmax(hits))
-    t = float(run.t[k])
-    if k == 0 or run.j[k] != run.j[k - 1]:
+    t = float(run.t[first])
+    if first == 0 or run.j[first] != run.j[first - 1]:
         return t
-    curve = next((c for j, t0, t1, c in run.segments if j == run.j[k] and t0 <= run.t[k - 1]
-                  and t <= t1), None)  # fmt: skip
+    curve = next((c for j, t0, t1, c in run.segments if j == run.j[first]
+                  and t0 <= run.t[first - 1] and t <= t1), None)  # fmt: skip
     if curve is None:
         return t
-    condition = conditions[locations[k]]
-    before = float(run.t[k - 1])
+    return _bisect(float(run.t[first - 1]), t, conditions[locations[first]], curve)
+
+
+def _sampled_entry(
+    run: Run, locations: list[str], conditions: Mapping[str, Condition], upto: int
+) -> tuple[float, float, Condition, Callable[[float], Array]] | None:
+    """The first interval between stored points before point ``upto`` whose interpolant is in
+    the set at one of its :data:`BETWEEN` parts: ``(outside, inside, condition, curve)``, the
+    last time seen outside and the first seen inside; None if there is none."""
+    for j, t0, t1, curve in run.segments:
+        rows = np.flatnonzero((run.j[:upto] == j) & (run.t[:upto] >= t0) & (run.t[:upto] <= t1))
+        if len(rows) < 2 or locations[rows[0]] not in conditions:
+            continue
+        condition = conditions[locations[rows[0]]]
+        starts, ends = run.t[rows[:-1]], run.t[rows[1:]]
+        parts = np.arange(1, BETWEEN) / BETWEEN
+        times = (starts[:, None] + (ends - starts)[:, None] * parts[None, :]).ravel()
+        if not len(times):
+            continue
+        states = np.asarray(curve(times), dtype=float).reshape(len(run.state_names), -1).T
+        inside = _inside(np.column_stack([states, times]), condition)
+        if inside.any():
+            k = int(np.argmax(inside))
+            outside = float(times[k - 1]) if k % (BETWEEN - 1) else float(starts[k // (BETWEEN - 1)])
+            return outside, float(times[k]), condition, curve
+    return None
+
+
+def _bisect(before: float, t: float, condition: Condition, curve: Callable[[float], Array]) -> float:
+    """Where ``curve`` enters ``condition`` in ``(before, t]``: outside at ``before``, inside at ``t``."""
     for _ in range(200):
         middle = 0.5 * (before + t)
         if not before < middle < t:

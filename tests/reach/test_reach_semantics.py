@@ -185,6 +185,88 @@ def test_a_witness_starts_in_the_initial_location_it_was_found_from() -> None:
     assert run["x"][-1] >= 1.0 and entry.witness_time == pytest.approx(0.5, abs=0.02)
 
 
+@pytest.mark.parametrize("step", [0.1, 0.01])
+def test_an_exact_refutation_reports_where_its_run_enters_not_its_step(step: float) -> None:
+    """x' = 1 from 0.5 in b meets x >= 1 at t = 0.5; the exact walk meets it at a step point
+    past that (0.6 at step 0.1, 0.5005 by default) and reported that step's time."""
+    multi = hybrid.load_text(
+        "automaton: multi\nstate: {x: {initial: [0, 0.5]}}\n"
+        "locations: {a: {flow: {x: 0}}, b: {flow: {x: 1}}}\ninitial: {location: [a, b]}\n"
+        "properties: {forbidden: [{location: b, when: x >= 1}]}\n"
+    )
+    (entry,) = hybrid.reach(multi, 2.0, step=step).properties
+    assert entry.verdict == "refuted" and "propagated exactly" in entry.message
+    assert entry.witness_time == pytest.approx(0.5, abs=1e-9)
+
+
+def test_a_visit_between_stored_points_is_the_witness_time() -> None:
+    """x' = 1 from 0 passes 0.5 <= x <= 0.6 at t in [0.5, 0.6] between two stored points of
+    its run (0.111 and 1, the steps growing), and is put back to 0.5 by the jump at t = 1:
+    the first stored point in the set is at t = 1, which was reported."""
+    model = hybrid.load_text(
+        "automaton: reent\nstate: {x: {initial: 0}}\n"
+        "locations: {l1: {flow: {x: 1}}, l2: {flow: {x: 0}}}\n"
+        "edges: [{from: l1, to: l2, guard: x >= 1, reset: {x: 0.5}}]\n"
+        "properties: {forbidden: [{when: x >= 0.5 and x <= 0.6}]}\n"
+    )
+    (entry,) = hybrid.reach(model, 2.0).properties
+    assert entry.verdict == "refuted" and "simulated run" in entry.message
+    assert entry.witness_time == pytest.approx(0.5, abs=1e-9)
+    run = entry.simulated
+    assert run is not None and not any(0.5 <= x <= 0.6 for x in run["x"][run.j == 0])
+
+
+SYNCED = {
+    "C.yaml": """
+automaton: C
+state: {x: {initial: 0}}
+locations:
+  c1: {flow: {x: 1}}
+  c2: {flow: {x: 1}, invariant: x >= 1}
+  c3: {flow: {x: 0}}
+  c4: {flow: {x: 0}}
+labels: [go, stop]
+initial: {location: [c1, c4]}
+edges:
+  - {from: c1, to: c2, label: go}
+  - {from: c2, to: c3, guard: x == 1}
+  - {from: c4, to: c3, label: stop}
+""",
+    "D.yaml": """
+automaton: D
+state: {k: {initial: 0}}
+locations: {d1: {flow: {k: 1}}, d2: {flow: {k: 1}}, d3: {flow: {k: 0}}}
+labels: [go, stop]
+initial: {location: [d2, d1]}
+edges:
+  - {from: d1, to: d3, label: go, guard: k >= 1}
+  - {from: d2, to: d3, label: stop, guard: k >= 2}
+""",
+    "CD.yaml": """
+system: CD
+components: [{spec: C.yaml}, {spec: D.yaml}]
+properties:
+  forbidden:
+    - {locations: {C: c3, D: d3}, when: "x <= 1.5"}
+    - {locations: {C: c3, D: d3}, when: "k >= 1.5"}
+""",
+}
+
+
+def test_a_witness_is_searched_from_every_initial_mode(tmp_path: Path) -> None:
+    """(c3, d3) is reached only from initial modes other than the first, (c1, d2): from
+    (c1, d1), go at k = 1 then x == 1 at t = 1 (x = 1); from (c4, d2), stop at k = 2 (x = 0,
+    k = 2). Witnesses were tried from the first initial mode only: both entries unknown."""
+    for name, text in SYNCED.items():
+        (tmp_path / name).write_text(text, encoding="utf-8")
+    near, late = hybrid.reach(hybrid.load(tmp_path / "CD.yaml"), 3.0).properties
+    assert near.verdict == late.verdict == "refuted"
+    assert near.witness_time == pytest.approx(1.0, abs=1e-9)
+    assert near.witness_location == {"C": "c1", "D": "d1"}
+    assert late.witness_time == pytest.approx(2.0, abs=1e-9)
+    assert late.witness_location == {"C": "c4", "D": "d2"}
+
+
 def test_check_reports_a_run_that_reaches_what_its_analysis_proved() -> None:
     """The analysis decides y >= 0 exactly, so b is entered with y >= 0 and 'b with
     y <= -0.01' was proved, check ok; the simulator's run enters b at y = -0.05."""
