@@ -298,12 +298,9 @@ def _quick(
         if found is None:
             continue
         candidate = replace(found.candidate, location=key)
-
-        def replay(candidate: Candidate = candidate) -> Run | None:
-            return simulate_candidate(model, forms, candidate, max_jumps)
-
-        at = _entry_time(replay(), forms, {forms.system.mode_name(key): _condition(forms, entry, key)},
-                         found.at)  # fmt: skip
+        run = simulate_candidate(model, forms, candidate, max_jumps)  # the witness, and its time
+        condition = _condition(forms, entry, key)
+        at = _entry_time(run, forms, {forms.system.mode_name(key): condition}, found.at)
         return PropertyResult(
             entry,
             "refuted",
@@ -314,8 +311,8 @@ def _quick(
             witness_initial=candidate.initial,
             witness_inputs=dict(candidate.inputs),
             witness_location=_location_of(model, candidate.location),
-            condition=_condition(forms, entry, key),
-            replay=replay,
+            condition=condition,
+            simulated=run,
         )
     return None
 

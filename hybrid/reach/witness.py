@@ -148,8 +148,8 @@ def simulate_candidate(
     inputs: dict[str, Callable[[float], float]] = dict(candidate.inputs)
     for name in forms.unbounded:
         inputs.setdefault(name, PiecewiseConstant(np.zeros(1), np.zeros(1)))
-    if candidate.location is not None:
-        model = starting_in(model, candidate.location)
+    if candidate.location is not None and candidate.location != _initial_mode(model):
+        model = starting_in(model, candidate.location)  # a model of its own: compiled again
     try:
         return simulate(
             model,
@@ -164,6 +164,10 @@ def simulate_candidate(
         )
     except HybridError:
         return None
+
+
+def _initial_mode(model: Automaton | System) -> tuple[str, ...]:
+    return (model.initial_location,) if isinstance(model, Automaton) else model.initial_mode
 
 
 def starting_in(model: Automaton | System, location: tuple[str, ...]) -> Automaton | System:
@@ -233,8 +237,6 @@ def _sampled_entry(
         starts, ends = run.t[rows[:-1]], run.t[rows[1:]]
         parts = np.arange(1, BETWEEN) / BETWEEN
         times = (starts[:, None] + (ends - starts)[:, None] * parts[None, :]).ravel()
-        if not len(times):
-            continue
         states = np.asarray(curve(times), dtype=float).reshape(len(run.state_names), -1).T
         inside = _inside(np.column_stack([states, times]), condition)
         if inside.any():

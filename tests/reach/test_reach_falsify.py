@@ -56,7 +56,7 @@ def test_a_ramp_is_refuted_at_the_first_step_past_its_closed_form_entry() -> Non
         handle_sigint=False,
     )
     assert replay.location[-1] == "up" and replay["x"][-1] == pytest.approx(1.5, rel=1e-9)
-    # the lazily simulated witness is that run
+    # the witness kept is that run, simulated
     assert entry.witness is not None and entry.witness["x"][-1] >= 1.5
 
 
