@@ -24,7 +24,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from hybrid.cli.compile import announce_compile
+from hybrid.cli.compile import compile_notes
 from hybrid.cli.exits import EXIT_FINDINGS, EXIT_OK
 from hybrid.cli.settings import settings_from
 from hybrid.errors import UsageError
@@ -133,27 +133,26 @@ def run_sweep(args: argparse.Namespace) -> int:
     interrupts = Interrupts(notify=_notifier(line))
     with interrupts.installed():
         model = load(args.file)
-        if args.backend == "compiled":
-            announce_compile(args.file, model)
-        table = sweep(
-            model,
-            settings=settings_from(args),
-            grid=grid,
-            vary=vary or None,
-            samples=args.sample,
-            seed=args.seed,
-            sampler=args.sampler,
-            parameters=dict(args.param) or None,
-            inputs=dict(args.input) or None,
-            summaries=args.summary,
-            workers=args.workers,
-            scheduler=args.scheduler,
-            run_timeout=args.run_timeout,
-            out=args.out,
-            resume=args.resume,
-            progress=line if line is not None else False,
-            backend=args.backend,
-        )
+        with compile_notes(args.file, line):
+            table = sweep(
+                model,
+                settings=settings_from(args),
+                grid=grid,
+                vary=vary or None,
+                samples=args.sample,
+                seed=args.seed,
+                sampler=args.sampler,
+                parameters=dict(args.param) or None,
+                inputs=dict(args.input) or None,
+                summaries=args.summary,
+                workers=args.workers,
+                scheduler=args.scheduler,
+                run_timeout=args.run_timeout,
+                out=args.out,
+                resume=args.resume,
+                progress=line if line is not None else False,
+                backend=args.backend,
+            )
     if line is not None:
         line.clear()
     if table.resumed:
@@ -213,24 +212,23 @@ def run_falsify(args: argparse.Namespace) -> int:
     interrupts = Interrupts(notify=_notifier(line))
     with interrupts.installed():
         model = load(args.file)
-        if args.backend == "compiled":
-            announce_compile(args.file, model)
-        result = falsify(
-            model,
-            args.requirement,
-            vary or None,
-            settings=settings_from(args),
-            budget=args.budget,
-            seed=args.seed,
-            sampler=args.sampler,
-            parameters=dict(args.param) or None,
-            inputs=dict(args.input) or None,
-            workers=args.workers,
-            scheduler=args.scheduler,
-            run_timeout=args.run_timeout,
-            progress=line if line is not None else False,
-            backend=args.backend,
-        )
+        with compile_notes(args.file, line):
+            result = falsify(
+                model,
+                args.requirement,
+                vary or None,
+                settings=settings_from(args),
+                budget=args.budget,
+                seed=args.seed,
+                sampler=args.sampler,
+                parameters=dict(args.param) or None,
+                inputs=dict(args.input) or None,
+                workers=args.workers,
+                scheduler=args.scheduler,
+                run_timeout=args.run_timeout,
+                progress=line if line is not None else False,
+                backend=args.backend,
+            )
     if line is not None:
         line.clear()
     if out is not None:

@@ -13,11 +13,13 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 from hybrid.cli.exits import EXIT_OK
 
-__all__ = ["add_compile_command", "announce_compile", "run_compile"]
+__all__ = ["add_compile_command", "compile_notes", "run_compile"]
 
 
 def add_compile_command(sub: Any) -> None:
@@ -26,18 +28,22 @@ def add_compile_command(sub: Any) -> None:
     p.add_argument("files", nargs="+", metavar="FILE", help="spec or system files")
 
 
-def announce_compile(file: str, model: Any) -> None:
-    """Before a compiled run: a note naming what it compiles first and about how long that
-    takes (:func:`~hybrid.simulation.native.choice.compile_notice`); nothing when cached."""
-    from hybrid.errors import HybridError
-    from hybrid.simulation.native.choice import compile_notice
+@contextmanager
+def compile_notes(file: str, line: Any = None) -> Iterator[None]:
+    """Within it, a compiled run about to compile prints ``FILE: note: compiling ...``
+    (what, and about how long: :func:`~hybrid.simulation.native.choice.compile_notices`),
+    after every check that may still refuse the run; ``line``: the progress line, if any."""
+    from hybrid.simulation.native.choice import compile_notices
 
-    try:
-        notice = compile_notice(model)
-    except (HybridError, ImportError):  # numba missing, or a model it refuses: the run says so
-        return
-    if notice is not None:
-        print(f"{file}: note: {notice}", file=sys.stderr, flush=True)
+    def say(notice: str) -> None:
+        text = f"{file}: note: {notice}"
+        if line is not None:
+            line.message(text)
+        else:
+            print(text, file=sys.stderr, flush=True)
+
+    with compile_notices(say):
+        yield
 
 
 def run_compile(files: list[str]) -> int:

@@ -16,7 +16,7 @@ import warnings
 from collections.abc import Callable
 from pathlib import Path
 
-from hybrid.cli.compile import announce_compile
+from hybrid.cli.compile import compile_notes
 from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_OK
 from hybrid.cli.settings import settings_from
 from hybrid.compose import System, as_system
@@ -63,16 +63,15 @@ def run_simulate(args: argparse.Namespace) -> int:
             print(f"{args.file}: note: backend auto: {chosen.backend} ({chosen.reason})",
                   file=sys.stderr)  # fmt: skip
             backend = chosen.backend
-        if backend == "compiled":  # a first run compiles: say what, and for how long
-            announce_compile(args.file, model)
-        run = simulate(
-            model,
-            settings=settings_from(args),
-            dense=args.plot is not None,
-            inputs=inputs or None,
-            progress=line,
-            backend=backend,
-        )
+        with compile_notes(args.file, line):  # a first compiled run: what, and how long
+            run = simulate(
+                model,
+                settings=settings_from(args),
+                dense=args.plot is not None,
+                inputs=inputs or None,
+                progress=line,
+                backend=backend,
+            )
         for note in run.settings.get("start", {}).get("notes", ()):
             print(f"{args.file}: note: {note}", file=sys.stderr)
         for excursion in run.out_of_bounds:

@@ -65,3 +65,65 @@ def test_the_compile_notice_names_what_a_first_run_compiles(
     assert compile_notice(model) == "compiling the model (about 1 s); later runs load them from the cache"
     seal(generate(NativeModel(as_system(model))))
     assert compile_notice(model) is None
+
+
+def _fresh_structure() -> hybrid.Automaton:
+    """A model whose compiled form no cache holds: a flow constant of its own."""
+    import uuid
+
+    rate = 1.0 + uuid.uuid4().int % 10**9 / 1e12
+    return hybrid.load_text(
+        f"automaton: drift\nstate: {{x: {{initial: [0, 2]}}}}\ninputs: {{u: {{range: [1, 3]}}}}\n"
+        f"locations: {{go: {{flow: {{x: {rate!r} * u}}}}}}\n",
+        file="drift.yaml",
+    )
+
+
+def test_a_first_compiled_run_says_what_it_compiles_once_the_run_is_accepted(
+    tmp_path: Path,
+) -> None:
+    """The note was printed by the command before the run: also for runs then refused,
+    which compile nothing. It is now said as the compile starts, and only then."""
+    from hybrid.simulation.native.choice import compile_notices
+
+    model = _fresh_structure()
+    said: list[str] = []
+    with compile_notices(said.append):
+        with pytest.raises(hybrid.UsageError, match="method 'RK23'"):
+            hybrid.simulate(model, t_end=1.0, backend="compiled", method="RK23")
+        with pytest.raises(hybrid.UsageError, match="cannot hold input 'u'"):
+            hybrid.sweep(model, t_end=1.0, grid={"input.u": [1.0, 3.0]}, backend="compiled")
+        out = tmp_path / "table.csv"
+        parts = tmp_path / "table.csv.parts"
+        parts.mkdir()
+        (parts / "campaign.json").write_text('{"fingerprint": "another"}')
+        with pytest.raises(hybrid.UsageError, match="another campaign"):
+            hybrid.sweep(model, t_end=1.0, grid={"init.x": [0.0, 1.0]}, out=out, resume=True,
+                         backend="compiled", workers=0)  # fmt: skip
+        assert said == []  # refused, nothing compiled: nothing said
+        run = hybrid.simulate(model, t_end=1.0, backend="compiled")
+        assert "the model (about 1 s)" in said[0] and len(said) == 1
+        again = hybrid.simulate(model, t_end=2.0, backend="compiled")
+    assert len(said) == 1  # compiled once: said once
+    u = hybrid.simulate(model, t_end=1.0, backend="scipy").states[-1, 0]  # x' = rate * u
+    assert run.states[-1, 0] == pytest.approx(u, rel=1e-9)
+    assert again.termination.cause == "t_end"
+
+
+def test_a_refused_compiled_sweep_says_no_compile_note(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from hybrid.simulation.native import cache
+
+    monkeypatch.setenv(cache.CACHE_ENV, str(tmp_path / "cache"))  # nothing compiled there
+    spec = tmp_path / "drift.yaml"
+    spec.write_text("automaton: drift\nstate: {x: {initial: [0, 2]}}\n"
+                    "inputs: {u: {range: [1, 3]}}\nlocations: {go: {flow: {x: u}}}\n")  # fmt: skip
+    done = run_cli("sweep", spec, "--t-end", "4", "--grid", "input.u=1:3:3", "--backend",
+                   "compiled", "--workers", "0", "--out", tmp_path / "t.csv")  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert_no_traceback(done.stderr)
+    assert "note: compiling" not in done.stderr  # it said so before refusing
+    assert done.stderr.startswith(f"{spec}: the compiled backend cannot hold input 'u'")
+    done = run_cli("simulate", spec, "--t-end", "4", "--backend", "compiled", "--method", "RK23")
+    assert done.returncode == 2 and "note: compiling" not in done.stderr, done.stderr

@@ -32,7 +32,9 @@ from __future__ import annotations
 
 import importlib.util
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -47,9 +49,12 @@ __all__ = [
     "SCIPY_LOAD_S",
     "SCIPY_RUN_FLOOR_S",
     "Choice",
+    "announce",
     "cached",
     "choose",
     "compile_notice",
+    "compile_notices",
+    "generated_notice",
 ]
 
 KERNEL_COMPILE_S = 8.0
@@ -89,19 +94,25 @@ def cached(model: Any) -> tuple[str, str, float]:
     Generates the model's source (no numba import).
     """
     from hybrid.compose import as_system
-    from hybrid.simulation.native.cache import _LOADED, cache_key, cache_root
-    from hybrid.simulation.native.kernel_text import kernel_module
     from hybrid.simulation.native.source import generate
     from hybrid.simulation.native.structure import NativeModel
 
-    version = _numba_version()
     generated = generate(NativeModel(as_system(model)))  # a user's model: either type
+    return (*_states(generated), generated.compile_estimate)
+
+
+def _states(generated: Any) -> tuple[str, str]:
+    """:func:`cached`'s states of a model's generated source and of the kernel."""
+    from hybrid.simulation.native.cache import _LOADED, cache_key, cache_root
+    from hybrid.simulation.native.kernel_text import kernel_module
+
+    version = _numba_version()
     keys = [cache_key(generated, version), cache_key(kernel_module(), version)]
     found = [
         "loaded" if key in _LOADED else "cached" if _sealed(cache_root() / key) else "missing"
         for key in keys
     ]
-    return found[0], found[1], generated.compile_estimate
+    return found[0], found[1]
 
 
 def choose(model: Any, runs: int, *, method: str = "RK45", inputs: bool = False,
@@ -151,10 +162,13 @@ def compile_notice(model: Any) -> str | None:
     """What a first compiled run of ``model`` compiles before it starts, and about how long
     that takes here; ``None`` when the model and the compiled loop are both cached.
 
-    A command prints it before it compiles, so that a user knows why a first run waits
-    (and that later ones will not).
+    A command prints it as a run starts to compile (:func:`compile_notices`), so that
+    a user knows why a first run waits (and that later ones will not).
     """
-    model_state, kernel_state, estimate = cached(model)
+    return _notice(*cached(model))
+
+
+def _notice(model_state: str, kernel_state: str, estimate: float) -> str | None:
     parts = []
     if kernel_state == "missing":
         parts.append(f"the compiled loop (once per machine, about {KERNEL_COMPILE_S:.0f} s)")
@@ -163,6 +177,51 @@ def compile_notice(model: Any) -> str | None:
     if not parts:
         return None
     return f"compiling {' and '.join(parts)}; later runs load them from the cache"
+
+
+_SAY: ContextVar[Callable[[str], None] | None] = ContextVar("hybrid_compile_notices", default=None)
+
+
+@contextmanager
+def compile_notices(say: Callable[[str], None]) -> Iterator[None]:
+    """Within it, ``say(text)`` when a compiled run is about to compile: once its model is
+    accepted, after every check that may refuse the run (:func:`announce`).
+
+    A command that printed :func:`compile_notice` before calling the run printed it also
+    for a run then refused (another method, a held input, a campaign's ``--resume``).
+
+    Examples
+    --------
+    >>> said = []
+    >>> with compile_notices(said.append):
+    ...     announce(lambda: "compiling the model")
+    ...     announce(lambda: None)  # all of it cached
+    >>> announce(lambda: "compiling the loop")  # outside: nothing asked, nothing worked out
+    >>> said
+    ['compiling the model']
+    """
+    token = _SAY.set(say)
+    try:
+        yield
+    finally:
+        _SAY.reset(token)
+
+
+def announce(notice: Callable[[], str | None]) -> None:
+    """``say(notice())`` within :func:`compile_notices` when the notice is not ``None``;
+    ``notice`` is called only there. The compiled backend calls it with
+    :func:`generated_notice` before it compiles or loads a model."""
+    say = _SAY.get()
+    if say is None:
+        return
+    text = notice()
+    if text is not None:
+        say(text)
+
+
+def generated_notice(generated: Any) -> str | None:
+    """:func:`compile_notice` of a model whose source is ``generated`` already."""
+    return _notice(*_states(generated), generated.compile_estimate)
 
 
 def _scipy_loaded() -> bool:

@@ -32,6 +32,7 @@ from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import Layout, run_from
 from hybrid.simulation.native.cache import load_generated, require_numba, seal
+from hybrid.simulation.native.choice import announce, generated_notice
 from hybrid.simulation.native.features import check_supported
 from hybrid.simulation.native.interruptible import run_here, run_in_worker
 from hybrid.simulation.native.kernel_text import kernel_module
@@ -100,6 +101,7 @@ class CompiledNative:
         self.native = NativeModel(model)
         self.layout = Layout.of(self.native)
         self.generated = generate(self.native)
+        announce(partial(generated_notice, self.generated))  # the model is accepted: say it
         with compiling_beside(self.generated.compile_estimate):
             kernel(wait=False)  # the first time, worker processes compile the rest meanwhile
         try:
