@@ -36,7 +36,7 @@ from hybrid.model import Automaton, Forbidden
 from hybrid.reach.affine import TIME, Condition, Forms, Rows
 from hybrid.reach.boxes import meets_many
 from hybrid.reach.engine import ReachSet, explore, forms_of, initial_boxes, mode_of
-from hybrid.reach.falsify import refute
+from hybrid.reach.falsify import entry_time, refute
 from hybrid.reach.result import PropertyResult, ReachResult
 from hybrid.reach.witness import (
     Candidate,
@@ -294,13 +294,17 @@ def _quick(
         if not _matches(forms, entry, key):
             continue
         every = _within(_condition(forms, entry, key, for_all=True), forms, t_end)
-        found = refute(forms, mode_of(forms, key), lo, hi, every, t_end=t_end, step=step)
+        mode = mode_of(forms, key)
+        found = refute(forms, mode, lo, hi, every, t_end=t_end, step=step)
         if found is None:
             continue
         candidate = replace(found.candidate, location=key)
-        run = simulate_candidate(model, forms, candidate, max_jumps)  # the witness, and its time
         condition = _condition(forms, entry, key)
-        at = _entry_time(run, forms, {forms.system.mode_name(key): condition}, found.at)
+        at = entry_time(found, mode, condition, forms.index[TIME])  # exactly: no simulation
+
+        def replay(candidate: Candidate = candidate) -> Run | None:
+            return simulate_candidate(model, forms, candidate, max_jumps)
+
         return PropertyResult(
             entry,
             "refuted",
@@ -312,19 +316,9 @@ def _quick(
             witness_inputs=dict(candidate.inputs),
             witness_location=_location_of(model, candidate.location),
             condition=condition,
-            simulated=run,
+            replay=replay,
         )
     return None
-
-
-def _entry_time(run: Run | None, forms: Forms, conditions: dict[str, Condition], at: float) -> float:
-    """When the simulated run of an exact refutation enters the set, bisected on its dense
-    output (the exact walk finds the step it is in by, up to a step late); ``at``, the walk's
-    time, if the simulator's run is not seen in the set by then."""
-    if run is None:
-        return at
-    entered = reaches(run, forms, conditions)
-    return entered if entered is not None and entered <= at else at
 
 
 def _location_of(

@@ -63,7 +63,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -74,7 +74,7 @@ from hybrid.reach.engine import Mode
 from hybrid.reach.flowpipe import FP_MARGIN, exp_matrices
 from hybrid.reach.witness import Candidate, PiecewiseConstant
 
-__all__ = ["BLOCK", "ENTER", "MARGIN", "Refutation", "refute"]
+__all__ = ["BLOCK", "ENTER", "MARGIN", "Refutation", "entry_time", "refute"]
 
 Array = NDArray[np.float64]
 BLOCK = 32
@@ -91,12 +91,20 @@ segment counts as failing it (rounding of the propagated points)."""
 
 @dataclass(frozen=True)
 class Refutation:
-    """A run into a forbidden case: the candidate to replay, its step count and end point."""
+    """A run into a forbidden case: the candidate to replay, its step count and end point.
+
+    ``points`` are its step points ``x_0 ... x_k`` (the reach vector, time at
+    ``k h``), ``inputs`` the input values held on each step (rows), ``h`` the step:
+    what :func:`entry_time` follows between them.
+    """
 
     candidate: Candidate
     steps: int
     at: float
     point: Array
+    points: Array = field(repr=False, default_factory=lambda: np.zeros((0, 0)))
+    inputs: Array = field(repr=False, default_factory=lambda: np.zeros((0, 0)))
+    h: float = 0.0
 
 
 def _transition_matrices(a: Array, h: float) -> tuple[Array, Array]:
@@ -273,7 +281,77 @@ def _concrete(
     names = forms.system.state_names
     initial = {v: float(x0[i]) for i, v in enumerate(names)}
     candidate = Candidate(initial, inputs, k * h, "support, propagated exactly")
-    return Refutation(candidate, k, k * h, end)
+    return Refutation(candidate, k, k * h, end, pts, u, h)
+
+
+def entry_time(found: Refutation, mode: Mode, condition: Condition, t_index: int) -> float:
+    """When the run of ``found`` first enters ``condition`` (rows as written, a strict row
+    strictly), followed exactly: no later than ``found.at``, where the walk saw it inside.
+
+    Each step is looked at in its step points and at :data:`~hybrid.reach.witness.BETWEEN`
+    parts between them (the state there propagated from the step's start with the step's
+    input: ``e^{A d} x_i + Phi1(d) (B u_i + c)``, one matrix pair for all steps); the time
+    is then bisected after the last sample seen outside, each middle propagated from the
+    step's start by its own ``expm``. A visit shorter than a part may be missed, as a
+    simulated witness's between its points (:func:`hybrid.reach.witness.reaches`).
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> from hybrid.compose import as_system
+    >>> from hybrid.reach.affine import Forms
+    >>> from hybrid.reach.engine import initial_boxes, mode_of
+    >>> m = hybrid.load_text('''
+    ... automaton: ramp
+    ... state: {x: {initial: [0.5, 0.6]}}
+    ... locations: {l: {flow: {x: 1}}}
+    ... properties: {forbidden: [{when: x >= 1}]}
+    ... ''')
+    >>> forms = Forms(as_system(m))
+    >>> key, lo, hi = initial_boxes(forms)[0]
+    >>> mode = mode_of(forms, key)
+    >>> cond = forms.condition(m.properties.forbidden[0].when, 0, key, m.position, "x >= 1")
+    >>> found = refute(forms, mode, lo, hi, cond, t_end=2.0, step=0.3)
+    >>> found.at, entry_time(found, mode, cond, forms.index["t"])  # from 0.6: x = 1 at 0.4
+    (0.6, 0.4)
+    """
+    from hybrid.reach.witness import BETWEEN, inside
+
+    pts, u, h, k = found.points, found.inputs, found.h, found.steps
+    if k < 1 or len(pts) != k + 1:
+        return found.at
+    pts = pts.copy()
+    pts[:, t_index] = np.arange(k + 1) * h  # the walk's times, as it tested its clocks
+    if inside(pts[:1], condition)[0]:
+        return 0.0
+    sub_phi, sub_phi1 = _transition_matrices(mode.a, h / BETWEEN)
+    forcing = u @ mode.b.T + mode.c  # row i: B u_i + c, held on step i
+    sub_push = forcing @ sub_phi1.T
+    samples = [pts[:-1]]
+    for part in range(1, BETWEEN):
+        samples.append(samples[-1] @ sub_phi.T + sub_push)
+        samples[-1][:, t_index] = (np.arange(k) + part / BETWEEN) * h
+    samples.append(pts[1:])
+    grid = np.stack(samples[1:], axis=1)  # [step, sample]: its parts, then its end
+    hits = inside(grid.reshape(k * BETWEEN, -1), condition).reshape(k, BETWEEN)
+    if not hits.any():
+        return found.at
+    i, part = divmod(int(np.argmax(hits.ravel())), BETWEEN)  # inside at sample part + 1 of step i
+    before = i * h + part * h / BETWEEN
+    after = (i + 1) * h if part + 1 == BETWEEN else i * h + (part + 1) * h / BETWEEN
+    start, push = pts[i], forcing[i]
+    for _ in range(200):
+        middle = 0.5 * (before + after)
+        if not before < middle < after:
+            break
+        e, e1 = _transition_matrices(mode.a, middle - i * h)
+        point = e @ start + e1 @ push
+        point[t_index] = middle
+        if inside(point[None, :], condition)[0]:
+            after = middle
+        else:
+            before = middle
+    return after
 
 
 def _legal(mode: Mode, pts: Array, u: Array, h: float, t_index: int) -> bool:

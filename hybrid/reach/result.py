@@ -20,7 +20,7 @@ True
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -49,7 +49,9 @@ class PropertyResult:
     ``first_contact`` is the earliest time a set meets the entry (``None``: none
     does, or no sets were computed); ``witness`` a simulated run that reaches it
     (refuted only), entering at ``witness_time``, from ``witness_initial`` with
-    ``witness_inputs``.
+    ``witness_inputs``. A refutation found by exact propagation
+    (:mod:`hybrid.reach.falsify`) holds ``replay`` instead of the run: ``witness``
+    simulates it on first access (its time was found without a simulation).
     """
 
     entry: Forbidden
@@ -63,10 +65,14 @@ class PropertyResult:
     witness_location: str | dict[str, str] | None = None
     """Where the witness starts: its initial location (a name per component in a system)."""
     condition: Condition = field(default=(), repr=False)
+    replay: Callable[[], Run | None] | None = field(default=None, repr=False, compare=False)
 
     @property
     def witness(self) -> Run | None:
-        """The witness run (refuted only)."""
+        """The witness run (refuted only), simulated on first access if it was not yet."""
+        if self.simulated is None and self.replay is not None:
+            object.__setattr__(self, "simulated", self.replay())
+            object.__setattr__(self, "replay", None)
         return self.simulated
 
     @property

@@ -39,6 +39,7 @@ __all__ = [
     "Candidate",
     "PiecewiseConstant",
     "corner_candidates",
+    "inside",
     "random_candidates",
     "reaches",
     "simulate_candidate",
@@ -206,7 +207,7 @@ def reaches(run: Run, forms: Forms, conditions: Mapping[str, Condition]) -> floa
     for name, condition in conditions.items():
         here = np.array([loc == name for loc in locations], dtype=bool)
         if here.any():
-            hits |= here & _inside(points, condition)
+            hits |= here & inside(points, condition)
     first = int(np.argmax(hits)) if hits.any() else len(points)
     sampled = _sampled_entry(run, locations, conditions, first)
     if sampled is not None:
@@ -238,9 +239,9 @@ def _sampled_entry(
         parts = np.arange(1, BETWEEN) / BETWEEN
         times = (starts[:, None] + (ends - starts)[:, None] * parts[None, :]).ravel()
         states = np.asarray(curve(times), dtype=float).reshape(len(run.state_names), -1).T
-        inside = _inside(np.column_stack([states, times]), condition)
-        if inside.any():
-            k = int(np.argmax(inside))
+        seen = inside(np.column_stack([states, times]), condition)
+        if seen.any():
+            k = int(np.argmax(seen))
             outside = float(times[k - 1]) if k % (BETWEEN - 1) else float(starts[k // (BETWEEN - 1)])
             return outside, float(times[k]), condition, curve
     return None
@@ -253,14 +254,14 @@ def _bisect(before: float, t: float, condition: Condition, curve: Callable[[floa
         if not before < middle < t:
             break
         point = np.append(np.asarray(curve(middle), dtype=float), middle)
-        if _inside(point[None, :], condition)[0]:
+        if inside(point[None, :], condition)[0]:
             t = middle
         else:
             before = middle
     return t
 
 
-def _inside(points: NDArray[np.float64], condition: Condition) -> NDArray[np.bool_]:
+def inside(points: NDArray[np.float64], condition: Condition) -> NDArray[np.bool_]:
     """Which ``points`` (rows: state, then time) satisfy a case of ``condition`` exactly."""
     found = np.zeros(len(points), dtype=bool)
     for case in condition:

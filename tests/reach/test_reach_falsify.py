@@ -4,8 +4,9 @@
   time ``t`` is ``1 + t`` (start at 1, input at 1), so ``x >= 1.5`` is first
   reached at ``t = 0.5``; at step 0.01 the walk finds it at the first step point
   past it by the entry margin, ``0.51``, and the time reported is where that
-  run, simulated with ``hybrid.simulate``, enters the set: ``0.5``. No flowpipe is
-  computed with ``refute_first``.
+  run enters the set, followed exactly between its step points: ``0.5``. No
+  flowpipe is computed with ``refute_first``, and nothing is simulated until the
+  witness is read.
 - The same ramp where ``x <= 1.2`` holds in the location (an invariant, with or
   without an edge out at ``x >= 1.2``): the maximiser would leave the invariant
   or meet the guard, so it is not a run of the model; by hand no run of the
@@ -56,8 +57,39 @@ def test_a_ramp_is_refuted_at_the_first_step_past_its_closed_form_entry() -> Non
         handle_sigint=False,
     )
     assert replay.location[-1] == "up" and replay["x"][-1] == pytest.approx(1.5, rel=1e-9)
-    # the witness kept is that run, simulated
+    # the witness is that run, simulated when read
     assert entry.witness is not None and entry.witness["x"][-1] >= 1.5
+
+
+def test_an_exact_refutation_times_its_entry_without_simulating(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The entry time was found by simulating the refuting run at once: 10.5 s of
+    Building BDU02's verdict (48 variables to t = 20) against 0.04 s before. The heater
+    ``x' = -0.7 x + 2 u`` from ``x = 2`` with ``u = 1.5`` passes 4 at ``ln(8) / 0.7``."""
+    from hybrid.reach import api
+
+    simulated: list[object] = []
+    real = api.simulate_candidate
+
+    def counted(*args: object, **kwargs: object) -> object:
+        simulated.append(args)
+        return real(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(api, "simulate_candidate", counted)
+    heater = hybrid.load_text(
+        "automaton: heater\nstate: {x: {initial: [1, 2]}}\ninputs: {u: {range: [0.5, 1.5]}}\n"
+        "locations: {on: {flow: {x: -0.7 * x + 2 * u}}}\n"
+        "properties: {forbidden: [{when: x > 4.0}]}\n"
+    )
+    result = hybrid.reach(heater, 6.0, max_jumps=0, refute_first=True)
+    (entry,) = result.properties
+    assert entry.verdict == "refuted" and "propagated exactly" in entry.message
+    assert entry.witness_time == pytest.approx(math.log(8.0) / 0.7, rel=1e-12)
+    assert simulated == []
+    run = entry.witness
+    assert len(simulated) == 1 and run is not None and entry.witness is run  # once, kept
+    assert run.t[-1] > entry.witness_time and run["x"].max() > 4.0
 
 
 def test_without_refute_first_the_sets_are_kept_and_the_same_run_refutes() -> None:
