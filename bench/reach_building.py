@@ -15,8 +15,8 @@ in this process after a warm-up call (``time.process_time``, BLAS on one
 thread, best of 3): the sets alone (``witness=False``), the verdict as a gate
 asks for it (``refute_first=True``: a refuted entry is decided before any
 flowpipe; a proof computes the whole one) and the default call (sets, then the
-witness, simulated when read),
-with the peak memory it allocated (``tracemalloc``). Hylaa is given the same matrices and forbidden set
+witness, whose run is simulated only when asked for), with the peak memory it
+allocated (``tracemalloc``). Hylaa is given the same matrices and forbidden set
 by ``bench/hylaa_driver.py`` in its own interpreter, at the same step; the ratio
 is Hylaa's CPU time over reach's time to the verdict.
 """

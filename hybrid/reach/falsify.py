@@ -102,9 +102,9 @@ class Refutation:
     steps: int
     at: float
     point: Array
-    points: Array = field(repr=False, default_factory=lambda: np.zeros((0, 0)))
-    inputs: Array = field(repr=False, default_factory=lambda: np.zeros((0, 0)))
-    h: float = 0.0
+    points: Array = field(repr=False)
+    inputs: Array = field(repr=False)
+    h: float
 
 
 def _transition_matrices(a: Array, h: float) -> tuple[Array, Array]:
@@ -315,12 +315,9 @@ def entry_time(found: Refutation, mode: Mode, condition: Condition, t_index: int
     >>> found.at, entry_time(found, mode, cond, forms.index["t"])  # from 0.6: x = 1 at 0.4
     (0.6, 0.4)
     """
-    from hybrid.reach.witness import BETWEEN, inside
+    from hybrid.reach.witness import BETWEEN, bisect_entry, inside
 
-    pts, u, h, k = found.points, found.inputs, found.h, found.steps
-    if k < 1 or len(pts) != k + 1:
-        return found.at
-    pts = pts.copy()
+    pts, u, h, k = found.points.copy(), found.inputs, found.h, found.steps
     pts[:, t_index] = np.arange(k + 1) * h  # the walk's times, as it tested its clocks
     if inside(pts[:1], condition)[0]:
         return 0.0
@@ -340,18 +337,13 @@ def entry_time(found: Refutation, mode: Mode, condition: Condition, t_index: int
     before = i * h + part * h / BETWEEN
     after = (i + 1) * h if part + 1 == BETWEEN else i * h + (part + 1) * h / BETWEEN
     start, push = pts[i], forcing[i]
-    for _ in range(200):
-        middle = 0.5 * (before + after)
-        if not before < middle < after:
-            break
-        e, e1 = _transition_matrices(mode.a, middle - i * h)
-        point = e @ start + e1 @ push
-        point[t_index] = middle
-        if inside(point[None, :], condition)[0]:
-            after = middle
-        else:
-            before = middle
-    return after
+
+    def state(t: float) -> Array:  # the run at time t of step i (time, the last column, left out)
+        e, e1 = _transition_matrices(mode.a, t - i * h)
+        x: Array = e @ start + e1 @ push
+        return x[:t_index]
+
+    return bisect_entry(before, after, condition, state)
 
 
 def _legal(mode: Mode, pts: Array, u: Array, h: float, t_index: int) -> bool:

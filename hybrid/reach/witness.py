@@ -38,6 +38,7 @@ from hybrid.simulation.result import Run
 __all__ = [
     "Candidate",
     "PiecewiseConstant",
+    "bisect_entry",
     "corner_candidates",
     "inside",
     "random_candidates",
@@ -211,7 +212,7 @@ def reaches(run: Run, forms: Forms, conditions: Mapping[str, Condition]) -> floa
     first = int(np.argmax(hits)) if hits.any() else len(points)
     sampled = _sampled_entry(run, locations, conditions, first)
     if sampled is not None:
-        return _bisect(*sampled)
+        return bisect_entry(*sampled)
     if first == len(points):
         return None
     t = float(run.t[first])
@@ -221,7 +222,7 @@ def reaches(run: Run, forms: Forms, conditions: Mapping[str, Condition]) -> floa
                   and t0 <= run.t[first - 1] and t <= t1), None)  # fmt: skip
     if curve is None:
         return t
-    return _bisect(float(run.t[first - 1]), t, conditions[locations[first]], curve)
+    return bisect_entry(float(run.t[first - 1]), t, conditions[locations[first]], curve)
 
 
 def _sampled_entry(
@@ -247,8 +248,11 @@ def _sampled_entry(
     return None
 
 
-def _bisect(before: float, t: float, condition: Condition, curve: Callable[[float], Array]) -> float:
-    """Where ``curve`` enters ``condition`` in ``(before, t]``: outside at ``before``, inside at ``t``."""
+def bisect_entry(
+    before: float, t: float, condition: Condition, curve: Callable[[float], Array]
+) -> float:
+    """Where ``curve`` (the state at a time, time left out) enters ``condition`` in
+    ``(before, t]``: outside at ``before``, inside at ``t``."""
     for _ in range(200):
         middle = 0.5 * (before + t)
         if not before < middle < t:

@@ -97,12 +97,11 @@ def cached(model: Any) -> tuple[str, str, float]:
     from hybrid.simulation.native.source import generate
     from hybrid.simulation.native.structure import NativeModel
 
-    generated = generate(NativeModel(as_system(model)))  # a user's model: either type
-    return (*_states(generated), generated.compile_estimate)
+    return _cached_source(generate(NativeModel(as_system(model))))  # a user's model: either type
 
 
-def _states(generated: Any) -> tuple[str, str]:
-    """:func:`cached`'s states of a model's generated source and of the kernel."""
+def _cached_source(generated: Any) -> tuple[str, str, float]:
+    """:func:`cached` of a model whose source is ``generated`` already."""
     from hybrid.simulation.native.cache import _LOADED, cache_key, cache_root
     from hybrid.simulation.native.kernel_text import kernel_module
 
@@ -112,7 +111,7 @@ def _states(generated: Any) -> tuple[str, str]:
         "loaded" if key in _LOADED else "cached" if _sealed(cache_root() / key) else "missing"
         for key in keys
     ]
-    return found[0], found[1]
+    return found[0], found[1], generated.compile_estimate
 
 
 def choose(model: Any, runs: int, *, method: str = "RK45", inputs: bool = False,
@@ -221,7 +220,7 @@ def announce(notice: Callable[[], str | None]) -> None:
 
 def generated_notice(generated: Any) -> str | None:
     """:func:`compile_notice` of a model whose source is ``generated`` already."""
-    return _notice(*_states(generated), generated.compile_estimate)
+    return _notice(*_cached_source(generated))
 
 
 def _scipy_loaded() -> bool:
