@@ -29,6 +29,7 @@ def test_the_choice_weighs_the_runs_against_loading_and_compiling(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     ten_ms = lambda: 0.01  # noqa: E731 (one scipy run's CPU seconds)
+    monkeypatch.setattr(choice, "machine_factor", lambda: 1.0)  # the benchmark machine's speed
     monkeypatch.setattr(choice, "cached", lambda model: ("missing", "cached", 1.0))
     # 1000 runs of 10 ms save 1000 * 0.01 * (1 - 1/50) = 9.8 s > LOAD_S + 1.0 s
     chosen = choose(THERMO, 1000, run_s=ten_ms)
@@ -47,6 +48,55 @@ def test_the_choice_weighs_the_runs_against_loading_and_compiling(
     timed: list[int] = []
     loaded = choose(THERMO, 1, run_s=lambda: timed.append(1) or 0.0)
     assert loaded.backend == "compiled" and not timed  # nothing to load: nothing timed
+
+
+def test_near_the_break_even_the_costs_are_scaled_by_the_machines_speed(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The constants are the benchmark machine's; the timed run is this machine's. On a
+    machine three times slower a run saves three times as much, and compiling costs three
+    times as much: the choice is the benchmark machine's."""
+    asked: list[int] = []
+
+    def three() -> float:
+        asked.append(1)
+        return 3.0
+
+    monkeypatch.setattr(choice, "machine_factor", three)
+    monkeypatch.setattr(choice, "cached", lambda model: ("missing", "missing", 1.0))
+    cost = LOAD_S + KERNEL_COMPILE_CPU_S + 1.0  # 19.9 s at the benchmark machine's speed
+    share = 1 - 1 / 50
+    # 1,000 runs of 13 ms on the benchmark machine save 12.7 s < 19.9 s: scipy there; here
+    # they take 39 ms and save 38.2 s, above 19.9 s but below 3 * 19.9 = 59.7 s
+    chosen = choose(THERMO, 1000, run_s=lambda: 0.039)
+    assert chosen.backend == "scipy" and asked == [1]
+    assert chosen.reason == (f"1000 runs would save about {1000 * 0.039 * share:.1f} s; "
+                             f"compiling and loading (about {3 * cost:.1f} s of CPU here, "
+                             "3.0 times the benchmark machine's)")  # fmt: skip
+    runs = int(3 * cost / (0.039 * share)) + 1  # just past the scaled break-even
+    assert choose(THERMO, runs, run_s=lambda: 0.039).backend == "compiled"
+    # far from the break-even (more than NEAR times either way) the speed is not asked
+    del asked[:]
+    assert choose(THERMO, 100_000, run_s=lambda: 0.039).backend == "compiled"
+    assert choose(THERMO, 10, run_s=lambda: 0.039).backend == "scipy"
+    assert asked == []
+
+
+def test_the_machine_factor_tracks_a_slower_engine(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The factor is a reference scipy run over its time on the benchmark machine: a
+    machine on which that run takes twice as long reads twice the factor."""
+    from hybrid.simulation import engine
+
+    real = engine.simulate
+    clock = {"t": 0.0}
+
+    def simulate(*args: object, **kwargs: object) -> object:
+        clock["t"] += 2 * choice.PROBE_S  # each run of the reference: twice its time there
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(engine, "simulate", simulate)
+    monkeypatch.setattr("time.process_time", lambda: clock["t"])
+    assert choice.machine_factor() == pytest.approx(2.0, rel=1e-5)
 
 
 def test_a_campaign_too_long_for_scipy_at_its_cheapest_is_not_timed(

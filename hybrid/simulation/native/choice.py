@@ -11,6 +11,9 @@ scipy run costs. :func:`choose` runs compiled when:
 - or the campaign's runs are expected to save more than loading (and, what is
   not in the cache, compiling) costs: ``runs * run_s`` (one scipy run of the
   model, timed by the caller) above :data:`LOAD_S` plus the compile estimate;
+  these costs are constants from the benchmark machine, so near the break-even
+  they are scaled by how fast this machine is (:func:`machine_factor`: a
+  reference scipy run timed here against :data:`PROBE_S`), as the timed run is;
   a campaign so long that scipy would cost more even at its cheapest
   (:data:`SCIPY_RUN_FLOOR_S` a run, and :data:`SCIPY_LOAD_S` to load the
   scipy engine where it is not loaded yet) is not timed: timing would load it;
@@ -46,6 +49,7 @@ __all__ = [
     "KERNEL_COMPILE_CPU_S",
     "KERNEL_COMPILE_S",
     "LOAD_S",
+    "PROBE_S",
     "SCIPY_LOAD_S",
     "SCIPY_RUN_FLOOR_S",
     "Choice",
@@ -55,6 +59,7 @@ __all__ = [
     "compile_notice",
     "compile_notices",
     "generated_notice",
+    "machine_factor",
 ]
 
 KERNEL_COMPILE_S = 8.0
@@ -77,6 +82,29 @@ SCIPY_RUN_FLOOR_S = 6e-4
 one state and no event, over 1e-9 s: measured 0.82 ms)."""
 COMPILED_SHARE = 1.0 / 50.0
 """A compiled run's time as a share of a scipy run's (measured 1/75 to 1/100: rounded up)."""
+PROBE_S = 2.6e-3
+"""CPU seconds of :func:`machine_factor`'s reference run on the benchmark machine of the
+constants above. Derived: 7.8 ms (7.66 to 8.27, eight processes) on the machine of the
+``7a7f7ec`` bench run, where the kernel and a model compiled in 53.6 s of one process
+against 17.9 s on the benchmark machine; 7.8 ms * 17.9 / 53.6."""
+NEAR = 4.0
+"""Within this factor of the break-even (saving / cost, at the constants) the costs are
+scaled by :func:`machine_factor`; beyond it no machine is that much slower or faster."""
+FACTOR_RANGE = (0.25, 4.0)
+"""The least and most :func:`machine_factor` returns."""
+PROBE_SPEC = """\
+automaton: speed_probe
+parameters: {a: 0.1, T_out: 10.0, T_heat: 30.0, T_low: 18.0, T_high: 22.0}
+state: {T: {initial: 20.0}}
+locations:
+  off: {flow: {T: -a*(T - T_out)}, invariant: T >= T_low}
+  on: {flow: {T: a*(T_heat - T)}, invariant: T <= T_high}
+initial: {location: off}
+edges:
+  - {from: off, to: on, guard: T <= T_low}
+  - {from: on, to: off, guard: T >= T_high}
+"""
+"""The reference model: a thermostat (specs/thermostat.yaml's flows and switches)."""
 
 
 @dataclass(frozen=True)
@@ -143,9 +171,8 @@ def choose(model: Any, runs: int, *, method: str = "RK45", inputs: bool = False,
         estimate if model_state == "missing" else 0.0
     )
     cost = LOAD_S + compiling
-    what = f"compiling and loading (about {cost:.0f} s of CPU)" if compiling else (
-        f"loading the cached compiled code (about {cost:.1f} s)"
-    )  # fmt: skip
+    doing = "compiling and loading" if compiling else "loading the cached compiled code"
+    what = f"{doing} (about {cost:.0f} s of CPU)" if compiling else f"{doing} (about {cost:.1f} s)"
     if run_s is None:
         return Choice("scipy", f"one run: {what} would cost more than it saves")
     least = runs * SCIPY_RUN_FLOOR_S + (0.0 if _scipy_loaded() else SCIPY_LOAD_S)
@@ -153,8 +180,41 @@ def choose(model: Any, runs: int, *, method: str = "RK45", inputs: bool = False,
         return Choice("compiled", f"{runs} runs would cost at least {least:.1f} s on scipy "
                                   f"(loading it included); {what}")  # fmt: skip
     saved = runs * run_s() * (1.0 - COMPILED_SHARE)
+    if 1.0 / NEAR < saved / cost < NEAR:  # the run was timed on this machine: the costs too
+        factor = machine_factor()
+        cost *= factor
+        what = (f"{doing} (about {cost:.1f} s of CPU here, {factor:.1f} times the benchmark "
+                "machine's)")  # fmt: skip
     verdict = "compiled" if saved > cost else "scipy"
     return Choice(verdict, f"{runs} runs would save about {saved:.1f} s; {what}")
+
+
+def machine_factor() -> float:
+    """How much more CPU time this machine takes than the benchmark machine, now.
+
+    A reference scipy run (a thermostat for 10 s, :data:`PROBE_SPEC`), timed after one
+    untimed run (best of two), over :data:`PROBE_S`; within :data:`FACTOR_RANGE`.
+    It is the same work as a campaign's timed run, so it slows with it. Loads the scipy
+    engine (a campaign's timed run has already).
+
+    Examples
+    --------
+    >>> FACTOR_RANGE[0] <= machine_factor() <= FACTOR_RANGE[1]
+    True
+    """
+    import time
+
+    from hybrid.reader.loader import load_text
+    from hybrid.simulation.engine import simulate
+
+    model = load_text(PROBE_SPEC, file="<speed probe>")
+    times = []
+    for _ in range(3):
+        start = time.process_time()
+        simulate(model, 10.0, backend="scipy", handle_sigint=False)
+        times.append(time.process_time() - start)
+    least, most = FACTOR_RANGE
+    return min(most, max(least, min(times[1:]) / PROBE_S))
 
 
 def compile_notice(model: Any) -> str | None:
