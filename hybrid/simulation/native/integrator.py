@@ -47,6 +47,7 @@ __all__ = [
     "dense_eval",
     "eval_rhs",
     "initial_step",
+    "min_step_at",
     "remember_flow_failure",
     "rk45_step",
 ]
@@ -125,6 +126,12 @@ def eval_rhs(fns: Fns, m: int, t: float, x: Array, p: Array, out: Array, wf: Arr
     remember_flow_failure(t, x, out, wf, wi)
 
 
+def min_step_at(t: float) -> float:
+    """scipy's smallest step at ``t``, ``10 * spacing(t)`` (``nextafter`` is a call into the C
+    library, a twentieth of a short run's step: asked only below :data:`TEN_EPS` ``* |t|``)."""
+    return 10.0 * abs(np.nextafter(t, math.inf) - t)
+
+
 def rk45_step(
     fns: Fns,
     m: int,
@@ -150,10 +157,9 @@ def rk45_step(
     z = wf[wi[W_YTMP] : wi[W_YTMP] + d]
     p_c = at(p, 0)
     k_at = wi[W_K]  # K[s, i] at wf[k_at + s * d + i] (flat: a reshape calls numba's runtime)
-    # scipy's minimum step, 10 * spacing(t), is at most ``above``: worked out only below it
-    # (``nextafter`` is a call into the C library, a twentieth of a short run's step)
+    # scipy's minimum step is at most ``above``: worked out only below it
     above = TEN_EPS * abs(t) + 1e-300
-    min_step = 10.0 * abs(np.nextafter(t, math.inf) - t) if h_abs < above else 0.0
+    min_step = min_step_at(t) if h_abs < above else 0.0
     if h_abs > max_step:
         h_abs = max_step
     elif h_abs < min_step:
@@ -161,7 +167,7 @@ def rk45_step(
     rejected = False
     while True:
         if h_abs < above and min_step == 0.0:
-            min_step = 10.0 * abs(np.nextafter(t, math.inf) - t)
+            min_step = min_step_at(t)
         if h_abs < min_step:
             return False, t, h_abs, 0.0
         t_new = t + h_abs
