@@ -129,7 +129,7 @@ def eval_rhs(fns: Fns, m: int, t: float, x: Array, p: Array, out: Array, wf: Arr
 def min_step_at(t: float) -> float:
     """scipy's smallest step at ``t``, ``10 * spacing(t)`` (``nextafter`` is a call into the C
     library, a twentieth of a short run's step: asked only below :data:`TEN_EPS` ``* |t|``)."""
-    return 10.0 * abs(np.nextafter(t, math.inf) - t)
+    return 10.0 * abs(float(np.nextafter(t, math.inf)) - t)
 
 
 def rk45_step(
