@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 import warnings
 from pathlib import Path
+from typing import Any
 
 import pytest
 from support import SPECS, read_csv, run_cli
@@ -85,16 +86,16 @@ def test_near_the_break_even_the_costs_are_scaled_by_the_machines_speed(
 def test_the_machine_factor_tracks_a_slower_engine(monkeypatch: pytest.MonkeyPatch) -> None:
     """The factor is a reference scipy run over its time on the benchmark machine: a
     machine on which that run takes twice as long reads twice the factor."""
-    from hybrid.simulation import engine
+    from hybrid.simulation import reference
 
-    real = engine.simulate
+    real = reference.simulate_reference
     clock = {"t": 0.0}
 
-    def simulate(*args: object, **kwargs: object) -> object:
+    def simulate(*args: Any, **kwargs: Any) -> Any:
         clock["t"] += 2 * choice.PROBE_S  # each run of the reference: twice its time there
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(engine, "simulate", simulate)
+    monkeypatch.setattr(reference, "simulate_reference", simulate)
     monkeypatch.setattr("time.process_time", lambda: clock["t"])
     assert choice.machine_factor() == pytest.approx(2.0, rel=1e-5)
 

@@ -82,11 +82,12 @@ SCIPY_RUN_FLOOR_S = 6e-4
 one state and no event, over 1e-9 s: measured 0.82 ms)."""
 COMPILED_SHARE = 1.0 / 50.0
 """A compiled run's time as a share of a scipy run's (measured 1/75 to 1/100: rounded up)."""
-PROBE_S = 2.6e-3
+PROBE_S = 2.2e-3
 """CPU seconds of :func:`machine_factor`'s reference run on the benchmark machine of the
-constants above. Derived: 7.8 ms (7.66 to 8.27, eight processes) on the machine of the
-``7a7f7ec`` bench run, where the kernel and a model compiled in 53.6 s of one process
-against 17.9 s on the benchmark machine; 7.8 ms * 17.9 / 53.6."""
+constants above. Derived: on a slower machine the reference run and a one-process compile
+of the kernel and a model, timed back to back, gave 2.17 and 2.19 ms times 17.9 s (that
+compile on the benchmark machine) over 52.5 and 51.5 s. The run read about 5 ms or about
+7.7 ms there as the machine's speed changed; the compile's 52 s spans both."""
 NEAR = 4.0
 """Within this factor of the break-even (saving / cost, at the constants) the costs are
 scaled by :func:`machine_factor`; beyond it no machine is that much slower or faster."""
@@ -204,14 +205,16 @@ def machine_factor() -> float:
     """
     import time
 
+    from hybrid.compose import as_system
     from hybrid.reader.loader import load_text
-    from hybrid.simulation.engine import simulate
+    from hybrid.simulation.reference import simulate_reference
+    from hybrid.simulation.settings import merged
 
-    model = load_text(PROBE_SPEC, file="<speed probe>")
+    model, settings = as_system(load_text(PROBE_SPEC, file="<speed probe>")), merged(None, 10.0)
     times = []
     for _ in range(3):
         start = time.process_time()
-        simulate(model, 10.0, backend="scipy", handle_sigint=False)
+        simulate_reference(model, settings, None, None, False, None)
         times.append(time.process_time() - start)
     least, most = FACTOR_RANGE
     return min(most, max(least, min(times[1:]) / PROBE_S))
