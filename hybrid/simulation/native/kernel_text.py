@@ -20,7 +20,7 @@ Examples
 --------
 >>> code, names = kernel_source(("integrator",))
 >>> names[:3]
-['remember_flow_failure', 'eval_rhs', 'rk45_step']
+['remember_flow_failure', 'eval_rhs', 'min_step_at']
 """
 
 from __future__ import annotations
