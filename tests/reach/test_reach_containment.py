@@ -16,9 +16,12 @@ then every set for the few points left).
 
 from __future__ import annotations
 
+import atexit
 import hashlib
 import multiprocessing
 import os
+import shutil
+import tempfile
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -239,7 +242,15 @@ def _escapes(
     return done, points, problems
 
 
-ACCEPTED = _accepted(Path(os.environ.get("TMPDIR", "/tmp")) / "hybrid-reach-models")
+def _import_folder() -> Path:
+    """A folder of this process's own for the imported specs, removed at its exit: processes
+    that collect the suite at once (pytest's workers) each write and load their own."""
+    folder = Path(tempfile.mkdtemp(prefix="hybrid-reach-models-"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    return folder
+
+
+ACCEPTED = _accepted(_import_folder())
 MODELS = dict(ACCEPTED)
 
 
