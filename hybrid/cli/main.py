@@ -234,11 +234,22 @@ def entry() -> int:
 
 
 def _quiet_after_interrupt(unraisable: Any) -> None:
-    """Python's report of an error in a finalizer, unless a Ctrl-C stopped work half-way.
+    """Python's report of an error in a finalizer, unless a Ctrl-C stopped work half-way;
+    a Ctrl-C that landed in a finalizer or a callback is delivered again.
 
     A compile stopped by Ctrl-C leaves LLVM handles half-made; their finalizers fail
     as the process ends ("Exception ignored in ..."), which says nothing to the user.
+    A Ctrl-C whose ``KeyboardInterrupt`` is raised inside such code (an import's
+    module lock is released by a callback) is reported there and dropped by Python:
+    the command would print a traceback and go on. It is raised again as a signal,
+    which the command's handler (or the default one, at its next line) receives.
     """
+    if issubclass(unraisable.exc_type, KeyboardInterrupt):
+        if not _STOPPED[0]:
+            import signal
+
+            signal.raise_signal(signal.SIGINT)  # ignored once the command is done (entry)
+        return
     interrupts = sys.modules.get("hybrid.simulation.interrupts")  # loaded if Ctrl-C was handled
     seen = interrupts is not None and interrupts.interrupted()
     if not (_STOPPED[0] or seen):
