@@ -39,8 +39,9 @@ check-specs: $(STAMP_TEST)
 	$(BIN)/hybrid validate specs/*.yaml
 	$(BIN)/hybrid check specs/*.yaml
 
+# The suite on every core (pytest-xdist), each test file on one worker (its fixtures made once).
 test: lint typecheck check-specs
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --dist loadfile
 
 # The site, from scratch, every warning an error (docs/writing-docs.md); open docs/_build/html/index.html.
 docs: $(STAMP_DOCS)
