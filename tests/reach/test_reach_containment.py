@@ -6,8 +6,9 @@ asserted to name a place in a file), random runs start at points of the
 initial set with piecewise-constant inputs within their ranges, simulated with
 tight tolerances; every stored point ``(t, x)`` in location ``L`` must lie in
 some set of ``L`` whose time interval holds ``t``, with ``x`` within the set's
-box, up to 1e-9 relative. In the suite: 200 runs per model; under ``make fuzz``
-(``HYBRID_FUZZ=1``): 10,000. The flowpipe is computed once per model; the runs are
+box, up to 1e-9 relative. In the suite: 200 runs per model, fewer for a costly one
+(:func:`_plan`); under ``make fuzz`` (``HYBRID_FUZZ=1``): 10,000 runs of every model over
+its full horizon and jumps. The flowpipe is computed once per model; the runs are
 simulated in two forked processes (each run from its own seeded generator, so the
 same runs whichever process takes them) and their points checked against the sets
 of their location at once (the sets whose time interval starts last before the point,
@@ -82,9 +83,19 @@ def _load(tmp: Path, source: Path, cfg: Path | None) -> hybrid.Automaton | hybri
 FUZZ = os.environ.get("HYBRID_FUZZ", "0") not in ("", "0")
 POINTS = 600
 """In the suite, a model whose nominal run stores more points than this over its horizon
-is sampled over a horizon that many points long (at least an eighth of it): the 200 runs
-of the four slowest (motor, Fischer, Building, ISS: thousands of solver steps a run at
-rtol 1e-10) took 170 s of the suite's time. ``make fuzz`` samples every full horizon."""
+is sampled over a horizon that many points long (at least an eighth of it)."""
+RUN_POINTS = 20_000
+"""In the suite, a model is sampled by 200 runs, or by as many as store about this many
+points in all (at least :data:`MIN_RUNS`), judged by one sampled run."""
+MIN_RUNS = 40
+FEW_JUMPS = 4
+BRANCHING = 10_000
+"""In the suite, a model whose flowpipe over :data:`FEW_JUMPS` jumps already holds more sets
+than this is sampled (runs and flowpipe) up to that many jumps."""
+# Measured on a 2-core machine before these limits: the 200 runs of the four costliest
+# models (motor 0.53 s a run of 1,567 points, Building 0.92 s, ISS 0.64 s) and Fischer's
+# flowpipe over 6 jumps (144,609 sets, 82 s; 22,961 over 4 jumps, 10 s) took 448 s of the
+# suite's 16 minutes. ``make fuzz`` samples every model in full.
 
 
 def _runs() -> int:
@@ -92,7 +103,10 @@ def _runs() -> int:
 
 
 def _sampled_run(
-    model: hybrid.Automaton | hybrid.System, t_end: float, rng: np.random.Generator
+    model: hybrid.Automaton | hybrid.System,
+    t_end: float,
+    rng: np.random.Generator,
+    max_jumps: int = MAX_JUMPS,
 ) -> tuple[hybrid.Run, dict[str, float]]:
     """One run from a random initial point, each bounded input piecewise constant at random."""
     system = as_system(model)
@@ -103,21 +117,34 @@ def _sampled_run(
         given[name] = PiecewiseConstant(starts, rng.uniform(r.lo, r.hi, 4))
     for name in (n for n in system.free_inputs if n not in system.input_ranges()):
         given[name] = PiecewiseConstant(np.zeros(1), np.zeros(1))
-    run = hybrid.simulate(model, t_end, max_jumps=MAX_JUMPS, rtol=1e-10, atol=1e-12,
+    run = hybrid.simulate(model, t_end, max_jumps=max_jumps, rtol=1e-10, atol=1e-12,
                           initial=initial, inputs=given, handle_sigint=False)  # fmt: skip
     return run, initial
 
 
-def _horizon(model: hybrid.Automaton | hybrid.System, seed: int) -> float:
-    """The sampled horizon: the model's full one, shortened in the suite for a costly model
-    (judged by one sampled run over the full horizon)."""
+def _plan(model: hybrid.Automaton | hybrid.System, seed: int) -> tuple[float, int]:
+    """The sampled horizon and number of runs: the model's full horizon and :func:`_runs`,
+    both cut in the suite for a costly model (judged by one sampled run over the full
+    horizon)."""
     t_end = T_END if len(model.state_names) <= LARGE else T_END_LARGE
     if FUZZ:
-        return t_end
+        return t_end, _runs()
     probe, _ = _sampled_run(model, t_end, np.random.default_rng(seed))
-    if len(probe) <= POINTS:
-        return t_end
-    return max(t_end / 8, t_end * POINTS / len(probe))
+    if len(probe) > POINTS:
+        t_end = max(t_end / 8, t_end * POINTS / len(probe))
+        probe, _ = _sampled_run(model, t_end, np.random.default_rng(seed))
+    return t_end, max(MIN_RUNS, min(_runs(), RUN_POINTS // max(1, len(probe))))
+
+
+def _flowpipe(
+    model: hybrid.Automaton | hybrid.System, t_end: float
+) -> tuple[hybrid.ReachResult, int]:
+    """The flowpipe the runs are checked against, and the jumps both stop at."""
+    if not FUZZ:
+        few = hybrid.reach(model, t_end, max_jumps=FEW_JUMPS, step=STEP, witness=False)
+        if len(few.sets) > BRANCHING:
+            return few, FEW_JUMPS
+    return hybrid.reach(model, t_end, max_jumps=MAX_JUMPS, step=STEP, witness=False), MAX_JUMPS
 
 
 def _accepted(tmp: Path) -> list[tuple[str, hybrid.Automaton | hybrid.System]]:
@@ -177,7 +204,13 @@ CHUNK = 50
 
 
 def _chunk(
-    name: str, t_end: float, sets: dict[str, _Sets], seed: int, first: int, count: int
+    name: str,
+    t_end: float,
+    max_jumps: int,
+    sets: dict[str, _Sets],
+    seed: int,
+    first: int,
+    count: int,
 ) -> tuple[int, list[str]]:
     """Runs ``first .. first + count - 1`` of model ``name``: stored points and escapes.
 
@@ -188,7 +221,7 @@ def _chunk(
     points = 0
     problems: list[str] = []
     for k in range(first, first + count):
-        run, initial = _sampled_run(model, t_end, np.random.default_rng([seed, k]))
+        run, initial = _sampled_run(model, t_end, np.random.default_rng([seed, k]), max_jumps)
         points += len(run)
         locations = run.location.astype(str)
         for loc in np.unique(locations):
@@ -203,13 +236,12 @@ def _chunk(
 
 
 def _escapes(
-    name: str, runs: int, seed: int, progress: Callable[[int, int, int], None] | None = None
+    name: str, seed: int, progress: Callable[[int, int, int], None] | None = None
 ) -> tuple[int, int, list[str]]:
-    """``runs`` sampled runs of model ``name`` against its sets: runs, points, escapes."""
+    """Sampled runs of model ``name`` against its sets (:func:`_plan`): runs, points, escapes."""
     model = MODELS[name]
-    # large models (Building, 48 states) over a shorter horizon: each run costs more
-    t_end = _horizon(model, seed)
-    result = hybrid.reach(model, t_end, max_jumps=MAX_JUMPS, step=STEP, witness=False)
+    t_end, runs = _plan(model, seed)
+    result, max_jumps = _flowpipe(model, t_end)
     sets: dict[str, _Sets] = {}
     for loc in {s.location for s in result.sets}:
         chosen = [s for s in result.sets if s.location == loc]
@@ -218,7 +250,9 @@ def _escapes(
             np.array([s.lo for s in chosen]),
             np.array([s.hi for s in chosen]),
         )
-    tasks = [(name, t_end, sets, seed, k, min(CHUNK, runs - k)) for k in range(0, runs, CHUNK)]
+    tasks = [
+        (name, t_end, max_jumps, sets, seed, k, min(CHUNK, runs - k)) for k in range(0, runs, CHUNK)
+    ]
     done = points = 0
     problems: list[str] = []
 
@@ -264,6 +298,6 @@ def test_reach_accepts_the_affine_models() -> None:
 @pytest.mark.fuzz
 @pytest.mark.parametrize("name", list(MODELS))
 def test_every_simulated_state_is_in_a_set(name: str) -> None:
-    runs, points, problems = _escapes(name, _runs(), seed=24)
-    assert runs >= 200 and points >= runs
+    runs, points, problems = _escapes(name, seed=24)
+    assert runs >= MIN_RUNS and points >= runs
     assert not problems, f"{len(problems)} escapes, first: {problems[:3]}"
