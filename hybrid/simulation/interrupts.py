@@ -122,7 +122,9 @@ def immediate(what: str) -> Iterator[None]:
     Inside a command's :class:`Interrupts`, a Ctrl-C would otherwise only be
     requested and seen by the next run's loop, after a compile of many seconds;
     here it raises ``KeyboardInterrupt`` saying what was stopped (the command
-    line prints that and exits 130). Outside one, Python's own handler raises it.
+    line prints that and exits 130). A Ctrl-C requested just before (while numba
+    was imported, say) stops it as it starts. Outside one, Python's own handler
+    raises it.
 
     Examples
     --------
@@ -134,12 +136,21 @@ def immediate(what: str) -> Iterator[None]:
     ...     except KeyboardInterrupt:
     ...         print("stopped at once")
     stopped at once
+    >>> stop.requested = True  # a Ctrl-C came before the work
+    >>> try:
+    ...     with immediate("compiling the model"):
+    ...         print("never printed")
+    ... except KeyboardInterrupt as stopped:
+    ...     print(stopped)
+    interrupted while compiling the model
     >>> _ACTIVE.remove(stop)
     """
     if not _ACTIVE:
         yield
         return
     active = _ACTIVE[-1]
+    if active.requested:  # the work would only delay the stop it asked for
+        raise KeyboardInterrupt(f"interrupted while {what}")
     before, active.in_immediate = active.in_immediate, what
     try:
         yield

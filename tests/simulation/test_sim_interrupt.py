@@ -99,3 +99,29 @@ locations:
     # stopped at the end of the step during which the signal came (steps <= 0.01)
     assert sent and abs(term.t - sent[0]) <= 0.01
     assert run.t[-1] == term.t and run["x"][-1] == pytest.approx(term.t, abs=1e-9)
+
+
+def test_a_ctrl_c_before_a_compile_stops_the_command_before_it_compiles() -> None:
+    """A Ctrl-C requested just before the compile starts (numba's import takes a second) was
+    seen only by the run's loop, after the compile: a cold compile of the kernel held the
+    user for 31 s, then wrote a run of one point. Now the compile does not start."""
+    import uuid
+
+    import hybrid
+    from hybrid.simulation.interrupts import Interrupts
+
+    pytest.importorskip("numba")
+    from hybrid.simulation.native.choice import cached
+
+    rate = 1.0 + uuid.uuid4().int % 10**9 / 1e12  # a structure of its own: in no cache
+    model = hybrid.load_text(
+        f"automaton: drift\nstate: {{x: {{initial: 0}}}}\nlocations: {{go: {{flow: {{x: {rate!r}}}}}}}\n"
+    )
+    stop = Interrupts()
+    with stop.installed():
+        stop.press()  # the command's handler, as a Ctrl-C runs it
+        with pytest.raises(KeyboardInterrupt, match="interrupted while compiling the model"):
+            hybrid.simulate(model, t_end=1.0, backend="compiled")
+    assert cached(model)[0] == "missing"  # nothing was compiled
+    run = hybrid.simulate(model, t_end=1.0, backend="compiled", handle_sigint=False)
+    assert run.states[-1, 0] == pytest.approx(rate, rel=1e-12)  # and the next command compiles
