@@ -58,7 +58,9 @@ __all__ = [
     "choose",
     "compile_notice",
     "compile_notices",
+    "expected_wait",
     "generated_notice",
+    "generated_wait",
     "machine_factor",
 ]
 
@@ -222,20 +224,43 @@ def machine_factor() -> float:
 
 def compile_notice(model: Any) -> str | None:
     """What a first compiled run of ``model`` compiles before it starts, and about how long
-    that takes here; ``None`` when the model and the compiled loop are both cached.
+    that takes; ``None`` when the model and the compiled loop are both cached.
 
     A command prints it as a run starts to compile (:func:`compile_notices`), so that
-    a user knows why a first run waits (and that later ones will not).
+    a user knows why a first run waits (and that later ones will not). The estimates
+    are the benchmark machine's, scaled by how long the last compile on this machine
+    took against its own (:mod:`~hybrid.simulation.native.pace`; the text then says
+    "here").
     """
     return _notice(*cached(model))
 
 
+def expected_wait(model_state: str, kernel_state: str, estimate: float) -> float:
+    """Seconds a compile of what :func:`cached` says is missing waits on the benchmark
+    machine: the kernel's :data:`KERNEL_COMPILE_S` and the model's ``estimate`` (at
+    least 1 s); 0 when both are cached.
+
+    Examples
+    --------
+    >>> expected_wait("missing", "cached", 0.4), expected_wait("cached", "missing", 0.4)
+    (1.0, 8.0)
+    """
+    kernel_s = KERNEL_COMPILE_S if kernel_state == "missing" else 0.0
+    return kernel_s + (max(1.0, estimate) if model_state == "missing" else 0.0)
+
+
 def _notice(model_state: str, kernel_state: str, estimate: float) -> str | None:
+    from hybrid.simulation.native.pace import pace
+
     parts = []
+    # this machine's pace, from its last compile of the kind; None: the benchmark machine's
+    factor = pace("kernel" if kernel_state == "missing" else "model")
+    scale, here = (1.0, "") if factor is None else (factor, " here")
     if kernel_state == "missing":
-        parts.append(f"the compiled loop (once per machine, about {KERNEL_COMPILE_S:.0f} s)")
+        kernel_s = KERNEL_COMPILE_S * scale
+        parts.append(f"the compiled loop (once per machine, about {kernel_s:.0f} s{here})")
     if model_state == "missing":
-        parts.append(f"the model (about {max(1.0, estimate):.0f} s)")
+        parts.append(f"the model (about {max(1.0, max(1.0, estimate) * scale):.0f} s{here})")
     if not parts:
         return None
     return f"compiling {' and '.join(parts)}; later runs load them from the cache"
@@ -284,6 +309,15 @@ def announce(notice: Callable[[], str | None]) -> None:
 def generated_notice(generated: Any) -> str | None:
     """:func:`compile_notice` of a model whose source is ``generated`` already."""
     return _notice(*_cached_source(generated))
+
+
+def generated_wait(generated: Any) -> tuple[float, str]:
+    """:func:`expected_wait` of a model whose source is ``generated`` already, and the kind
+    of that compile (:mod:`~hybrid.simulation.native.pace`): ``"kernel"`` when the kernel
+    is missing, else ``"model"``."""
+    model_state, kernel_state, estimate = _cached_source(generated)
+    kind = "kernel" if kernel_state == "missing" else "model"
+    return expected_wait(model_state, kernel_state, estimate), kind
 
 
 def _scipy_loaded() -> bool:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 import warnings
 from collections.abc import Callable, Mapping
 from functools import partial
@@ -32,12 +33,13 @@ from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import Layout, run_from
 from hybrid.simulation.native.cache import load_generated, require_numba, seal
-from hybrid.simulation.native.choice import announce, generated_notice
+from hybrid.simulation.native.choice import announce, generated_notice, generated_wait
 from hybrid.simulation.native.features import check_supported
 from hybrid.simulation.native.interruptible import run_here, run_in_worker
 from hybrid.simulation.native.kernel_text import kernel_module
 from hybrid.simulation.native.kernel_types import PIECES
 from hybrid.simulation.native.loop import lay_out_work
+from hybrid.simulation.native.pace import record as record_pace
 from hybrid.simulation.native.shares import compiling_beside
 from hybrid.simulation.native.source import generate
 from hybrid.simulation.native.structure import NativeModel
@@ -102,6 +104,9 @@ class CompiledNative:
         self.layout = Layout.of(self.native)
         self.generated = generate(self.native)
         announce(partial(generated_notice, self.generated))  # the model is accepted: say it
+        require_numba()  # imported before the clock starts: the import is not the compile
+        expected, kind = generated_wait(self.generated)  # what is to compile, estimated
+        started = time.perf_counter()
         with compiling_beside(self.generated.compile_estimate):
             kernel(wait=False)  # the first time, worker processes compile the rest meanwhile
         try:
@@ -116,6 +121,8 @@ class CompiledNative:
         self.kernel = kernel()
         seal(self.kernel)  # both compiled whole now: their cache files are held to a manifest
         seal(self.module)
+        if expected:
+            record_pace(time.perf_counter() - started, expected, kind)  # later notices scale by it
         self.functions: Any = self.module.model
         from hybrid.simulation.native.pointers import model_addresses
 

@@ -1,0 +1,96 @@
+"""How long a compile takes on this machine, against the benchmark machine's estimates.
+
+A first compiled run says what it compiles and about how long that takes
+(:func:`~hybrid.simulation.native.choice.compile_notice`): the kernel's wait
+(:data:`~hybrid.simulation.native.choice.KERNEL_COMPILE_S`) and a model's estimate
+from its generated source are figures of the benchmark machine, and a machine three
+times slower waits three times as long. Each compile a process finishes keeps the
+seconds it waited over the seconds estimated (:func:`record`), in ``pace.json`` in
+the cache root: one ratio for a compile of the kernel (with its model), one for a
+model's alone, whose wait is more loading than compiling. Later notices scale their
+estimates by the ratio of their kind, or else of the other (:func:`pace`). Nothing
+here is needed for a run: a cache that cannot be written keeps no pace, and a pace
+that cannot be read is none.
+
+Examples
+--------
+>>> import os, tempfile
+>>> from hybrid.simulation.native import cache
+>>> os.environ[cache.CACHE_ENV] = tempfile.mkdtemp()
+>>> pace("model") is None
+True
+>>> record(27.0, 9.0, "kernel")
+>>> pace("kernel"), pace("model")
+(3.0, 3.0)
+>>> record(1.5, 1.0, "model")
+>>> pace("kernel"), pace("model")
+(3.0, 1.5)
+>>> del os.environ[cache.CACHE_ENV]
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+import tempfile
+
+from hybrid.simulation.native.cache import cache_root
+
+__all__ = ["KINDS", "PACE_FILE", "PACE_RANGE", "pace", "record"]
+
+KINDS = ("kernel", "model")
+"""The kinds of compile a pace is kept for."""
+
+PACE_FILE = "pace.json"
+"""The file in the cache root that keeps the last pace of each kind."""
+PACE_RANGE = (0.25, 16.0)
+"""The least and most pace kept: beyond, a measurement says more about a stalled or
+suspended process than about the machine."""
+
+
+def record(waited_s: float, estimated_s: float, kind: str) -> None:
+    """Keep ``waited_s / estimated_s`` (within :data:`PACE_RANGE`) as this machine's pace
+    for a compile of ``kind``: ``"kernel"`` (the kernel, and a model with it) or ``"model"``."""
+    if not (estimated_s > 0.0 and math.isfinite(waited_s) and waited_s > 0.0):
+        return
+    least, most = PACE_RANGE
+    kept = _kept()
+    kept[kind] = {"pace": min(most, max(least, waited_s / estimated_s)),
+                  "waited_s": waited_s, "estimated_s": estimated_s}  # fmt: skip
+    root = cache_root()
+    try:
+        handle, temporary = tempfile.mkstemp(dir=root, prefix=".", suffix=".tmp")
+    except OSError:
+        return  # a better estimate next time, no more: the run goes on without it
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8") as stream:
+            stream.write(json.dumps(kept))
+        os.replace(temporary, root / PACE_FILE)
+    except OSError:
+        with contextlib.suppress(OSError):
+            os.unlink(temporary)
+
+
+def pace(kind: str) -> float | None:
+    """This machine's pace for a compile of ``kind`` (see :func:`record`), else for the other
+    kind, else ``None``."""
+    kept = _kept()
+    for name in (kind, *(k for k in KINDS if k != kind)):
+        entry = kept.get(name)
+        found = entry.get("pace") if isinstance(entry, dict) else None
+        if isinstance(found, bool) or not isinstance(found, int | float):
+            continue
+        if PACE_RANGE[0] <= found <= PACE_RANGE[1]:
+            return float(found)
+    return None
+
+
+def _kept() -> dict[str, object]:
+    """What ``pace.json`` holds, or nothing when it is missing or damaged."""
+    try:
+        found = json.loads((cache_root() / PACE_FILE).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return {k: v for k, v in found.items() if k in KINDS} if isinstance(found, dict) else {}
