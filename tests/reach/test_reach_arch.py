@@ -18,7 +18,11 @@ importer's message.
 
 from __future__ import annotations
 
+import atexit
+import functools
 import re
+import shutil
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -38,20 +42,29 @@ BUILDING = EXTERNAL / "arch" / "building"
 PLATOON = EXTERNAL / "arch" / "platoon"
 
 
-TOPS: dict[Path, Path] = {}
-"""The folder of each import -> its top-level spec file."""
+_TMP = Path(tempfile.mkdtemp(prefix="hybrid-reach-arch-"))
+"""This process's own folder for the imported specs, removed at its exit: pytest's workers
+each collect this module, and one fixed folder had them read each other's half-written files."""
+atexit.register(shutil.rmtree, _TMP, ignore_errors=True)
+SOURCES = {
+    **{name: (BUILDING / "BLDF01.xml", BUILDING / f"BLDF01-{name}.cfg")
+       for name in ("BDS01", "BDU01", "BDU02")},
+    "PLAD01": (PLATOON / "PLAD01-BND.xml", PLATOON / "PLAD01-BND42-spec.cfg"),
+}  # fmt: skip
 
 
-def _import(tmp: Path, xml: Path, cfg: Path) -> hybrid.Automaton | hybrid.System | SpecError:
+def _import(tmp: Path, xml: Path, cfg: Path) -> tuple[hybrid.Automaton | hybrid.System, Path]:
+    """The model imported from ``xml`` and ``cfg`` into ``tmp``, and its top-level spec file;
+    an import the importer refuses, or whose spec does not load, fails the test with its
+    message."""
     try:
         result = import_spaceex(xml, cfg)
         tmp.mkdir(parents=True, exist_ok=True)
         for name, text in result.files.items():
             (tmp / name).write_text(text)
-        TOPS[tmp] = tmp / result.top
-        return hybrid.load(tmp / result.top)
-    except SpecError as exc:  # the importer refuses it, or writes a spec that does not load
-        return exc
+        return hybrid.load(tmp / result.top), tmp / result.top
+    except SpecError as exc:
+        pytest.fail(f"the SpaceEx import of {xml.name} with {cfg.name} failed: {exc}")
 
 
 def _horizon(cfg: Path) -> float:
@@ -60,20 +73,14 @@ def _horizon(cfg: Path) -> float:
     return float(found.group(1))
 
 
-_TMP = Path("/tmp/hybrid-reach-arch")
-MODELS = {
-    name: _import(_TMP / name, BUILDING / "BLDF01.xml", BUILDING / f"BLDF01-{name}.cfg")
-    for name in ("BDS01", "BDU01", "BDU02")
-}
-MODELS["PLAD01"] = _import(
-    _TMP / "PLAD01", PLATOON / "PLAD01-BND.xml", PLATOON / "PLAD01-BND42-spec.cfg"
-)
+@functools.cache
+def _imported(name: str) -> tuple[hybrid.Automaton | hybrid.System, Path]:
+    """Instance ``name`` of :data:`SOURCES`, imported when a test first needs it."""
+    return _import(_TMP / name, *SOURCES[name])
 
 
 def _model(name: str) -> hybrid.Automaton | hybrid.System:
-    found = MODELS[name]
-    assert not isinstance(found, SpecError), f"the SpaceEx import of {name} failed: {found}"
-    return found
+    return _imported(name)[0]
 
 
 def _x25(run: hybrid.Run) -> np.ndarray:
@@ -131,7 +138,9 @@ def test_building_bdu01_is_refuted_before_any_flowpipe_by_a_replayable_run() -> 
         return float(_x25(run)[-1])
 
     # the time was found without a simulation: the simulator's run enters there too, to 1e-6
-    assert replay(entry.witness_time * (1 - 1e-6)) < 0.004 <= replay(entry.witness_time * (1 + 1e-6))
+    assert (
+        replay(entry.witness_time * (1 - 1e-6)) < 0.004 <= replay(entry.witness_time * (1 + 1e-6))
+    )
     for name, r in as_system(model).initial_set().items():
         assert r.lo <= entry.witness_initial[name] <= r.hi
 
@@ -155,10 +164,12 @@ def test_building_bdu02_is_refuted_at_the_end_of_the_horizon() -> None:
 
 
 def test_check_is_green_on_bds01_and_red_with_a_witness_on_bdu01() -> None:
-    safe = run_cli("check", TOPS[_TMP / "BDS01"], "--reach-t-end", "20", "--reach-max-jumps", "1")
+    safe = run_cli("check", _imported("BDS01")[1], "--reach-t-end", "20", "--reach-max-jumps", "1")
     assert safe.returncode == 0, safe.stdout + safe.stderr
     assert "property-" not in safe.stdout
-    unsafe = run_cli("check", TOPS[_TMP / "BDU01"], "--reach-t-end", "20", "--reach-max-jumps", "1")
+    unsafe = run_cli(
+        "check", _imported("BDU01")[1], "--reach-t-end", "20", "--reach-max-jumps", "1"
+    )
     assert unsafe.returncode == 1, unsafe.stdout + unsafe.stderr
     assert (
         "error property-violated: forbidden state 'x25 >= 0.004' is reached at t = "
@@ -179,8 +190,7 @@ def test_filtered_oscillators_run_to_their_horizon(order: str) -> None:
     folder = EXTERNAL / "spaceex" / order
     xml = next(folder.glob("*.xml"))
     cfg = folder / f"{order}.cfg"
-    model = _import(_TMP / order, xml, cfg)
-    assert not isinstance(model, SpecError), model
+    model, _ = _import(_TMP / order, xml, cfg)
     t_end = _horizon(cfg)
     result = hybrid.reach(model, t_end, max_jumps=20, step=0.01)
     assert result.complete and len(result.properties) == len(model.properties.forbidden)
