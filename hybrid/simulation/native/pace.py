@@ -7,8 +7,9 @@ from its generated source are figures of the benchmark machine, and a machine th
 times slower waits three times as long. Each compile a process finishes keeps the
 seconds it waited over the seconds estimated (:func:`record`), in ``pace.json`` in
 the cache root: one ratio for a compile of the kernel (with its model), one for a
-model's alone, whose wait is more loading than compiling. Later notices scale their
-estimates by the ratio of their kind, or else of the other (:func:`pace`). Nothing
+large model's alone (a small one's wait is mostly loading, and keeps none). Later
+notices scale their estimates by the ratio of their kind, or else of the other
+(:func:`pace`). Nothing
 here is needed for a run: a cache that cannot be written keeps no pace, and a pace
 that cannot be read is none.
 
@@ -22,9 +23,10 @@ True
 >>> record(27.0, 9.0, "kernel")
 >>> pace("kernel"), pace("model")
 (3.0, 3.0)
->>> record(1.5, 1.0, "model")
+>>> record(1.5, 1.0, "model")  # a small model's compile: no pace
+>>> record(30.0, 15.0, "model")
 >>> pace("kernel"), pace("model")
-(3.0, 1.5)
+(3.0, 2.0)
 >>> del os.environ[cache.CACHE_ENV]
 """
 
@@ -38,13 +40,17 @@ import tempfile
 
 from hybrid.simulation.native.cache import cache_root
 
-__all__ = ["KINDS", "PACE_FILE", "PACE_RANGE", "pace", "record"]
+__all__ = ["KINDS", "MIN_ESTIMATE_S", "PACE_FILE", "PACE_RANGE", "pace", "record"]
 
 KINDS = ("kernel", "model")
 """The kinds of compile a pace is kept for."""
 
 PACE_FILE = "pace.json"
 """The file in the cache root that keeps the last pace of each kind."""
+MIN_ESTIMATE_S = 5.0
+"""A compile estimated shorter keeps no pace: its wait is mostly loading, whatever the
+machine (a small model compiled in a process that has compiled before waited 0.34 s
+against 1 s estimated, on a machine where the kernel waited 3.3 times its estimate)."""
 PACE_RANGE = (0.25, 16.0)
 """The least and most pace kept: beyond, a measurement says more about a stalled or
 suspended process than about the machine."""
@@ -52,8 +58,9 @@ suspended process than about the machine."""
 
 def record(waited_s: float, estimated_s: float, kind: str) -> None:
     """Keep ``waited_s / estimated_s`` (within :data:`PACE_RANGE`) as this machine's pace
-    for a compile of ``kind``: ``"kernel"`` (the kernel, and a model with it) or ``"model"``."""
-    if not (estimated_s > 0.0 and math.isfinite(waited_s) and waited_s > 0.0):
+    for a compile of ``kind``: ``"kernel"`` (the kernel, and a model with it) or ``"model"``
+    (at least :data:`MIN_ESTIMATE_S` estimated)."""
+    if not (estimated_s >= MIN_ESTIMATE_S and math.isfinite(waited_s) and waited_s > 0.0):
         return
     least, most = PACE_RANGE
     kept = _kept()

@@ -55,7 +55,9 @@ def test_a_models_notice_scales_by_the_last_model_compile(empty_cache: Path) -> 
     assert _notice("missing", "cached", 0.5) == (
         "compiling the model (about 3 s here); later runs load them from the cache"
     )  # no model compile kept yet: the kernel's pace
-    pace.record(2.0, 1.0, "model")
+    pace.record(1.5, 1.0, "model")  # a small model's: mostly loading, not kept
+    assert pace.pace("model") == 3.0
+    pace.record(30.0, 15.0, "model")  # a large model's
     assert _notice("missing", "cached", 2.5) == (
         "compiling the model (about 5 s here); later runs load them from the cache"
     )
@@ -91,12 +93,13 @@ def test_a_damaged_pace_is_no_pace(empty_cache: Path, text: str) -> None:
 
 def test_extreme_waits_are_kept_within_the_range(empty_cache: Path) -> None:
     least, most = pace.PACE_RANGE
-    pace.record(1000.0, 1.0, "model")
+    pace.record(1000.0, 10.0, "model")
     assert pace.pace("model") == most
     pace.record(0.001, 8.0, "model")
     assert pace.pace("model") == least
     pace.record(float("nan"), 8.0, "model")  # nothing measured: the last pace stays
     pace.record(5.0, 0.0, "model")  # nothing estimated (nothing compiled): likewise
+    pace.record(50.0, pace.MIN_ESTIMATE_S / 2, "model")  # a small compile: likewise
     assert pace.pace("model") == least
 
 
