@@ -9,9 +9,8 @@ seconds it waited over the seconds estimated (:func:`record`), in ``pace.json`` 
 the cache root: one ratio for a compile of the kernel (with its model), one for a
 large model's alone (a small one's wait is mostly loading, and keeps none). Later
 notices scale their estimates by the ratio of their kind, or else of the other
-(:func:`pace`). Nothing
-here is needed for a run: a cache that cannot be written keeps no pace, and a pace
-that cannot be read is none.
+(:func:`pace`). Nothing here is needed for a run: a cache that cannot be written
+keeps no pace, and a pace that cannot be read is none.
 
 Examples
 --------
