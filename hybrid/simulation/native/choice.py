@@ -228,9 +228,9 @@ def compile_notice(model: Any) -> str | None:
 
     A command prints it as a run starts to compile (:func:`compile_notices`), so that
     a user knows why a first run waits (and that later ones will not). The estimates
-    are the benchmark machine's, scaled by how long the last compile on this machine
-    took against its own (:mod:`~hybrid.simulation.native.pace`; the text then says
-    "here").
+    are the benchmark machine's; one of 5 s or more is scaled by how long the last
+    long compile on this machine took against its own
+    (:mod:`~hybrid.simulation.native.pace`; the text then says "here").
     """
     return _notice(*cached(model))
 
@@ -250,17 +250,21 @@ def expected_wait(model_state: str, kernel_state: str, estimate: float) -> float
 
 
 def _notice(model_state: str, kernel_state: str, estimate: float) -> str | None:
-    from hybrid.simulation.native.pace import pace
+    from hybrid.simulation.native.pace import MIN_ESTIMATE_S, pace
 
-    parts = []
     # this machine's pace, from its last compile of the kind; None: the benchmark machine's
     factor = pace("kernel" if kernel_state == "missing" else "model")
-    scale, here = (1.0, "") if factor is None else (factor, " here")
+
+    def about(seconds: float) -> str:  # a short compile's wait is mostly loading: not scaled
+        if factor is None or seconds < MIN_ESTIMATE_S:
+            return f"about {seconds:.0f} s"
+        return f"about {seconds * factor:.0f} s here"
+
+    parts = []
     if kernel_state == "missing":
-        kernel_s = KERNEL_COMPILE_S * scale
-        parts.append(f"the compiled loop (once per machine, about {kernel_s:.0f} s{here})")
+        parts.append(f"the compiled loop (once per machine, {about(KERNEL_COMPILE_S)})")
     if model_state == "missing":
-        parts.append(f"the model (about {max(1.0, max(1.0, estimate) * scale):.0f} s{here})")
+        parts.append(f"the model ({about(max(1.0, estimate))})")
     if not parts:
         return None
     return f"compiling {' and '.join(parts)}; later runs load them from the cache"

@@ -40,9 +40,9 @@ def test_the_notice_scales_its_estimates_by_the_last_compiles_pace(empty_cache: 
     notice = compile_notice(model)
     assert notice is not None
     kernel_s = 3 * KERNEL_COMPILE_S
-    model_s = max(1.0, 3 * max(1.0, _thermostat_estimate()))
+    assert _thermostat_estimate() < pace.MIN_ESTIMATE_S  # a short compile: not scaled
     assert f"the compiled loop (once per machine, about {kernel_s:.0f} s here)" in notice
-    assert f"the model (about {model_s:.0f} s here)" in notice
+    assert f"the model (about {max(1.0, _thermostat_estimate()):.0f} s)" in notice
     kept = json.loads((empty_cache / pace.PACE_FILE).read_text())
     assert kept == {"kernel": {"pace": 3.0, "waited_s": 30.0, "estimated_s": 10.0}}
 
@@ -52,18 +52,22 @@ def test_a_models_notice_scales_by_the_last_model_compile(empty_cache: Path) -> 
     from hybrid.simulation.native.choice import _notice
 
     pace.record(27.0, 9.0, "kernel")
-    assert _notice("missing", "cached", 0.5) == (
-        "compiling the model (about 3 s here); later runs load them from the cache"
+    assert _notice("missing", "cached", 10.0) == (
+        "compiling the model (about 30 s here); later runs load them from the cache"
     )  # no model compile kept yet: the kernel's pace
-    pace.record(1.5, 1.0, "model")  # a small model's: mostly loading, not kept
+    assert _notice("missing", "cached", 0.5) == (
+        "compiling the model (about 1 s); later runs load them from the cache"
+    )  # a short compile, mostly loading: the estimate as it is
+    pace.record(1.5, 1.0, "model")  # a small model's compile: not kept either
     assert pace.pace("model") == 3.0
     pace.record(30.0, 15.0, "model")  # a large model's
-    assert _notice("missing", "cached", 2.5) == (
-        "compiling the model (about 5 s here); later runs load them from the cache"
+    assert _notice("missing", "cached", 10.0) == (
+        "compiling the model (about 20 s here); later runs load them from the cache"
     )
-    assert "the compiled loop (once per machine, about 24 s here)" in str(
-        _notice("missing", "missing", 2.5)
-    )  # a kernel compile: the kernel's pace
+    assert _notice("missing", "missing", 10.0) == (
+        "compiling the compiled loop (once per machine, about 24 s here) and the model "
+        "(about 30 s here); later runs load them from the cache"
+    )  # a compile with the kernel: the kernel's pace for both
     assert pace.pace("kernel") == 3.0 and pace.pace("model") == 2.0
 
 
