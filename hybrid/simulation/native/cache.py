@@ -47,6 +47,7 @@ import sys
 import tempfile
 import threading
 import warnings
+from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
 
@@ -60,6 +61,7 @@ __all__ = [
     "CompiledCacheNote",
     "cache_key",
     "cache_root",
+    "compiling",
     "load_generated",
     "require_numba",
     "seal",
@@ -226,6 +228,48 @@ def _import(name: str, path: Path) -> ModuleType:
         sys.modules.pop(name, None)
         raise
     return module
+
+
+LOCK_FILE = ".compile.lock"
+"""In a key's directory: held (``flock``) by the process compiling that key."""
+
+
+@contextlib.contextmanager
+def compiling(*generated: Generated) -> Iterator[None]:
+    """Held while this process compiles ``generated``: another process about to compile one
+    of them at once waits until it is done, then loads it from the cache.
+
+    Two processes started together on an empty cache (two pytest workers, two runs of
+    a make file) each compiled the kernel, twice the CPU for the same files. Only keys
+    neither loaded here nor sealed on disk are locked, each in its directory, in the
+    order of their keys (two processes never wait for each other); a lock is released
+    when its process ends, however it ends. Where ``fcntl`` is missing or a directory
+    cannot be written, nothing is locked.
+    """
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: each process compiles what it needs, as before
+        yield
+        return
+    numba = require_numba()
+    keys = sorted({cache_key(g, numba.__version__) for g in generated})
+    held: list[int] = []
+    try:
+        for key in keys:
+            directory = cache_root() / key
+            if key in _LOADED or (directory / MANIFEST).is_file():
+                continue
+            try:
+                directory.mkdir(parents=True, exist_ok=True, mode=0o700)
+                handle = os.open(directory / LOCK_FILE, os.O_RDWR | os.O_CREAT, 0o600)
+            except OSError:
+                continue  # the compile goes on unlocked (a cache elsewhere, say)
+            held.append(handle)
+            fcntl.flock(handle, fcntl.LOCK_EX)  # a Ctrl-C while waiting stops the wait
+        yield
+    finally:
+        for handle in held:
+            os.close(handle)  # closing releases the lock
 
 
 def load_generated(generated: Generated) -> ModuleType:

@@ -32,7 +32,7 @@ from hybrid.model import Automaton
 from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import Layout, run_from
-from hybrid.simulation.native.cache import load_generated, require_numba, seal
+from hybrid.simulation.native.cache import compiling, load_generated, require_numba, seal
 from hybrid.simulation.native.choice import announce, generated_notice, generated_wait
 from hybrid.simulation.native.features import check_supported
 from hybrid.simulation.native.interruptible import run_here, run_in_worker
@@ -92,7 +92,9 @@ def kernel(parallel: bool = False, wait: bool = True) -> ModuleType:
                 address for name, _ in PIECES for address in addresses(getattr(_KERNEL["one"], name))
             )
         if parallel and "many" not in _KERNEL:
-            _KERNEL["many"] = load_generated(kernel_module(_KERNEL["one"].__name__))
+            many = kernel_module(_KERNEL["one"].__name__)
+            with compiling(many):  # another process compiling it: awaited, then loaded
+                _KERNEL["many"] = load_generated(many)
         return _KERNEL["many" if parallel else "one"]
 
 
@@ -105,24 +107,12 @@ class CompiledNative:
         self.generated = generate(self.native)
         announce(partial(generated_notice, self.generated))  # the model is accepted: say it
         require_numba()  # imported before the clock starts: the import is not the compile
-        expected, kind = generated_wait(self.generated)  # what is to compile, estimated
-        started = time.perf_counter()
-        with compiling_beside(self.generated.compile_estimate):
-            kernel(wait=False)  # the first time, worker processes compile the rest meanwhile
-        try:
-            self.module: ModuleType = load_generated(self.generated)
-        except Exception as exc:  # numba refusing a library's compiled form, say
-            lines = [line for line in str(exc).splitlines() if line.strip()]
-            what = ", ".join(sorted(self.native.functions)) or "its expressions"
-            raise UsageError(
-                f"the compiled backend could not compile {self.native.system.name} "
-                f"(library functions: {what}): {lines[0] if lines else type(exc).__name__}"
-            ) from exc
-        self.kernel = kernel()
-        seal(self.kernel)  # both compiled whole now: their cache files are held to a manifest
-        seal(self.module)
-        if expected:
-            record_pace(time.perf_counter() - started, expected, kind)  # later notices scale by it
+        with compiling(kernel_module(), self.generated):  # another process's compile: awaited
+            expected, kind = generated_wait(self.generated)  # what is left to compile
+            started = time.perf_counter()
+            self.module, self.kernel = self._compile_or_load()
+            if expected:
+                record_pace(time.perf_counter() - started, expected, kind)  # for later notices
         self.functions: Any = self.module.model
         from hybrid.simulation.native.pointers import model_addresses
 
@@ -137,6 +127,24 @@ class CompiledNative:
         self._one = _entry_point(self.kernel.run_one)
         self._many: Callable[..., None] | None = None
         self._scratch = threading.local()
+
+    def _compile_or_load(self) -> tuple[ModuleType, ModuleType]:
+        """The model's module and the kernel, compiled or loaded, and sealed."""
+        with compiling_beside(self.generated.compile_estimate):
+            kernel(wait=False)  # the first time, worker processes compile the rest meanwhile
+        try:
+            module = load_generated(self.generated)
+        except Exception as exc:  # numba refusing a library's compiled form, say
+            lines = [line for line in str(exc).splitlines() if line.strip()]
+            what = ", ".join(sorted(self.native.functions)) or "its expressions"
+            raise UsageError(
+                f"the compiled backend could not compile {self.native.system.name} "
+                f"(library functions: {what}): {lines[0] if lines else type(exc).__name__}"
+            ) from exc
+        loop = kernel()
+        seal(loop)  # both compiled whole now: their cache files are held to a manifest
+        seal(module)
+        return module, loop
 
     def run_one(self, p: Any, x0: Any, t0: float, m0: int, cfg: Any, arrays: b.RunArrays,
                 flag: Any) -> None:  # fmt: skip
