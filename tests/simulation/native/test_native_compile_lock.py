@@ -64,47 +64,39 @@ def cache_env(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> dict[str, str]
     return {**os.environ, cache.CACHE_ENV: str(tmp_path / "cache")}
 
 
-def test_a_second_process_waits_for_the_one_compiling_the_same_key(
-    tmp_path: Path, cache_env: dict[str, str]
-) -> None:
-    log = tmp_path / "order"
-    holder = _holder(log, "# one source\n", 1.0, cache_env)
-    _enter(log, "# one source\n")
-    holder.wait(timeout=60)
-    assert log.read_text().splitlines() == ["holder in", "holder out", "second in"]
+ONE = "# one source\n"
+CASES = {
+    "same-key-waits": ("# one source\n", None, ["holder in", "holder out", "second in"]),
+    "other-key-goes-on": ("# another source\n", None, ["holder in", "second in", "holder out"]),
+    "sealed-meanwhile-goes-on": (
+        "# one source\n",
+        "seal",
+        ["holder in", "second in", "holder out"],
+    ),
+    "holder-killed-goes-on": ("# one source\n", "kill", ["holder in", "second in"]),
+}
+"""What the second process compiles, what happens to the first's key meanwhile (its code
+sealed on disk, or its process killed with SIGKILL), and the order the file then holds."""
 
 
-def test_other_code_is_not_held_up(tmp_path: Path, cache_env: dict[str, str]) -> None:
-    log = tmp_path / "order"
-    holder = _holder(log, "# one source\n", 3.0, cache_env)
-    _enter(log, "# another source\n")
-    holder.wait(timeout=60)
-    assert log.read_text().splitlines() == ["holder in", "second in", "holder out"]
-
-
-def test_code_sealed_in_the_cache_is_loaded_without_waiting(
-    tmp_path: Path, cache_env: dict[str, str]
+@pytest.mark.parametrize("case", list(CASES))
+def test_a_second_process_waits_only_while_the_same_key_is_compiled(
+    case: str, tmp_path: Path, cache_env: dict[str, str]
 ) -> None:
     import numba
 
     from hybrid.simulation.native import cache
     from hybrid.simulation.native.kernel_text import Generated
 
+    second, meanwhile, order = CASES[case]
     log = tmp_path / "order"
-    holder = _holder(log, "# one source\n", 3.0, cache_env)
-    key = cache.cache_key(Generated(source="# one source\n"), numba.__version__)
-    (cache.cache_root() / key / cache.MANIFEST).write_text("{}")  # compiled whole meanwhile
-    _enter(log, "# one source\n")
+    holder = _holder(log, ONE, 60.0 if meanwhile == "kill" else 2.0, cache_env)
+    if meanwhile == "seal":  # compiled whole meanwhile (by another process, say)
+        key = cache.cache_key(Generated(source=ONE), numba.__version__)
+        (cache.cache_root() / key / cache.MANIFEST).write_text("{}")
+    elif meanwhile == "kill":  # the lock goes with the process
+        holder.send_signal(signal.SIGKILL)
+        holder.wait(timeout=60)
+    _enter(log, second)
     holder.wait(timeout=60)
-    assert log.read_text().splitlines() == ["holder in", "second in", "holder out"]
-
-
-def test_a_holder_killed_mid_compile_holds_nothing(
-    tmp_path: Path, cache_env: dict[str, str]
-) -> None:
-    log = tmp_path / "order"
-    holder = _holder(log, "# one source\n", 60.0, cache_env)
-    holder.send_signal(signal.SIGKILL)
-    holder.wait(timeout=60)
-    _enter(log, "# one source\n")  # the lock went with the process
-    assert log.read_text().splitlines() == ["holder in", "second in"]
+    assert log.read_text().splitlines() == order
