@@ -62,6 +62,7 @@ __all__ = [
     "cache_key",
     "cache_root",
     "compiling",
+    "key_state",
     "load_generated",
     "require_numba",
     "seal",
@@ -230,6 +231,15 @@ def _import(name: str, path: Path) -> ModuleType:
     return module
 
 
+def key_state(key: str) -> str:
+    """Where the compiled module of ``key`` is: ``"loaded"`` in this process, ``"cached"``
+    (sealed on disk by :func:`seal`) or ``"missing"`` (to compile; files no manifest
+    covers are checked by loading them)."""
+    if key in _LOADED:
+        return "loaded"
+    return "cached" if (cache_root() / key / MANIFEST).is_file() else "missing"
+
+
 LOCK_FILE = ".compile.lock"
 """In a key's directory: held (``flock``) by the process compiling that key."""
 
@@ -256,9 +266,9 @@ def compiling(*generated: Generated) -> Iterator[None]:
     held: list[int] = []
     try:
         for key in keys:
-            directory = cache_root() / key
-            if key in _LOADED or (directory / MANIFEST).is_file():
+            if key_state(key) != "missing":
                 continue
+            directory = cache_root() / key
             try:
                 directory.mkdir(parents=True, exist_ok=True, mode=0o700)
                 handle = os.open(directory / LOCK_FILE, os.O_RDWR | os.O_CREAT, 0o600)

@@ -39,7 +39,6 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 from hybrid.errors import HybridError
@@ -133,15 +132,12 @@ def cached(model: Any) -> tuple[str, str, float]:
 
 def _cached_source(generated: Any) -> tuple[str, str, float]:
     """:func:`cached` of a model whose source is ``generated`` already."""
-    from hybrid.simulation.native.cache import _LOADED, cache_key, cache_root
+    from hybrid.simulation.native.cache import cache_key, key_state
     from hybrid.simulation.native.kernel_text import kernel_module
 
     version = _numba_version()
     keys = [cache_key(generated, version), cache_key(kernel_module(), version)]
-    found = [
-        "loaded" if key in _LOADED else "cached" if _sealed(cache_root() / key) else "missing"
-        for key in keys
-    ]
+    found = [key_state(key) for key in keys]
     return found[0], found[1], generated.compile_estimate
 
 
@@ -331,10 +327,6 @@ def _scipy_loaded() -> bool:
     by compiled runs too, without scipy.
     """
     return "hybrid.simulation.reference" in sys.modules
-
-
-def _sealed(directory: Path) -> bool:
-    return (directory / "manifest.json").is_file()
 
 
 def _numba_version() -> str:
