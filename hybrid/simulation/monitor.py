@@ -113,7 +113,7 @@ import threading
 import weakref
 from collections.abc import Callable, Sequence
 from dataclasses import replace
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
@@ -124,7 +124,7 @@ from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
 from hybrid.expr.dependencies import signals_read
 from hybrid.expr.rho import guard_to_rho
 from hybrid.modes import Binder, Mode, mode_of
-from hybrid.simulation.compiled import CompiledMode, CompiledModel, Source
+from hybrid.simulation.compiled import CompiledModel, Source
 from hybrid.simulation.crossing import HORIZON_SAMPLES, band, parts
 from hybrid.simulation.dense import StepCurve
 from hybrid.simulation.failures import describe_failure
@@ -134,6 +134,7 @@ from hybrid.simulation.watched import Watched, watched_requirements
 
 __all__ = [
     "DIP_REACH",
+    "Keyed",
     "MarginTable",
     "Monitor",
     "Watched",
@@ -164,6 +165,14 @@ def owners(system: System, watched: Watched) -> set[int]:
     return found
 
 
+class Keyed(Protocol):
+    """What the monitor reads of a mode: its key (a compiled mode is one; so is a bare key
+    holder, when the run was computed elsewhere and only its margins are needed)."""
+
+    @property
+    def key(self) -> Mode: ...
+
+
 class MarginTable:
     """The margin function of each requirement in scope, per mode (compiled on first use)."""
 
@@ -175,7 +184,7 @@ class MarginTable:
         self._modes: dict[Mode, list[tuple[int, Fn]]] = {}
         self._functions: dict[tuple[int, tuple[tuple[str, int], ...]], Fn] = {}
 
-    def of(self, mode: CompiledMode) -> list[tuple[int, Fn]]:
+    def of(self, mode: Keyed) -> list[tuple[int, Fn]]:
         """``(requirement index, margin)`` of every requirement in scope in ``mode``."""
         found = self._modes.get(mode.key)
         if found is None:
@@ -183,7 +192,7 @@ class MarginTable:
             self._modes[mode.key] = found
         return found
 
-    def _compile(self, mode: CompiledMode) -> list[tuple[int, Fn]]:
+    def _compile(self, mode: Keyed) -> list[tuple[int, Fn]]:
         system = self.compiled.system
         view = None
         found: list[tuple[int, Fn]] = []
@@ -292,7 +301,7 @@ class Monitor:
 
     # --- what the recorder sees ---------------------------------------------------------
 
-    def point(self, mode: CompiledMode, t: float, x: np.ndarray) -> None:
+    def point(self, mode: Keyed, t: float, x: np.ndarray) -> None:
         """A point of the run not inside a stay (the start, the point after a jump)."""
         for k, fn in self.table.of(mode):
             tr = self.tracks[k]
@@ -305,7 +314,7 @@ class Monitor:
                 if tr.always and tr.violated_at is None and value < -band(x):
                     tr.violated_at = t
 
-    def segment(self, mode: CompiledMode, curve: StepCurve, stop: float | None) -> None:
+    def segment(self, mode: Keyed, curve: StepCurve, stop: float | None) -> None:
         """An accepted step of a stay in ``mode``, up to ``stop`` (None: its end)."""
         entries = self.table.of(mode)
         if not entries:

@@ -29,11 +29,13 @@ True
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from hybrid.simulation.compiled import CompiledMode, CompiledModel
+from hybrid.modes import Mode
+from hybrid.simulation.compiled import CompiledModel
 from hybrid.simulation.dense import StepCurve, polynomial_curve
 from hybrid.simulation.monitor import Monitor
 from hybrid.simulation.native.assemble import DenseSegment, Layout
@@ -47,15 +49,16 @@ def replay(
 ) -> dict[str, RequirementResult]:
     """Each requirement's result on ``run``, a compiled run kept with its steps' interpolants.
 
-    ``model`` is the scipy backend's compiled form of the same model (its modes
-    evaluate the requirements' margins), ``layout`` the compiled backend's
-    names of modes.
+    ``model`` is the scipy backend's compiled form of the same model (the
+    monitor compiles the requirements' margins with it; the modes' own functions
+    are not needed, so they are not compiled), ``layout`` the compiled
+    backend's names of modes.
     """
-    keys = {mode.name: mode.key for mode in layout.modes}
+    visited = {mode.name: _Visited(mode.key) for mode in layout.modes}
     names = model.state_names
 
-    def mode(name: Any) -> CompiledMode:
-        return model.mode(keys[str(name)])
+    def mode(name: Any) -> _Visited:
+        return visited[str(name)]
 
     current = mode(run.location[0])
     monitor.point(current, float(run.t[0]), np.array([run[n][0] for n in names], dtype=float))
@@ -71,6 +74,13 @@ def replay(
             current = mode(jump.target)
             monitor.point(current, jump.t, np.array([jump.after[n] for n in names], dtype=float))
     return monitor.results(run.termination.t)
+
+
+@dataclass(frozen=True)
+class _Visited:
+    """A mode the run visited, as the monitor reads it (:class:`~hybrid.simulation.monitor.Keyed`)."""
+
+    key: Mode
 
 
 def _steps(stay: DenseSegment, end: float) -> Iterator[tuple[StepCurve, float | None]]:
