@@ -53,19 +53,22 @@ _NOT_SOURCE = {
 }
 
 
-def _clean_env() -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items() if k not in {"PYTHONPATH", "VIRTUAL_ENV"}}
-    env["PYTHONDONTWRITEBYTECODE"] = "1"
+def _clean_env(bytecode: bool) -> dict[str, str]:
+    drop = {"PYTHONPATH", "VIRTUAL_ENV", "PYTHONDONTWRITEBYTECODE"}
+    env = {k: v for k, v in os.environ.items() if k not in drop}
+    if not bytecode:
+        env["PYTHONDONTWRITEBYTECODE"] = "1"
     return env
 
 
 def _run(
-    args: Sequence[str | Path], cwd: Path, timeout: float = 600.0
+    args: Sequence[str | Path], cwd: Path, timeout: float = 600.0, bytecode: bool = False
 ) -> subprocess.CompletedProcess[str]:
+    """``args`` in ``cwd``; ``bytecode``: Python may write ``.pyc`` files (in a test's venv)."""
     return subprocess.run(
         [str(a) for a in args],
         cwd=cwd,
-        env=_clean_env(),
+        env=_clean_env(bytecode),
         capture_output=True,
         text=True,
         timeout=timeout,
@@ -80,9 +83,14 @@ def _venv(where: Path) -> Path:
     return where / "bin" / "python"
 
 
-def _pip_install(python: Path, *what: str | Path) -> None:
-    """``pip install WHAT``; skips the test when pip cannot reach an index."""
-    done = _run([python, "-m", "pip", "install", "--quiet", *what], cwd=python.parent)
+def _pip_install(python: Path, *what: str | Path, compile_all: bool = True) -> None:
+    """``pip install WHAT``; skips the test when pip cannot reach an index.
+
+    ``compile_all=False``: pip writes no bytecode for what it installs (half the
+    time of installing numpy and scipy); the commands run then compile what they import.
+    """
+    flags = [] if compile_all else ["--no-compile"]
+    done = _run([python, "-m", "pip", "install", "--quiet", *flags, *what], cwd=python.parent)
     if done.returncode != 0:
         said = done.stdout + done.stderr
         if any(mark in said for mark in _OFFLINE):
@@ -170,24 +178,25 @@ def test_a_clean_install_works_as_written(
     kind: str, artifacts: dict[str, Path], tmp_path: Path
 ) -> None:
     python = _venv(tmp_path / "venv")
-    _pip_install(python, artifacts[kind])
+    _pip_install(python, artifacts[kind], compile_all=False)
     hybrid = tmp_path / "venv" / "bin" / "hybrid"
     work = tmp_path / "work"
     work.mkdir()
     shutil.copy(REPO / "docs" / "examples" / "tank.yaml", work / "tank.yaml")
     shutil.copy(REPO / "specs" / "uvms_singularity.yaml", work / "uvms_singularity.yaml")
 
-    shown = _run([hybrid, "--help"], cwd=work)
+    shown = _run([hybrid, "--help"], cwd=work, bytecode=True)
     assert shown.returncode == 0, shown.stderr
     assert "validate" in shown.stdout and "simulate" in shown.stdout
 
-    valid = _run([hybrid, "validate", "tank.yaml"], cwd=work)
+    valid = _run([hybrid, "validate", "tank.yaml"], cwd=work, bytecode=True)
     assert (valid.returncode, valid.stdout.strip()) == (0, "tank.yaml: ok"), valid.stderr
 
     ran = _run(
         [hybrid, "simulate", "tank.yaml", "--t-end", "12", "--out", "tank.csv",
          "--events", "tank.json", "--rtol", "1e-9", "--atol", "1e-12"],
         cwd=work,
+        bytecode=True,
     )  # fmt: skip
     assert ran.returncode == 0, ran.stderr
     events = json.loads((work / "tank.json").read_text())
@@ -198,16 +207,17 @@ def test_a_clean_install_works_as_written(
     assert (work / "tank.csv").read_text().startswith("t,j,location,h,volume")
 
     # The case study is not installed, nor its function library registered.
-    absent = _run([python, "-c", "import uvms_model"], cwd=work)
+    absent = _run([python, "-c", "import uvms_model"], cwd=work, bytecode=True)
     assert absent.returncode == 1 and "ModuleNotFoundError" in absent.stderr
     libraries = _run(
         [python, "-c",
          "from importlib.metadata import entry_points;"
          "print(sorted(e.name for e in entry_points(group='hybrid.functions')))"],
         cwd=work,
+        bytecode=True,
     )  # fmt: skip
     assert libraries.stdout.strip() == "[]", libraries.stderr
-    refused = _run([hybrid, "validate", "uvms_singularity.yaml"], cwd=work)
+    refused = _run([hybrid, "validate", "uvms_singularity.yaml"], cwd=work, bytecode=True)
     assert refused.returncode == 2
     assert "Traceback" not in refused.stderr
     assert refused.stderr.startswith("uvms_singularity.yaml:")
