@@ -66,6 +66,8 @@ __all__ = [
 Array = NDArray[np.float64]
 MAX_CLUSTERS = 4
 """Boxes queued per edge and flowpipe after clustering."""
+CLUSTER_CHUNK = 4096
+"""Segments met against a guard at once (arrays of rows x columns per segment)."""
 MAX_STEPS = 1_000_000
 """Most steps of one flowpipe (``t_end / step``): each keeps four boxes a step, and the
 default step gives 4,000."""
@@ -378,16 +380,20 @@ def _clusters(
     each, at least ``entry``'s): one per stretch of consecutive contact."""
     stretches: list[tuple[Array, Array]] = []
     previous = -2
-    for k, (lo, hi) in enumerate(segments):
-        box = meets(lo, hi, guard, widen=max(float(band(lo, hi, t_index)), entry))
-        if box is None:
-            continue
-        if k == previous + 1 and stretches:
-            last = stretches[-1]
-            stretches[-1] = (np.minimum(last[0], box[0]), np.maximum(last[1], box[1]))
-        else:
-            stretches.append(box)
-        previous = k
+    for first in range(0, len(segments), CLUSTER_CHUNK):  # all at once, a chunk at a time
+        chunk = segments[first : first + CLUSTER_CHUNK]
+        lo, hi = np.stack([seg[0] for seg in chunk]), np.stack([seg[1] for seg in chunk])
+        c_lo, c_hi, ok = meets_many(
+            lo, hi, guard, widen=np.maximum(band(lo, hi, t_index), entry)
+        )
+        for i in np.flatnonzero(ok).tolist():
+            k, box = first + i, (c_lo[i], c_hi[i])
+            if k == previous + 1 and stretches:
+                last = stretches[-1]
+                stretches[-1] = (np.minimum(last[0], box[0]), np.maximum(last[1], box[1]))
+            else:
+                stretches.append(box)
+            previous = k
     while len(stretches) > MAX_CLUSTERS:
         gaps = [stretches[i + 1][0][-1] - stretches[i][1][-1] for i in range(len(stretches) - 1)]
         i = int(np.argmin(gaps))
