@@ -115,6 +115,68 @@ def _widen(lo: Array, hi: Array) -> tuple[Array, Array]:
     return lo - pad, hi + pad
 
 
+BLOCK_ENTRIES = 1 << 18
+"""Entries of the powers of ``Phi`` held at once (2 MiB): the steps of a block are computed
+together, ``max(1, BLOCK_ENTRIES // n^2)`` of them, at most a chunk."""
+
+
+def _steps(
+    k0: int,
+    m: int,
+    phi: Array,
+    p: Array,
+    center: Array,
+    inputs: Array,
+    r0: Array,
+    phi1_vc: Array,
+    hvc: Array,
+    e_omega: Array,
+    err_in: Array,
+    driven: tuple[float, Array, Array, Array] | None,
+    point_lo: Array,
+    point_hi: Array,
+    seg_lo: Array,
+    seg_hi: Array,
+) -> tuple[Array, Array, Array]:
+    """Steps ``k0 .. k0 + m - 1``: their segments and the step points after them, written in
+    place; returns ``Phi^(k0+m)``, the centre and the inputs' radius after them.
+
+    The recurrences (the powers of ``Phi``, the centres, the inputs' radius, added
+    step by step in the same order) run one step at a time; everything else is
+    computed for the ``m`` steps at once (the module docstring gives each bound).
+    """
+    n = phi.shape[0]
+    powers = np.empty((m + 1, n, n))
+    centers = np.empty((m + 1, n))
+    moved = np.empty((m, n))
+    powers[0], centers[0] = p, center
+    for i in range(m):
+        powers[i + 1] = phi @ powers[i]
+        moved[i] = phi @ centers[i]
+        centers[i + 1] = moved[i] + phi1_vc
+    if driven is None:
+        radius = np.abs(powers[1:]) @ r0 + inputs
+        after = inputs
+    else:  # inputs_{k+1} = inputs_k + h |P_k B| ur + |P_k| E_in |B| ur, added in that order
+        h, b, u_r, ein_bu = driven
+        terms = np.empty((2 * m + 1, n))
+        terms[0] = inputs
+        terms[1::2] = h * (np.abs(powers[:m] @ b) @ u_r)
+        terms[2::2] = np.abs(powers[:m]) @ ein_bu
+        sums = np.cumsum(terms, axis=0)[2::2]
+        radius = np.abs(powers[1:]) @ r0 + sums
+        after = sums[-1]
+    here, ahead = slice(k0, k0 + m), slice(k0 + 1, k0 + m + 1)
+    point_lo[ahead] = centers[1:] - radius
+    point_hi[ahead] = centers[1:] + radius
+    magnitude = np.maximum(np.abs(point_lo[here]), np.abs(point_hi[here]))
+    err = magnitude @ e_omega.T + err_in
+    far = moved + hvc
+    seg_lo[here] = np.minimum(point_lo[here], far - radius) - err
+    seg_hi[here] = np.maximum(point_hi[here], far + radius) + err
+    return powers[m], centers[m], after
+
+
 def flowpipe(
     a: Array,
     b: Array,
@@ -187,41 +249,31 @@ def flowpipe(
     r0 = (x_hi - x_lo) / 2.0 * grow
     p = np.eye(n)
     inputs = np.zeros(n)
-    radius = r0
     point_lo = np.empty((steps + 1, n))
     point_hi = np.empty((steps + 1, n))
     seg_lo = np.empty((steps, n))
     seg_hi = np.empty((steps, n))
-    point_lo[0], point_hi[0] = center - radius, center + radius
+    point_lo[0], point_hi[0] = center - r0, center + r0
     has_inputs = b.shape[1] > 0 and bool(np.any(u_r > 0.0))
+    block = max(1, min(chunk, BLOCK_ENTRIES // max(1, n * n)))  # steps whose powers of Phi are held
     done = steps
-    first = 0
-    for k in range(steps):
-        if has_inputs:
-            inputs = inputs + h * (np.abs(p @ b) @ u_r) + np.abs(p) @ ein_bu
-        p = phi @ p
-        moved = phi @ center
-        new_center = moved + phi1_vc
-        new_radius = np.abs(p) @ r0 + inputs
-        point_lo[k + 1] = new_center - new_radius
-        point_hi[k + 1] = new_center + new_radius
-        magnitude = np.maximum(np.abs(point_lo[k]), np.abs(point_hi[k]))
-        err = e_omega @ magnitude + err_in
-        far = moved + hvc
-        seg_lo[k] = np.minimum(point_lo[k], far - new_radius) - err
-        seg_hi[k] = np.maximum(point_hi[k], far + new_radius) + err
-        center = new_center
-        if k + 1 - first == chunk or k + 1 == steps:
-            block = slice(first, k + 1)
-            seg_lo[block], seg_hi[block] = _widen(seg_lo[block], seg_hi[block])
-            if not (np.all(np.isfinite(seg_lo[block])) and np.all(np.isfinite(seg_hi[block]))):
-                raise Overflow("the bounds overflow")
-            if keep is not None:
-                kept = keep(first, seg_lo[block], seg_hi[block])
-                if kept < k + 1 - first:
-                    done = first + kept
-                    break
-            first = k + 1
+    for first in range(0, steps, chunk):
+        last = min(first + chunk, steps)
+        for k0 in range(first, last, block):
+            p, center, inputs = _steps(
+                k0, min(k0 + block, last) - k0, phi, p, center, inputs, r0, phi1_vc, hvc,
+                e_omega, err_in, (h, b, u_r, ein_bu) if has_inputs else None,
+                point_lo, point_hi, seg_lo, seg_hi,
+            )  # fmt: skip
+        part = slice(first, last)
+        seg_lo[part], seg_hi[part] = _widen(seg_lo[part], seg_hi[part])
+        if not (np.all(np.isfinite(seg_lo[part])) and np.all(np.isfinite(seg_hi[part]))):
+            raise Overflow("the bounds overflow")
+        if keep is not None:
+            kept = keep(first, seg_lo[part], seg_hi[part])
+            if kept < last - first:
+                done = first + kept
+                break
     point_lo[: done + 1], point_hi[: done + 1] = _widen(point_lo[: done + 1], point_hi[: done + 1])
     tau = np.arange(done + 1, dtype=np.float64) * h
     return Flowpipe(tau, seg_lo[:done], seg_hi[:done], point_lo[: done + 1], point_hi[: done + 1])
