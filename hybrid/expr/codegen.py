@@ -29,6 +29,7 @@ from hybrid.expr import ir
 from hybrid.expr.dependencies import evaluation_order
 from hybrid.expr.functions import BUILTINS, Function
 from hybrid.expr.generated import define
+from hybrid.expr.matrix_form import MatrixForm, matrix_form
 from hybrid.expr.printer import SourcePrinter
 
 __all__ = [
@@ -208,6 +209,26 @@ class _Names(dict[str, str]):
             raise KeyError(name)
         self[name] = local
         return local
+
+
+MATRIX_MIN_TERMS = 64
+"""A flow of at least this many number-times-variable products is compiled as one matrix
+product (below it, the interpreter's operations cost about what the product's call does)."""
+
+
+def _as_matrix(
+    exprs: Sequence[ir.Expr],
+    ctx: CodeContext,
+    shape: str,
+    part: bool,
+    stash: Stash | None,
+    order: Sequence[str],
+) -> MatrixForm | None:
+    """The matrix form of a list of outputs that read no signal, if it has enough terms."""
+    if shape != "list" or part or stash is not None or order or not ctx.states:
+        return None
+    form = matrix_form(exprs, ctx.states, ctx.params, ctx.inputs)
+    return form if form is not None and form.terms >= MATRIX_MIN_TERMS else None
 
 
 def _tiny(exprs: Sequence[ir.Expr], definitions: Sequence[ir.Expr], ctx: CodeContext) -> bool:
@@ -404,6 +425,7 @@ def compile_function(
         )
 
     failed: str
+    matrices: dict[str, Any] = {}
     if reset_of is not None:
         items = [
             printer.emit(e)[0] if e is not None else names[ctx.states[i]]
@@ -414,6 +436,13 @@ def compile_function(
     elif shape == "scalar":
         body.append(f"return {printer.emit(exprs[0])[0]}")
         failed = "_nan"
+    elif (form := _as_matrix(exprs, ctx, shape, part, stash, order)) is not None:
+        # one matrix product instead of a term-by-term sum (hybrid.expr.matrix_form)
+        body = [line for line in body if line.startswith("u_")]  # the inputs read
+        driven = f" + _N @ ({''.join(f'{names[u]}, ' for u in form.inputs)})" if form.inputs else ""
+        body.append(f"return (_M @ x{driven} + _c).tolist()")
+        failed = f"[_nan] * {len(exprs)}"
+        matrices = {"_M": form.states, "_N": form.by_input, "_c": form.const}
     else:
         items = [printer.emit(e)[0] for e in exprs]
         open_, close = ("[", "]") if shape == "list" else ("(", ",)" if len(items) == 1 else ")")
@@ -456,6 +485,7 @@ def compile_function(
         scope[f"_{fname}"] = func.fn
     for u, fn in ctx.inputs.items():
         scope[f"_in_{u}"] = fn
+    scope.update(matrices)
     # only what the source names: a system of many components compiles thousands of
     # small functions, each with its own namespace
     named = set(_GLOBAL_NAME.findall(source))

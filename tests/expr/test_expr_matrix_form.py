@@ -1,0 +1,118 @@
+"""A long linear flow is compiled as one matrix product and computes what its terms compute.
+
+The field's linear models (ARCH-COMP's Building: 48 states, 1,176 terms) write
+their flows out term by term; from :data:`~hybrid.expr.codegen.MATRIX_MIN_TERMS`
+products on, the flow is compiled as ``M x + N u + c``. Checked against the
+matrices the terms were written from, against the term-by-term compilation (the
+same products summed in another order: a few units in the last place), against
+the closed form of a run, and for the same failure report when an input fails.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import hybrid
+from hybrid.compose import as_system
+from hybrid.expr import codegen
+from hybrid.simulation.compiled import CompiledModel
+
+N = 70
+
+
+def _linear_text(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> str:
+    """A spec whose flow of x_i is ``sum_j a[i, j] x_j + b[i] u + c[i]``, written term by term."""
+    n = len(c)
+    flows = []
+    for i in range(n):
+        terms = [f"{float(a[i, j])!r} * x{j}" for j in range(n) if a[i, j] != 0.0]
+        terms += [f"{float(b[i])!r} * u", repr(float(c[i]))]
+        flows.append(f"      x{i}: {' + '.join(terms)}")
+    states = ", ".join(f"x{i}: {{initial: {1.0 + i / n!r}}}" for i in range(n))  # floats
+    return (
+        "automaton: linear\n"
+        "inputs: {u: {range: [0, 1]}}\n"
+        f"state: {{{states}}}\n"
+        "locations:\n"
+        "  only:\n"
+        "    flow:\n" + "\n".join(flows) + "\n"
+    )
+
+
+def _system(seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    a = rng.normal(0.0, 1.0, (N, N)) * (rng.uniform(size=(N, N)) < 0.3) - 2.0 * np.eye(N)
+    return a, rng.normal(0.0, 1.0, N), rng.normal(0.0, 1.0, N)
+
+
+def _rhs(text: str, u: float = 0.7) -> tuple[object, str]:
+    model = hybrid.load_text(text)
+    compiled = CompiledModel(as_system(model), {"u": lambda t: u})
+    mode = compiled.mode(compiled.initial_key)
+    return mode.rhs, mode.rhs.__doc__ or ""
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_long_flow_is_one_product_and_equals_its_matrices(seed: int) -> None:
+    a, b, c = _system(seed)
+    rhs, source = _rhs(_linear_text(a, b, c))
+    assert "_M @ x" in source and len(source) < 1000  # not the 1,500 terms
+    x = np.random.default_rng(seed + 10).normal(0.0, 1.0, N)
+    got = np.array(rhs(0.5, x))  # type: ignore[operator]
+    np.testing.assert_allclose(got, a @ x + 0.7 * b + c, rtol=1e-12, atol=1e-12)
+
+
+def test_it_agrees_with_the_terms_summed_in_order(monkeypatch: pytest.MonkeyPatch) -> None:
+    a, b, c = _system(2)
+    text = _linear_text(a, b, c)
+    product, source = _rhs(text)
+    monkeypatch.setattr(codegen, "MATRIX_MIN_TERMS", 10**9)
+    terms, term_source = _rhs(text)
+    assert "_M @ x" in source and "_M" not in term_source
+    x = np.random.default_rng(3).normal(0.0, 1.0, N)
+    p, q = np.array(product(0.0, x)), np.array(terms(0.0, x))  # type: ignore[operator]
+    scale = np.abs(a) @ np.abs(x) + np.abs(b) * 0.7 + np.abs(c)  # the size of each sum's terms
+    assert np.all(np.abs(p - q) <= 64 * np.finfo(float).eps * scale)
+
+
+def test_a_run_follows_the_closed_form() -> None:
+    """``x_i' = -k_i x_i``, 70 of them: ``x_i(t) = x_i(0) e^{-k_i t}``."""
+    k = 0.1 + np.arange(N) / N
+    a = -np.diag(k)
+    a[np.arange(N - 1), np.arange(1, N)] = 0.0
+    text = _linear_text(a, np.zeros(N), np.zeros(N))
+    assert "_M @ x" in _rhs(text)[1]
+    run = hybrid.simulate(hybrid.load_text(text), 3.0, rtol=1e-10, atol=1e-12,
+                          inputs={"u": lambda t: 0.5}, handle_sigint=False)  # fmt: skip
+    x0 = 1.0 + np.arange(N) / N
+    np.testing.assert_allclose(run.states[-1], x0 * np.exp(-k * 3.0), rtol=1e-8)
+
+
+def test_short_or_nonlinear_flows_stay_term_by_term() -> None:
+    a, b, c = _system(4)
+    text = _linear_text(a, b, c)
+    nonlinear = text.replace("      x0: ", "      x0: x1 * x2 + ", 1)  # a product of two
+    assert nonlinear != text and "_M" not in _rhs(nonlinear)[1]
+    small = _linear_text(-np.eye(3), np.ones(3), np.zeros(3))
+    assert "_M" not in _rhs(small)[1]
+
+
+def test_a_failing_input_is_reported_as_before(monkeypatch: pytest.MonkeyPatch) -> None:
+    a, b, c = _system(5)
+    model = hybrid.load_text(_linear_text(a, b, c))
+
+    def broken(t: float) -> float:
+        if t > 0.25:
+            return math.sqrt(-1.0)  # ValueError: math domain error
+        return 0.5
+
+    said = []
+    for threshold in (codegen.MATRIX_MIN_TERMS, 10**9):
+        monkeypatch.setattr(codegen, "MATRIX_MIN_TERMS", threshold)
+        run = hybrid.simulate(model, 1.0, inputs={"u": broken}, handle_sigint=False)
+        said.append((run.termination.cause, run.termination.message))
+    assert said[0] == said[1]
+    assert said[0][0] != "t_end" and "math domain error" in said[0][1]
