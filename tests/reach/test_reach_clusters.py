@@ -9,6 +9,8 @@ boundary of two chunks.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -27,18 +29,19 @@ GUARD = (
 def _one_at_a_time(
     segments: list[tuple[np.ndarray, np.ndarray]], entry: float
 ) -> list[tuple[np.ndarray, np.ndarray]]:
-    stretches: list[tuple[np.ndarray, np.ndarray]] = []
-    previous = -2
-    for k, (lo, hi) in enumerate(segments):
-        box = meets(lo, hi, GUARD, widen=max(float(band(lo, hi, T_INDEX)), entry))
-        if box is None:
-            continue
-        if k == previous + 1 and stretches:
-            last = stretches[-1]
-            stretches[-1] = (np.minimum(last[0], box[0]), np.maximum(last[1], box[1]))
-        else:
-            stretches.append(box)
-        previous = k
+    """Each segment met alone; runs of consecutive indices grouped (index minus rank is
+    constant along a run), each run's boxes joined by their elementwise hull."""
+    met = [
+        (k, meets(lo, hi, GUARD, widen=max(float(band(lo, hi, T_INDEX)), entry)))
+        for k, (lo, hi) in enumerate(segments)
+    ]
+    hits = [(k, box) for k, box in met if box is not None]
+    stretches = []
+    for _, run in itertools.groupby(enumerate(hits), key=lambda item: item[1][0] - item[0]):
+        boxes = [box for _, (_, box) in run]
+        stretches.append(
+            (np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0))
+        )
     return stretches
 
 
