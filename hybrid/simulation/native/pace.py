@@ -34,9 +34,8 @@ from __future__ import annotations
 import contextlib
 import json
 import math
-import os
-import tempfile
 
+from hybrid.files import atomic_write
 from hybrid.simulation.native.cache import cache_root
 
 __all__ = ["KINDS", "MIN_ESTIMATE_S", "PACE_FILE", "PACE_RANGE", "pace", "record"]
@@ -65,18 +64,10 @@ def record(waited_s: float, estimated_s: float, kind: str) -> None:
     kept = _kept()
     kept[kind] = {"pace": min(most, max(least, waited_s / estimated_s)),
                   "waited_s": waited_s, "estimated_s": estimated_s}  # fmt: skip
-    root = cache_root()
-    try:
-        handle, temporary = tempfile.mkstemp(dir=root, prefix=".", suffix=".tmp")
-    except OSError:
-        return  # a better estimate next time, no more: the run goes on without it
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            stream.write(json.dumps(kept))
-        os.replace(temporary, root / PACE_FILE)
-    except OSError:
-        with contextlib.suppress(OSError):
-            os.unlink(temporary)
+    # a cache that cannot be written (CannotWrite is an OSError) keeps no pace: the run
+    # goes on without it, and a later notice says the benchmark machine's figures
+    with contextlib.suppress(OSError), atomic_write(cache_root() / PACE_FILE) as stream:
+        stream.write(json.dumps(kept).encode("utf-8"))
 
 
 def pace(kind: str) -> float | None:
