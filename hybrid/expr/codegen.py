@@ -375,6 +375,8 @@ def compile_function(
     definitions = [ctx.signals[s] for s in order]
     if part or reset_of is not None or not ctx.states:
         stash = share = None
+    # a long linear list: one product with the state array (hybrid.expr.matrix_form)
+    form = None if reset_of is not None else _as_matrix(exprs, ctx, shape, part, stash, order)
     if stash is not None:
         body.append("t = _float(t)")
     tiny = _tiny(exprs, definitions, ctx)
@@ -388,7 +390,7 @@ def compile_function(
         for s in all_used:
             if s in index:
                 names[s] = f"x[{index[s]}]"
-    elif ctx.states:
+    elif ctx.states and form is None:
         targets = ", ".join(names[s] for s in ctx.states)
         body.append(f"{targets}, = x.tolist()")
     for u in sorted(n for n in all_used if n in ctx.inputs):
@@ -436,9 +438,7 @@ def compile_function(
     elif shape == "scalar":
         body.append(f"return {printer.emit(exprs[0])[0]}")
         failed = "_nan"
-    elif (form := _as_matrix(exprs, ctx, shape, part, stash, order)) is not None:
-        # one matrix product instead of a term-by-term sum (hybrid.expr.matrix_form)
-        body = [line for line in body if line.startswith("u_")]  # the inputs read
+    elif form is not None:  # the inputs read are in the body; the state stays an array
         driven = f" + _N @ ({''.join(f'{names[u]}, ' for u in form.inputs)})" if form.inputs else ""
         body.append(f"return (_M @ x{driven} + _c).tolist()")
         failed = f"[_nan] * {len(exprs)}"
