@@ -245,11 +245,17 @@ def expected_wait(model_state: str, kernel_state: str, estimate: float) -> float
     return kernel_s + (max(1.0, estimate) if model_state == "missing" else 0.0)
 
 
+def _pace_kind(kernel_state: str) -> str:
+    """The kind of a compile (:mod:`~hybrid.simulation.native.pace`): ``"kernel"`` when the
+    kernel is missing (it is compiled with the model), else ``"model"``."""
+    return "kernel" if kernel_state == "missing" else "model"
+
+
 def _notice(model_state: str, kernel_state: str, estimate: float) -> str | None:
     from hybrid.simulation.native.pace import MIN_ESTIMATE_S, pace
 
     # this machine's pace, from its last compile of the kind; None: the benchmark machine's
-    factor = pace("kernel" if kernel_state == "missing" else "model")
+    factor = pace(_pace_kind(kernel_state))
 
     def about(seconds: float) -> str:  # a short compile's wait is mostly loading: not scaled
         if factor is None or seconds < MIN_ESTIMATE_S:
@@ -316,8 +322,7 @@ def generated_wait(generated: Any) -> tuple[float, str]:
     of that compile (:mod:`~hybrid.simulation.native.pace`): ``"kernel"`` when the kernel
     is missing, else ``"model"``."""
     model_state, kernel_state, estimate = _cached_source(generated)
-    kind = "kernel" if kernel_state == "missing" else "model"
-    return expected_wait(model_state, kernel_state, estimate), kind
+    return expected_wait(model_state, kernel_state, estimate), _pace_kind(kernel_state)
 
 
 def _scipy_loaded() -> bool:
