@@ -52,6 +52,7 @@ from pathlib import Path
 from types import ModuleType
 
 from hybrid.errors import Note, UsageError
+from hybrid.files import atomic_write
 from hybrid.simulation.native.kernel_text import Generated
 from hybrid.version import install_hint
 
@@ -142,16 +143,15 @@ def _writable_directory(key: str) -> Path:
 
 
 def _write_once(path: Path, text: str) -> None:
-    """Write ``text`` unless ``path`` holds it already (atomically, safe across processes)."""
+    """Write ``text`` unless ``path`` holds it already (atomically, safe across processes;
+    an unchanged file keeps its time stamp, which numba's cache index is keyed by)."""
     try:
         if path.read_text(encoding="utf-8") == text:
             return
     except OSError:
         pass
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=".", suffix=".tmp")
-    with os.fdopen(handle, "w", encoding="utf-8") as stream:
-        stream.write(text)
-    os.replace(temporary, path)
+    with atomic_write(path) as stream:
+        stream.write(text.encode("utf-8"))
 
 
 def _digests(directory: Path) -> dict[str, str]:
