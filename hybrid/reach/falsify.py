@@ -72,7 +72,8 @@ from hybrid.reach.affine import TIME, Condition, Forms, Rows
 from hybrid.reach.boxes import band
 from hybrid.reach.engine import Mode
 from hybrid.reach.flowpipe import FP_MARGIN, exp_matrices
-from hybrid.reach.witness import Candidate, PiecewiseConstant
+from hybrid.reach.witness import Candidate
+from hybrid.simulation.inputs import PiecewiseConstant
 
 __all__ = ["BLOCK", "ENTER", "MARGIN", "Refutation", "entry_time", "refute"]
 

@@ -11,12 +11,8 @@ with :func:`hybrid.simulate` and kept only if a stored point of the run lies in
 the forbidden set (:func:`reaches`). Other candidates (the nominal run, the
 corners of the initial box, a few seeded random runs) are tried the same way.
 
-Examples
---------
->>> import numpy as np
->>> f = PiecewiseConstant(np.array([0.0, 1.0]), np.array([2.0, 3.0]))
->>> f(0.5), f(1.0), f(7.0)
-(2.0, 3.0, 3.0)
+The inputs are held piecewise constant
+(:class:`~hybrid.simulation.inputs.PiecewiseConstant`).
 """
 
 from __future__ import annotations
@@ -33,11 +29,11 @@ from hybrid.model import Automaton
 from hybrid.reach.affine import Condition, Forms
 from hybrid.reach.flowpipe import exp_matrices
 from hybrid.simulation.engine import simulate
+from hybrid.simulation.inputs import PiecewiseConstant
 from hybrid.simulation.result import Run
 
 __all__ = [
     "Candidate",
-    "PiecewiseConstant",
     "bisect_entry",
     "corner_candidates",
     "inside",
@@ -48,18 +44,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class PiecewiseConstant:
-    """An input held at ``values[i]`` from ``starts[i]`` (a callable of ``t`` that pickles)."""
-
-    starts: Array
-    values: Array
-
-    def __call__(self, t: float) -> float:
-        i = int(np.searchsorted(self.starts, t, side="right")) - 1
-        return float(self.values[max(i, 0)])
 
 
 @dataclass(frozen=True)

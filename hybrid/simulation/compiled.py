@@ -431,13 +431,14 @@ def _identifier(name: str) -> str:
 
 
 def _numeric(fn: Callable[[float], float]) -> Callable[[float], float]:
-    """``fn`` if it gives floats (an expression or a time series of the command line), else
+    """``fn`` if it gives floats (an expression or a time series of the command line, inputs
+    held piecewise constant by reach), else
     ``fn`` with each value made a float: text, None, a complex number or an array of several
     values is then an evaluation error where the input is read (the run ends ``nonfinite``,
     naming the expression and the value), not an error inside numpy or the solver."""
-    from hybrid.simulation.inputs import ExpressionInput, TimeSeries
+    from hybrid.simulation.inputs import ExpressionInput, PiecewiseConstant, TimeSeries
 
-    if isinstance(fn, ExpressionInput | TimeSeries):
+    if isinstance(fn, ExpressionInput | TimeSeries | PiecewiseConstant):
         return fn
 
     def number(t: float) -> float:

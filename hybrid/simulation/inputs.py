@@ -11,6 +11,9 @@ inputs={"u": f})``). Here they are built from what a command line can carry:
   between the samples. A series must cover the whole run
   (:meth:`TimeSeries.check_covers`).
 
+And from numbers: :class:`PiecewiseConstant`, an input held at each value
+from its start on (the inputs of reach's witnesses and of the falsifier).
+
 Errors a user can make are a :class:`~hybrid.errors.UsageError` (a bad
 ``NAME=EXPR``) or a :class:`~hybrid.errors.SpecError` at ``file:line:column``
 (a bad CSV file).
@@ -23,6 +26,9 @@ Examples
 >>> ramp = TimeSeries("u", [0.0, 2.0], [0.0, 1.0], "ramp.csv")
 >>> ramp(0.5)
 0.25
+>>> held = PiecewiseConstant(np.array([0.0, 1.0]), np.array([2.0, 3.0]))
+>>> held(0.5), held(1.0), held(7.0)
+(2.0, 3.0, 3.0)
 >>> ExpressionInput("u", "sin(2*x)")
 Traceback (most recent call last):
 ...
@@ -33,15 +39,26 @@ from __future__ import annotations
 
 import bisect
 import csv
+import dataclasses
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
 
 from hybrid.errors import Position, SpecError, UsageError
 from hybrid.expr.codegen import CodeContext, EvalFailure, compile_function
 from hybrid.expr.parse import ExprError, Scope, parse_expression
 
-__all__ = ["ExpressionInput", "TimeSeries", "parse_assignment", "read_series"]
+__all__ = [
+    "ExpressionInput",
+    "PiecewiseConstant",
+    "TimeSeries",
+    "parse_assignment",
+    "read_series",
+]
 
 MAX_SERIES_BYTES = 512 * 1024 * 1024
 """Largest CSV file of input series read."""
@@ -130,6 +147,25 @@ class TimeSeries:
 
     def __repr__(self) -> str:
         return f"TimeSeries({self.name!r}, {len(self.times)} samples from {self.file})"
+
+
+@dataclass(frozen=True)
+class PiecewiseConstant:
+    """An input held at ``values[i]`` from ``starts[i]`` (a callable of ``t`` that pickles)."""
+
+    starts: NDArray[np.float64]
+    values: NDArray[np.float64]
+    _starts: list[float] = dataclasses.field(init=False, repr=False, compare=False)
+    _values: list[float] = dataclasses.field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        # as Python floats: read at every evaluation of the flow, where numpy's
+        # searchsorted on a scalar cost ten times a bisection of a list
+        object.__setattr__(self, "_starts", [float(s) for s in self.starts])
+        object.__setattr__(self, "_values", [float(v) for v in self.values])
+
+    def __call__(self, t: float) -> float:
+        return self._values[max(bisect.bisect_right(self._starts, t) - 1, 0)]
 
 
 def read_series(path: str | Path) -> dict[str, TimeSeries]:

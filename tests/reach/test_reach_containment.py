@@ -35,7 +35,7 @@ import hybrid
 from hybrid.compose import as_system
 from hybrid.errors import SpecError, UsageError
 from hybrid.interchange import import_spaceex
-from hybrid.reach.witness import PiecewiseConstant
+from hybrid.simulation.inputs import PiecewiseConstant
 
 EXTERNAL = REPO.parent / "shared" / "external-models"
 """The field's models, beside the repository as in CI (none there: only the repo's own)."""
