@@ -49,7 +49,9 @@ def write_csv(run: Run, path: str | Path, progress: Reporter | None = None) -> N
     rows = len(run)
     tracker = Tracker(f"writing {Path(path).name}", total=rows, unit="rows", report=progress)
     header = ",".join(["t", "j", "location", *run.state_names, *run.signal_names]) + "\n"
-    quoted = {name: _csv_text(str(name)) for name in np.unique(run.location).tolist()}
+    # a set, not np.unique: the names are str objects, which numpy would sort (seconds for
+    # a million points), where a set only hashes them (each hash kept by its shared str)
+    quoted = {name: _csv_text(str(name)) for name in set(run.location.tolist())}
     with atomic_write(path) as handle:
         handle.write(header.encode("utf-8"))
         for start in range(0, rows, CHUNK_ROWS):
