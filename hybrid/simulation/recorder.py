@@ -38,6 +38,8 @@ class StayRecord:
         self.j = j
         self.ts: list[float] = []
         self.xs: list[np.ndarray] = []
+        """The states of the points: one row per step end, or one block of rows per step
+        of a ``dt`` grid (a million points as rows would cost a second to stack)."""
         self.dt = recorder.settings.dt
         self.dense = recorder.settings.dense
         self.step_ends = [t0]
@@ -63,7 +65,7 @@ class StayRecord:
             grid = self._grid(curve.t0, curve.t1 if stop is None else stop, stop is None)
             if grid.size:
                 self.ts.extend(grid.tolist())
-                self.xs.extend(curve.many(grid))
+                self.xs.append(curve.many(grid))
         if self.dense:
             self.step_ends.append(curve.t1)
             self.interpolants.append(curve.dense_output())
@@ -87,9 +89,11 @@ class StayRecord:
             self.ts.append(t)
             self.xs.append(x)
         if self.ts:
-            self.recorder.points(
-                self.mode, self.j, np.array(self.ts), np.array(self.xs), self.stashes
-            )
+            if self.dt is None:
+                xs = np.array(self.xs)
+            else:
+                xs = np.concatenate([np.atleast_2d(x) for x in self.xs])
+            self.recorder.points(self.mode, self.j, np.array(self.ts), xs, self.stashes)
         if self.dense and self.interpolants:
             end = self.ts[-1] if self.ts else self.step_ends[-1]
             solution = OdeSolution(self.step_ends, self.interpolants)
