@@ -327,7 +327,10 @@ def compile_function(
 ) -> Callable[..., Any]:
     """Compile ``outputs`` into one function ``f(t, x)`` of a time and a 1-D numpy array.
 
-    ``shape`` is ``"scalar"`` (one value), ``"list"`` or ``"tuple"``. With
+    ``shape`` is ``"scalar"`` (one value), ``"list"`` or ``"tuple"``; a list of
+    outputs compiled as one matrix product (:func:`_as_matrix`) is returned as the
+    product's array (the same floats: a solver writes either into its stage row,
+    where turning 274 values into a list and back cost as much as the product). With
     ``reset_of``, output ``i`` is ``reset_of[i]`` if given, else ``x[i]``
     unchanged. On a math error the function records it in ``ctx.failure`` and
     returns NaN values (or ``False`` for conditions), so the solver stops and
@@ -440,7 +443,7 @@ def compile_function(
         failed = "_nan"
     elif form is not None:  # the inputs read are in the body; the state stays an array
         driven = f" + _N @ ({''.join(f'{names[u]}, ' for u in form.inputs)})" if form.inputs else ""
-        body.append(f"return (_M @ x{driven} + _c).tolist()")
+        body.append(f"return _M @ x{driven} + _c")
         failed = f"[_nan] * {len(exprs)}"
         matrices = {"_M": form.states, "_N": form.by_input, "_c": form.const}
     else:

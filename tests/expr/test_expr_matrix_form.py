@@ -116,3 +116,28 @@ def test_a_failing_input_is_reported_as_before(monkeypatch: pytest.MonkeyPatch) 
         said.append((run.termination.cause, run.termination.message))
     assert said[0] == said[1]
     assert said[0][0] != "t_end" and "math domain error" in said[0][1]
+
+
+def test_the_product_array_steps_as_its_list_did(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The flow gives the product's array; a run is bit for bit the run of its ``tolist()``."""
+    a, b, c = _system(6)
+    model = hybrid.load_text(_linear_text(a, b, c))
+    assert not isinstance(_rhs(_linear_text(a, b, c))[0](0.0, np.ones(N)), list)  # type: ignore[operator]
+
+    def simulate() -> hybrid.Run:
+        return hybrid.simulate(model, 2.0, rtol=1e-9, atol=1e-12, dt=0.01,
+                               inputs={"u": lambda t: math.sin(3.0 * t)}, handle_sigint=False)  # fmt: skip
+
+    product = simulate()
+    compile_function = codegen.compile_function
+
+    def as_list(*args: object, **kwargs: object) -> object:
+        fn = compile_function(*args, **kwargs)  # type: ignore[arg-type]
+        if "_M @ x" not in (fn.__doc__ or ""):
+            return fn
+        return lambda t, x: fn(t, x).tolist()
+
+    monkeypatch.setattr("hybrid.simulation.compiled.compile_function", as_list)
+    listed = simulate()
+    assert len(product.t) == len(listed.t) > 200
+    assert np.array_equal(product.t, listed.t) and np.array_equal(product.states, listed.states)
