@@ -71,13 +71,15 @@ class CodeContext:
     """Everything names in an expression can refer to when compiled.
 
     ``signals`` are the signal definitions in force (a vector signal's is a call
-    of a multi-output function); ``inputs`` gives external inputs as callables of ``t``.
+    of a multi-output function); ``inputs`` gives each external input's *slot*, a
+    list whose item 0 is its callable of ``t``, read at every call: a model compiled
+    once is run again with other inputs by putting them in its slots.
     """
 
     states: Sequence[str]
     params: Mapping[str, float] = field(default_factory=dict)
     signals: Mapping[str, ir.Expr] = field(default_factory=dict)
-    inputs: Mapping[str, Callable[[float], float]] = field(default_factory=dict)
+    inputs: Mapping[str, list[Callable[[float], float]]] = field(default_factory=dict)
     functions: Mapping[str, Function] = field(default_factory=dict)
     failure: EvalFailure = field(default_factory=EvalFailure)
 
@@ -397,7 +399,7 @@ def compile_function(
         targets = ", ".join(names[s] for s in ctx.states)
         body.append(f"{targets}, = x.tolist()")
     for u in sorted(n for n in all_used if n in ctx.inputs):
-        body.append(f"{names[u]} = _in_{u}(t)")
+        body.append(f"{names[u]} = _in_{u}[0](t)")
     kept = share.names if share is not None else ()
     if kept and set(kept) & set(order) and _calls(definitions, ctx.functions):
         # at the stash's point its signals are read, the others computed from them
@@ -486,8 +488,8 @@ def compile_function(
     scope["_min"], scope["_max"] = min, max
     for fname, func in ctx.functions.items():
         scope[f"_{fname}"] = func.fn
-    for u, fn in ctx.inputs.items():
-        scope[f"_in_{u}"] = fn
+    for u, slot in ctx.inputs.items():
+        scope[f"_in_{u}"] = slot
     scope.update(matrices)
     # only what the source names: a system of many components compiles thousands of
     # small functions, each with its own namespace

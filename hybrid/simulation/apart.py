@@ -43,6 +43,7 @@ Examples
 from __future__ import annotations
 
 import bisect
+import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
@@ -63,7 +64,7 @@ from hybrid.simulation.layout import run_layout
 from hybrid.simulation.result import Jump, Run, Termination
 from hybrid.simulation.settings import Settings
 
-__all__ = ["independent_groups", "merge", "simulate_apart"]
+__all__ = ["group_system", "independent_groups", "merge", "simulate_apart"]
 
 GroupRunner = Callable[[System, np.ndarray, Settings], tuple[Run, CompiledModel]]
 
@@ -109,16 +110,38 @@ def simulate_apart(
     dense = replace(settings, dense=True)
     parts: list[_Part] = []
     for members in groups:
-        sub = System(
-            system.name,
-            tuple(system.components[i] for i in members),
-            file=system.file,
-            position=system.position,
-        )
+        sub = group_system(system, members)
         columns = np.concatenate([np.arange(offsets[i], offsets[i + 1]) for i in members])
         run, compiled = run_group(sub, x0[columns.astype(int)], dense)
         parts.append(_Part(members, run, compiled))
     return merge(system, parts, settings)
+
+
+_GROUPS: dict[tuple[int, tuple[int, ...]], tuple[System, System]] = {}
+_GROUPS_SIZE = 64
+_GROUPS_LOCK = threading.Lock()
+
+
+def group_system(system: System, members: tuple[int, ...]) -> System:
+    """The system of ``system``'s components ``members``: the same object each time asked.
+
+    Each run of ``system`` runs its groups as these systems, and a system run again is
+    not compiled again (:func:`~hybrid.simulation.reference.compiled_model`).
+    """
+    key = (id(system), members)
+    with _GROUPS_LOCK:
+        found = _GROUPS.get(key)
+        if found is None or found[0] is not system:
+            sub = System(
+                system.name,
+                tuple(system.components[i] for i in members),
+                file=system.file,
+                position=system.position,
+            )
+            if len(_GROUPS) >= _GROUPS_SIZE:
+                del _GROUPS[next(iter(_GROUPS))]
+            found = _GROUPS[key] = (system, sub)
+    return found[1]
 
 
 @dataclass

@@ -94,7 +94,8 @@ class LatestFailure(EvalFailure):
 class CompiledModel:
     """Lazily compiled modes of a model, with external inputs bound.
 
-    ``inputs`` maps an automaton's declared input names to callables of ``t``.
+    ``inputs`` maps an automaton's declared input names to callables of ``t``
+    (:meth:`bind_inputs` puts others in their place for the next run).
     ``failure`` records evaluation errors of conditions, signals and resets;
     ``flow_failure`` those of the right-hand side (see the module docstring).
     """
@@ -109,21 +110,12 @@ class CompiledModel:
         self.flow_failure: EvalFailure = LatestFailure()
         self.terms_failure = EvalFailure()
         """Where a mode's ``terms`` record failures (read and cleared by the watch)."""
-        self.inputs = {name: _numeric(fn) for name, fn in (inputs or {}).items()}
-        external = self._external_inputs()
-        missing = [n for n in external if n not in self.inputs]
-        if missing:
-            raise UsageError(
-                f"input '{missing[0]}' needs a value: pass inputs={{'{missing[0]}': f}} "
-                "with f a function of t",
-                at=self.system.input_position(missing[0]),
-            )
-        unknown = [n for n in self.inputs if n not in external]
-        if unknown:
-            raise UsageError(
-                f"'{unknown[0]}' is not a declared input of {self.system.name} "
-                f"(inputs: {', '.join(external) or 'none'})"
-            )
+        self.running = False
+        """A run is stepping it (``reference.running``): it is not given other inputs then."""
+        self.inputs: dict[str, list[Callable[[float], float]]] = {}
+        """Each input's slot: item 0 is the callable the compiled functions read
+        (:class:`~hybrid.expr.codegen.CodeContext`); :meth:`bind_inputs` fills them."""
+        self.bind_inputs(inputs)
         self.state_names = self.system.state_names
         self.columns = self.system.signal_columns
         self.initial_key = self.system.initial_mode
@@ -144,6 +136,30 @@ class CompiledModel:
 
     def _external_inputs(self) -> list[str]:
         return list(self.system.free_inputs)
+
+    def bind_inputs(self, inputs: Mapping[str, Callable[[float], float]] | None) -> None:
+        """Put ``inputs`` in the slots the compiled functions read: the next run reads them.
+
+        Every declared input needs one; a :class:`UsageError` (the slots unchanged)
+        if one is missing or a name is not a declared input.
+        """
+        given = {name: _numeric(fn) for name, fn in (inputs or {}).items()}
+        external = self._external_inputs()
+        missing = [n for n in external if n not in given]
+        if missing:
+            raise UsageError(
+                f"input '{missing[0]}' needs a value: pass inputs={{'{missing[0]}': f}} "
+                "with f a function of t",
+                at=self.system.input_position(missing[0]),
+            )
+        unknown = [n for n in given if n not in external]
+        if unknown:
+            raise UsageError(
+                f"'{unknown[0]}' is not a declared input of {self.system.name} "
+                f"(inputs: {', '.join(external) or 'none'})"
+            )
+        for name, fn in given.items():
+            self.inputs.setdefault(name, [fn])[0] = fn
 
     def mode(self, key: Mode) -> CompiledMode:
         """The compiled mode ``key`` (compiled on first use, then cached)."""

@@ -13,7 +13,8 @@ are not loaded by a process that does not run them.
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -62,10 +63,11 @@ def simulate_reference(
                 sub: System, start: np.ndarray, how: Settings
             ) -> tuple[Run, CompiledModel]:
                 mine = {k: v for k, v in (inputs or {}).items() if k in sub.free_inputs}
-                part = compiled_model(with_group_requirements(whole, sub), mine)
+                part = compiled_model(_with_requirements(whole, sub), mine)
                 loop = EventLoop(part, how, interrupts, None)
                 loop.recorder.monitor = monitor_for(part, how)
-                parts.append((loop.recorder.run(sub.name, loop.run(how.t_start, start)), part))
+                with running(part):
+                    parts.append((loop.recorder.run(sub.name, loop.run(how.t_start, start)), part))
                 return parts[-1]
 
             run = simulate_apart(model, groups, x0, settings, run_group)
@@ -73,7 +75,8 @@ def simulate_reference(
         else:
             loop = EventLoop(compiled, settings, interrupts, progress)
             loop.recorder.monitor = monitor_for(compiled, settings)
-            run = loop.recorder.run(model.name, loop.run(settings.t_start, x0))
+            with running(compiled):
+                run = loop.recorder.run(model.name, loop.run(settings.t_start, x0))
     return run
 
 
@@ -98,28 +101,58 @@ def compiled_model(
 ) -> CompiledModel:
     """The compiled model of ``model``, reused across runs of the same model in a thread.
 
-    Compiling a mode's functions costs far more than a jump; a parameter sweep or
-    a benchmark simulates one model many times. Models given external inputs are
-    compiled afresh (the inputs are bound into the code); free inputs given none
-    are held at their nominal values (:func:`run_inputs`).
+    Compiling a mode's functions costs far more than a jump; a sweep, a falsification,
+    reach's candidate runs or a benchmark simulate one model many times, with other
+    inputs or none. The run's inputs are put in the compiled functions' slots
+    (:meth:`~hybrid.simulation.compiled.CompiledModel.bind_inputs`); free inputs given
+    none are held at their nominal values (:func:`run_inputs`). A model a run of this
+    thread is still using (an input that simulates it again) is compiled afresh.
     """
-    if inputs:
-        return CompiledModel(model, run_inputs(model, inputs))
     cache: dict[int, tuple[Automaton | System, CompiledModel]] = (
         getattr(_CACHE, "models", None) or {}
     )
     _CACHE.models = cache
     hit = cache.get(id(model))
     if hit is not None and hit[0] is model:
-        # a failure recorded by an earlier run of this model must not end this one
-        hit[1].failure.clear()
-        hit[1].flow_failure.clear()
-        return hit[1]
-    compiled = CompiledModel(model, run_inputs(model, None))
+        if not hit[1].running:
+            hit[1].bind_inputs(run_inputs(model, inputs))
+            # a failure recorded by an earlier run of this model must not end this one
+            hit[1].failure.clear()
+            hit[1].flow_failure.clear()
+            hit[1].terms_failure.clear()
+            return hit[1]
+        return CompiledModel(model, run_inputs(model, inputs))
+    compiled = CompiledModel(model, run_inputs(model, inputs))
     if len(cache) >= _CACHE_SIZE:
         cache.pop(next(iter(cache)))
     cache[id(model)] = (model, compiled)
     return compiled
+
+
+_OWNED: dict[int, tuple[System, System, System]] = {}
+_OWNED_LOCK = threading.Lock()
+
+
+def _with_requirements(whole: System, sub: System) -> System:
+    """``with_group_requirements(whole, sub)``, the same object for the same two (so that a
+    group run again is not compiled again)."""
+    with _OWNED_LOCK:
+        found = _OWNED.get(id(sub))
+        if found is None or found[0] is not whole or found[1] is not sub:
+            if len(_OWNED) >= _CACHE_SIZE * 8:
+                del _OWNED[next(iter(_OWNED))]
+            found = _OWNED[id(sub)] = (whole, sub, with_group_requirements(whole, sub))
+    return found[2]
+
+
+@contextmanager
+def running(compiled: CompiledModel) -> Iterator[CompiledModel]:
+    """``compiled`` marked in use while a run steps it (:func:`compiled_model` leaves it be)."""
+    before, compiled.running = compiled.running, True
+    try:
+        yield compiled
+    finally:
+        compiled.running = before
 
 
 def _initial_vector(

@@ -42,7 +42,7 @@ def _flow(definition: str, steady: frozenset[str] = frozenset({"a"}), **inputs: 
         states=("a", "b"),
         signals=signals,
         functions={"polar": POLAR},
-        inputs=inputs,  # type: ignore[arg-type]
+        inputs={name: [fn] for name, fn in inputs.items()},  # type: ignore[misc]
     )
     exprs = [parse_expression("0", SCOPE), parse_expression("p", SCOPE)]
     return compile_function("flow", exprs, ctx, stash=Stash([None]), steady=steady)
