@@ -10,6 +10,7 @@ each other.
 from __future__ import annotations
 
 import ast
+import functools
 import warnings
 from pathlib import Path
 
@@ -64,9 +65,19 @@ def _is_type_checking(node: ast.If) -> bool:
     )
 
 
+@functools.cache
+def _tree(path: Path) -> ast.Module:
+    """The syntax tree of ``path``, parsed once per process (three rules read every module)."""
+    return ast.parse(path.read_text(encoding="utf-8"))
+
+
+_BLOCKS = (ast.stmt, ast.excepthandler, ast.match_case)
+"""The nodes an import statement can be inside: statements and their blocks, no expression."""
+
+
 def _imports(path: Path, package: Path = PACKAGE) -> list[tuple[str, bool]]:
     """``(imported hybrid module, runs at import or call time)`` for every import in ``path``."""
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = _tree(path)
     found: list[tuple[str, bool]] = []
 
     def visit(node: ast.AST, runtime: bool) -> None:
@@ -90,7 +101,8 @@ def _imports(path: Path, package: Path = PACKAGE) -> list[tuple[str, bool]]:
                 is_module = where.with_suffix(".py").exists() or (where / "__init__.py").exists()
                 found.append((candidate if is_module else module, runtime))
         for child in ast.iter_child_nodes(node):
-            visit(child, runtime)
+            if isinstance(child, _BLOCKS):
+                visit(child, runtime)
 
     visit(tree, True)
     return found
@@ -103,7 +115,7 @@ def _spliced(path: Path) -> list[str]:
     ``# --- kernel ---`` line of other modules (``kernel_text.kernel_source``): a
     tuple of their names given to ``kernel_source(...)``, or ``KERNEL_MODULES``.
     """
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = _tree(path)
     names: list[str] = []
     for node in ast.walk(tree):
         value: ast.AST | None = None
@@ -119,7 +131,9 @@ def _spliced(path: Path) -> list[str]:
     return [f"{package}.{name}" for name in names]
 
 
+@functools.cache
 def _graph(package: Path = PACKAGE) -> tuple[nx.DiGraph, list[tuple[str, str, bool]]]:
+    """The import graph of ``package`` and its edges (made once per process: read, not changed)."""
     graph = nx.DiGraph()
     edges: list[tuple[str, str, bool]] = []
     for path in sorted(package.rglob("*.py")):
