@@ -47,7 +47,7 @@ import sys
 import tempfile
 import threading
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import ModuleType
 
@@ -245,9 +245,12 @@ LOCK_FILE = ".compile.lock"
 
 
 @contextlib.contextmanager
-def compiling(*generated: Generated) -> Iterator[None]:
+def compiling(
+    *generated: Generated, waiting: Callable[[], None] | None = None
+) -> Iterator[None]:
     """Held while this process compiles ``generated``: another process about to compile one
-    of them at once waits until it is done, then loads it from the cache.
+    of them at once waits until it is done, then loads it from the cache (calling
+    ``waiting()`` once, before it waits).
 
     Two processes started together on an empty cache (two pytest workers, two runs of
     a make file) each compiled the kernel, twice the CPU for the same files. Only keys
@@ -275,7 +278,13 @@ def compiling(*generated: Generated) -> Iterator[None]:
             except OSError:
                 continue  # the compile goes on unlocked (a cache elsewhere, say)
             held.append(handle)
-            fcntl.flock(handle, fcntl.LOCK_EX)  # a Ctrl-C while waiting stops the wait
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:  # another process is compiling it
+                if waiting is not None:
+                    waiting()
+                    waiting = None
+                fcntl.flock(handle, fcntl.LOCK_EX)  # a Ctrl-C while waiting stops the wait
         yield
     finally:
         for handle in held:

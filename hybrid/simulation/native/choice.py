@@ -61,6 +61,7 @@ __all__ = [
     "generated_notice",
     "generated_wait",
     "machine_factor",
+    "waiting_notice",
 ]
 
 KERNEL_COMPILE_S = 8.0
@@ -251,7 +252,9 @@ def _pace_kind(kernel_state: str) -> str:
     return "kernel" if kernel_state == "missing" else "model"
 
 
-def _notice(model_state: str, kernel_state: str, estimate: float) -> str | None:
+def _notice(
+    model_state: str, kernel_state: str, estimate: float, waiting: bool = False
+) -> str | None:
     from hybrid.simulation.native.pace import MIN_ESTIMATE_S, pace
 
     # this machine's pace, from its last compile of the kind; None: the benchmark machine's
@@ -269,6 +272,8 @@ def _notice(model_state: str, kernel_state: str, estimate: float) -> str | None:
         parts.append(f"the model ({about(max(1.0, estimate))})")
     if not parts:
         return None
+    if waiting:
+        return f"waiting for another process compiling {' and '.join(parts)}; then loading them"
     return f"compiling {' and '.join(parts)}; later runs load them from the cache"
 
 
@@ -315,6 +320,12 @@ def announce(notice: Callable[[], str | None]) -> None:
 def generated_notice(generated: Any) -> str | None:
     """:func:`compile_notice` of a model whose source is ``generated`` already."""
     return _notice(*_cached_source(generated))
+
+
+def waiting_notice(generated: Any) -> str | None:
+    """What this process waits for when another is compiling what :func:`generated_notice`
+    would have this one compile (:func:`~hybrid.simulation.native.cache.compiling`)."""
+    return _notice(*_cached_source(generated), waiting=True)
 
 
 def generated_wait(generated: Any) -> tuple[float, str]:

@@ -33,7 +33,12 @@ from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import Layout, run_from
 from hybrid.simulation.native.cache import compiling, load_generated, require_numba, seal
-from hybrid.simulation.native.choice import announce, generated_notice, generated_wait
+from hybrid.simulation.native.choice import (
+    announce,
+    generated_notice,
+    generated_wait,
+    waiting_notice,
+)
 from hybrid.simulation.native.features import check_supported
 from hybrid.simulation.native.interruptible import run_here, run_in_worker
 from hybrid.simulation.native.kernel_text import kernel_module
@@ -105,9 +110,12 @@ class CompiledNative:
         self.native = NativeModel(model)
         self.layout = Layout.of(self.native)
         self.generated = generate(self.native)
-        announce(partial(generated_notice, self.generated))  # the model is accepted: say it
         require_numba()  # imported before the clock starts: the import is not the compile
-        with compiling(kernel_module(), self.generated):  # another process's compile: awaited
+        # another process's compile of the same code is awaited, saying so; then what is
+        # left to compile is said (nothing, after such a wait)
+        waiting = partial(announce, partial(waiting_notice, self.generated))
+        with compiling(kernel_module(), self.generated, waiting=waiting):
+            announce(partial(generated_notice, self.generated))  # the model is accepted
             expected, kind = generated_wait(self.generated)  # what is left to compile
             started = time.perf_counter()
             self.module, self.kernel = self._compile_or_load()

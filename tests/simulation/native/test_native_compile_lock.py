@@ -52,7 +52,11 @@ def _enter(log: Path, source: str) -> None:
     from hybrid.simulation.native.cache import compiling
     from hybrid.simulation.native.kernel_text import Generated
 
-    with compiling(Generated(source=source)), log.open("a") as f:
+    def waiting() -> None:  # said once, before the wait (the notice of a compiled run)
+        with log.open("a") as f:
+            f.write("second waits\n")
+
+    with compiling(Generated(source=source), waiting=waiting), log.open("a") as f:
         f.write("second in\n")
 
 
@@ -66,7 +70,11 @@ def cache_env(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> dict[str, str]
 
 ONE = "# one source\n"
 CASES = {
-    "same-key-waits": ("# one source\n", None, ["holder in", "holder out", "second in"]),
+    "same-key-waits": (
+        "# one source\n",
+        None,
+        ["holder in", "second waits", "holder out", "second in"],
+    ),
     "other-key-goes-on": ("# another source\n", None, ["holder in", "second in", "holder out"]),
     "sealed-meanwhile-goes-on": (
         "# one source\n",
@@ -76,7 +84,8 @@ CASES = {
     "holder-killed-goes-on": ("# one source\n", "kill", ["holder in", "second in"]),
 }
 """What the second process compiles, what happens to the first's key meanwhile (its code
-sealed on disk, or its process killed with SIGKILL), and the order the file then holds."""
+sealed on disk, or its process killed with SIGKILL), and the order the file then holds
+("second waits": it was told that it waits, only where it does)."""
 
 
 @pytest.mark.parametrize("case", list(CASES))

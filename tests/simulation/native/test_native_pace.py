@@ -69,6 +69,10 @@ def test_a_models_notice_scales_by_the_last_model_compile(empty_cache: Path) -> 
         "(about 30 s here); later runs load them from the cache"
     )  # a compile with the kernel: the kernel's pace for both
     assert pace.pace("kernel") == 3.0 and pace.pace("model") == 2.0
+    assert _notice("missing", "missing", 10.0, waiting=True) == (
+        "waiting for another process compiling the compiled loop (once per machine, about "
+        "24 s here) and the model (about 30 s here); then loading them"
+    )  # another process holds the compile: this one says it waits for it
 
 
 @pytest.mark.parametrize(
