@@ -141,3 +141,27 @@ def test_the_product_array_steps_as_its_list_did(monkeypatch: pytest.MonkeyPatch
     listed = simulate()
     assert len(product.t) == len(listed.t) > 200
     assert np.array_equal(product.t, listed.t) and np.array_equal(product.states, listed.states)
+
+
+def test_long_linear_signal_columns_are_one_product() -> None:
+    """A signal defined as a long sum of products is computed by one product per stored point."""
+    a, b, c = _system(7)
+    weights = np.random.default_rng(8).normal(0.0, 1.0, (2, N))
+    weights[:, 50:] = 0.0  # 50 products each (a sum nests one level per term, 64 at most)
+    text = _linear_text(a, b, c).replace("locations:", "signals:\n" + "".join(
+        f"  y{k}: {' + '.join(f'{float(w)!r} * x{j}' for j, w in enumerate(weights[k, :50]))}"
+        " + 0.5 * u + 1.25\n" for k in range(2)
+    ) + "locations:")  # fmt: skip
+    model = hybrid.load_text(text)
+    compiled = CompiledModel(as_system(model), {"u": lambda t: 0.7})
+    outputs = compiled.mode(compiled.initial_key).outputs
+    assert "_M @ x" in (outputs.__doc__ or "")
+    x = np.random.default_rng(9).normal(0.0, 1.0, N)
+    got = outputs(0.0, x)
+    assert isinstance(got, tuple) and all(type(v) is float for v in got)
+    exact = weights @ x + 0.5 * 0.7 + 1.25
+    scale = np.abs(weights) @ np.abs(x) + 0.35 + 1.25
+    assert np.all(np.abs(np.array(got) - exact) <= 64 * np.finfo(float).eps * scale)
+    run = hybrid.simulate(model, 0.5, inputs={"u": lambda t: 0.7}, handle_sigint=False)
+    np.testing.assert_allclose(run.signals, run.states @ weights.T + 0.35 + 1.25, rtol=1e-12,
+                               atol=1e-12)  # fmt: skip
