@@ -61,6 +61,7 @@ from hybrid.simulation.instants import (
     transition_key,
 )
 from hybrid.simulation.layout import run_layout
+from hybrid.simulation.monitor import with_group_requirements
 from hybrid.simulation.result import Jump, Run, Termination
 from hybrid.simulation.settings import Settings
 
@@ -105,7 +106,10 @@ def simulate_apart(
     settings: Settings,
     run_group: GroupRunner,
 ) -> Run:
-    """Run each group of ``system`` alone (from its part of ``x0``) and merge the runs."""
+    """Run each group of ``system`` alone (from its part of ``x0``) and merge the runs.
+
+    ``run_group`` gets each group as :func:`group_system` gives it.
+    """
     offsets = np.cumsum([0] + [len(c.automaton.states) for c in system.components])
     dense = replace(settings, dense=True)
     parts: list[_Part] = []
@@ -123,7 +127,9 @@ _GROUPS_LOCK = threading.Lock()
 
 
 def group_system(system: System, members: tuple[int, ...]) -> System:
-    """The system of ``system``'s components ``members``: the same object each time asked.
+    """The system of ``system``'s components ``members``, with the system requirements it
+    owns (:func:`~hybrid.simulation.monitor.with_group_requirements`): the same object
+    each time asked.
 
     Each run of ``system`` runs its groups as these systems, and a system run again is
     not compiled again (:func:`~hybrid.simulation.reference.compiled_model`).
@@ -132,11 +138,14 @@ def group_system(system: System, members: tuple[int, ...]) -> System:
     with _GROUPS_LOCK:
         found = _GROUPS.get(key)
         if found is None or found[0] is not system:
-            sub = System(
-                system.name,
-                tuple(system.components[i] for i in members),
-                file=system.file,
-                position=system.position,
+            sub = with_group_requirements(
+                system,
+                System(
+                    system.name,
+                    tuple(system.components[i] for i in members),
+                    file=system.file,
+                    position=system.position,
+                ),
             )
             if len(_GROUPS) >= _GROUPS_SIZE:
                 del _GROUPS[next(iter(_GROUPS))]

@@ -30,7 +30,6 @@ from hybrid.simulation.monitor import (
     cut_results,
     join_groups,
     margin_table,
-    with_group_requirements,
 )
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
@@ -57,13 +56,12 @@ def simulate_reference(
             # components that share no label and read no signal of each other: simulated
             # apart and merged in hybrid time, never as a product
             parts: list[tuple[Run, CompiledModel]] = []
-            whole = model
 
             def run_group(
                 sub: System, start: np.ndarray, how: Settings
             ) -> tuple[Run, CompiledModel]:
                 mine = {k: v for k, v in (inputs or {}).items() if k in sub.free_inputs}
-                part = compiled_model(_with_requirements(whole, sub), mine)
+                part = compiled_model(sub, mine)
                 loop = EventLoop(part, how, interrupts, None)
                 loop.recorder.monitor = monitor_for(part, how)
                 with running(part):
@@ -127,22 +125,6 @@ def compiled_model(
         cache.pop(next(iter(cache)))
     cache[id(model)] = (model, compiled)
     return compiled
-
-
-_OWNED: dict[int, tuple[System, System, System]] = {}
-_OWNED_LOCK = threading.Lock()
-
-
-def _with_requirements(whole: System, sub: System) -> System:
-    """``with_group_requirements(whole, sub)``, the same object for the same two (so that a
-    group run again is not compiled again)."""
-    with _OWNED_LOCK:
-        found = _OWNED.get(id(sub))
-        if found is None or found[0] is not whole or found[1] is not sub:
-            if len(_OWNED) >= _CACHE_SIZE * 8:
-                del _OWNED[next(iter(_OWNED))]
-            found = _OWNED[id(sub)] = (whole, sub, with_group_requirements(whole, sub))
-    return found[2]
 
 
 @contextmanager
