@@ -229,8 +229,7 @@ def _as_matrix(
     """The matrix form of a list of outputs that read no signal, if it has enough terms."""
     if shape != "list" or part or stash is not None or order or not ctx.states:
         return None
-    form = matrix_form(exprs, ctx.states, ctx.params, ctx.inputs)
-    return form if form is not None and form.terms >= MATRIX_MIN_TERMS else None
+    return _long_form(exprs, ctx)
 
 
 def _columns_as_matrix(
@@ -247,7 +246,12 @@ def _columns_as_matrix(
     definitions = [ctx.signals[e.name] for e in exprs if isinstance(e, ir.Var)]
     if any(ir.names_in(d, ir.SIGNAL) for d in definitions):
         return None
-    form = matrix_form(definitions, ctx.states, ctx.params, ctx.inputs)
+    return _long_form(definitions, ctx)
+
+
+def _long_form(exprs: Sequence[ir.Expr], ctx: CodeContext) -> MatrixForm | None:
+    """The matrix form of ``exprs`` if they are linear with :data:`MATRIX_MIN_TERMS` products."""
+    form = matrix_form(exprs, ctx.states, ctx.params, ctx.inputs)
     return form if form is not None and form.terms >= MATRIX_MIN_TERMS else None
 
 
