@@ -4,8 +4,8 @@
 out*)`` (see ``kernel_types``) generated from the expression IR by
 :mod:`~hybrid.simulation.native.printer` as one numba ``cfunc``, with
 :mod:`~hybrid.simulation.native.mathlib` inlined into it and the
-per-operation functions (``model_rhs``...) inlined too, or compiled apart
-when the model is large (:data:`INLINE_LINES`); the slots an operation reads
+per-operation functions (``model_rhs``...) written into its dispatch, or
+compiled apart when the model is large (:data:`INLINE_LINES`); the slots an operation reads
 are loaded and the lines all its cases run alike are computed before its
 dispatch (:func:`_hoisted`, :func:`_shared`), and cases alike are written once
 (:func:`_alike`). And the table
@@ -59,7 +59,10 @@ MODEL_BASE_S, MODEL_SECONDS_PER_LINE = 0.4, 0.006
 INLINE_LINES = 600
 """Models whose operations take fewer generated lines are compiled as one function (measured,
 apart and as one: thermostat, 100 lines, 1.1 s and 0.5 s; the 16th-order filtered oscillator,
-550 lines, 3.7 s and 3.0 s; the 32nd-order, 870 lines, 5.0 s and 6.2 s)."""
+550 lines, 3.7 s and 3.0 s; the 32nd-order, 870 lines, 5.0 s and 6.2 s). The operations are
+written into ``model``'s branches (:func:`_inlined`), not inlined by numba, which copied and
+typed their IR again: the thermostat 0.79 -> 0.67 s, the bouncing ball 0.98 -> 0.74 s, the
+4th-order oscillator 2.05 -> 1.66 s (medians of three, the kernel loaded)."""
 
 
 class _Forms:
@@ -181,12 +184,51 @@ def _alike(var: str, cases: list[list[str]], indent: str) -> list[str]:
     return choose + _dispatch("case_", [list(body) for body in bodies], indent)
 
 
-def _function(name: str, args: str, cases: Sequence[list[str]], fallback: str) -> list[str]:
+def _body(var: str, cases: Sequence[list[str]], fallback: str, indent: str) -> list[str]:
+    """The lines that run ``cases[var]`` (``fallback`` past the last), each slot loaded once."""
     loads, read = _hoisted(cases)
     shared, rest = _shared(read)
-    lines = [f"def {name}({args}):", *(f"    {line}" for line in loads + shared)]
-    lines += _alike(args.split(",")[0], rest, "    ") if any(rest) else []
-    return [*lines, f"    {fallback}", ""]
+    lines = [f"{indent}{line}" for line in loads + shared]
+    lines += _alike(var, rest, indent) if any(rest) else []
+    return [*lines, f"{indent}{fallback}"]
+
+
+def _function(name: str, args: str, cases: Sequence[list[str]], fallback: str) -> list[str]:
+    return [f"def {name}({args}):", *_body(args.split(",")[0], cases, fallback, "    "), ""]
+
+
+_OPERATIONS = (
+    # (function, its index, its code, what it returns past its last case)
+    ("model_watch", "m", "OP_WATCH", "return"),
+    ("model_value", "f", "OP_VALUE", "return _NAN"),
+    ("model_truth", "f", "OP_TRUTH", "return False"),
+    ("model_rhs", "m", "OP_RHS", "return"),
+    ("model_arm", "m", "OP_ARM", "return"),
+    ("model_outputs", "m", "OP_OUTPUTS", "return"),
+    ("model_reset", "tr", "OP_RESET", "return"),
+)
+"""The operations of ``model``, in the order its dispatch tests their codes."""
+
+
+def _inlined(body: dict[str, list[list[str]]]) -> list[str]:
+    """``model``'s dispatch with each operation's cases written in it (for a small model).
+
+    What each branch returns is what ``model`` returns for the operation: a value, a
+    truth as 1.0 or 0.0, else 0.0. Numba's own inlining of seven functions into one
+    copied and retyped their IR: a quarter of a small model's compile.
+    """
+    lines: list[str] = []
+    for k, (name, _, code, fallback) in enumerate(_OPERATIONS):
+        cases = body[name]
+        if name == "model_truth":
+            cases = [[*case[:-1], f"return 1.0 if ({case[-1][len('return ') :]}) else 0.0"]
+                     for case in cases]  # fmt: skip
+            fallback = "return 0.0"
+        elif fallback == "return":
+            fallback = "return 0.0"
+        lines.append(f"    {'if' if k == 0 else 'elif'} op == {code}:")
+        lines += _body("i", cases, fallback, "        ")
+    return [*lines, "    return 0.0", ""]
 
 
 def generate(model: NativeModel) -> Generated:
@@ -292,11 +334,14 @@ def generate(model: NativeModel) -> Generated:
         "model_arm": arm_cases,
     }
     functions: list[str] = []
-    for name, cases in body.items():
-        index = {"model_value": "f", "model_truth": "f", "model_reset": "tr"}.get(name, "m")
-        fallback = {"model_value": "return _NAN", "model_truth": "return False"}.get(name, "return")
-        functions += _function(name, f"{index}, t, x, p, out", cases, fallback)
+    for name, index, _, fallback in _OPERATIONS:
+        functions += _function(name, f"{index}, t, x, p, out", body[name], fallback)
     op_lines = len(functions)
+    # a small model's operations are written into `model`, compiled as one function (less
+    # than half the time: numba's cost per function dominates); a large model's apart: numba's
+    # typing of one huge function costs more than that of its parts (UVMS mission 2: half its
+    # compile)
+    inline = op_lines < INLINE_LINES
     dispatch = [
         "    if op == OP_WATCH:",
         "        model_watch(i, t, x, p, out)",
@@ -321,6 +366,8 @@ def generate(model: NativeModel) -> Generated:
         f"    p = carray(pp, ({n_pe},))",
         f"    out = carray(outp, ({out_size},))",
     ]
+    if inline:
+        functions, dispatch, body = [], _inlined(body), {}
     if model.functions:  # a library's compiled form may raise: an evaluation failure, as NaN
         body["model_ops"], body["model_failed"] = [], []
         functions += [
@@ -354,10 +401,6 @@ def generate(model: NativeModel) -> Generated:
         ]
     else:
         functions += [*pointers, *dispatch]
-    # a small model's operations are inlined into `model`, compiled as one function (less than
-    # half the time: numba's cost per function dominates); a large model's apart: numba's typing
-    # of one huge function costs more than that of its parts (UVMS mission 2: half its compile)
-    inline = ", inline='always'" if op_lines < INLINE_LINES else ""
     footer = [
         "",
         "# ---- compiled with numba (cached on disk beside this file) ----",
@@ -366,8 +409,11 @@ def generate(model: NativeModel) -> Generated:
         "    global model",
         f"    for _name in {tuple(helpers)!r}:",
         f"        globals()[_name] = njit({JIT})(globals()[_name])",  # LLVM inlines them
-        f"    for _name in {tuple(body)!r}:",
-        f"        globals()[_name] = njit({JIT}{inline})(globals()[_name])",
+        *(
+            [f"    for _name in {tuple(body)!r}:", f"        globals()[_name] = njit({JIT})(globals()[_name])"]
+            if body
+            else []
+        ),
         "    with warnings.catch_warnings():",
         "        warnings.simplefilter('ignore', NumbaExperimentalFeatureWarning)",
         "        model = cfunc(model_signature(), cache=True, error_model='numpy')(model)",

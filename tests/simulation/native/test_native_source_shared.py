@@ -23,13 +23,15 @@ from support import REPO, import_source
 
 import hybrid
 from hybrid.compose import as_system
-from hybrid.simulation.native import source
+from hybrid.simulation.native import buffers, source
 from hybrid.simulation.native.structure import NativeModel
 
 pytest.importorskip("numba")
 
-OPERATIONS = ("model_rhs", "model_outputs", "model_value", "model_truth", "model_reset",
-              "model_watch", "model_arm")  # fmt: skip
+OPERATIONS = {"model_rhs": "OP_RHS", "model_outputs": "OP_OUTPUTS", "model_value": "OP_VALUE",
+              "model_truth": "OP_TRUTH", "model_reset": "OP_RESET", "model_watch": "OP_WATCH",
+              "model_arm": "OP_ARM"}  # fmt: skip
+"""Each operation's function (a large model's) and its code in ``model``'s dispatch."""
 RING = """
 automaton: th{i}
 state: {{T{i}: {{initial: 19.0}}}}
@@ -81,22 +83,33 @@ def test_every_operation_computes_what_it_computed_unshared(
     tag = "".join(c for c in name if c.isalnum())
     ours = import_source(tmp_path / f"hybrid_probe_shared_{tag}.py", shared)
     theirs = import_source(tmp_path / f"hybrid_probe_unshared_{tag}.py", unshared)
+    for module in (ours, theirs):  # `model` as plain Python, its arrays passed as themselves
+        module.carray = lambda array, shape: array
+    if name in ("thermostat", "uvms_mission_2"):  # a small model's operations are in `model`
+        assert ("def model_rhs(" in shared) == (name == "uvms_mission_2")
     rng = random.Random(name)
-    indices = {"model_value": 0, "model_truth": 0, "model_reset": 0}
-    for op in OPERATIONS:  # how many cases each has: its index past the last returns the fallback
-        indices[op] = unshared.split(f"def {op}(")[1].split("\ndef ")[0].count(" < ") + 1
     n_states = len(native.state_names)
     for _ in range(4):
         x = np.array([rng.uniform(-1.5, 1.5) for _ in range(max(1, n_states))])
         p = np.array([rng.uniform(0.2, 1.5) for _ in range(400)])
         t = rng.uniform(0.0, 30.0)
-        for op in OPERATIONS:
-            for index in range(indices[op] + 1):
+        for op, code in OPERATIONS.items():
+            # every case, and the index past the last, which returns the fallback
+            for index in range(_cases(unshared, op, code) + 1):
                 a, b = np.full(400, -7.0), np.full(400, -7.0)
-                got = getattr(ours, op)(index, t, x, p, a)
-                expected = getattr(theirs, op)(index, t, x, p, b)
+                got = ours.model(getattr(buffers, code), index, t, x, p, a)
+                expected = theirs.model(getattr(buffers, code), index, t, x, p, b)
                 assert a.tobytes() == b.tobytes(), (op, index)
                 assert np.array([got], dtype=float).tobytes() == np.array([expected], dtype=float).tobytes()
+
+
+def _cases(unshared: str, op: str, code: str) -> int:
+    """How many cases ``op`` has in a module generated unshared (one comparison fewer)."""
+    if f"def {op}(" in unshared:
+        text = unshared.split(f"def {op}(")[1].split("\ndef ")[0]
+    else:  # written into `model`'s branch for its code
+        text = unshared.split(f"op == {code}:")[1].split("op == OP_")[0]
+    return text.count(" < ") + 1
 
 
 def test_a_line_is_shared_only_when_what_it_reads_is_shared_too() -> None:
