@@ -25,8 +25,8 @@ Examples
 
 from __future__ import annotations
 
-import ast
 import functools
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,7 +35,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hybrid.simulation.native.kernel_types import PIECES
-from hybrid.simulation.native.shares import function_costs, piece_callees
 
 __all__ = ["JIT", "KERNEL_MODULES", "Generated", "kernel_module", "kernel_source"]
 
@@ -91,8 +90,13 @@ def kernel_source(modules: Sequence[str] = KERNEL_MODULES) -> tuple[str, list[st
         text = (here / f"{module}.py").read_text(encoding="utf-8")
         code = text.split(MARKER, 1)[1]
         parts.append(f"# ---- {module} ----{code}")
-        names += [n.name for n in ast.parse(code).body if isinstance(n, ast.FunctionDef)]
+        names += _TOP_LEVEL_DEF.findall(code)
     return "\n".join(parts), names
+
+
+_TOP_LEVEL_DEF = re.compile(r"^def (\w+)\(", re.MULTILINE)
+"""A function the kernel's code defines at its top level (read without parsing the code: every
+process that runs compiled makes the kernel's source, to find it in the cache)."""
 
 
 @functools.lru_cache(maxsize=4)
@@ -104,8 +108,9 @@ def kernel_module(parallel_over: str = "") -> Generated:
     also get a C wrapper, so that they can be passed as function pointers. A
     second process finds every piece in numba's cache and compiles nothing; on
     a miss every function is compiled, callees first (each one found in the
-    cache is loaded instead). Made once per process (a tenth of a second: the
-    files are read and parsed), however often the cache is asked for it.
+    cache is loaded instead). Made once per process (the files are read, not
+    parsed: what compiling needs of their syntax is worked out when compiling),
+    however often the cache is asked for it.
     """
     parallel = bool(parallel_over)
     modules = ("ensemble",) if parallel else KERNEL_MODULES[:-1]
@@ -134,8 +139,6 @@ def kernel_module(parallel_over: str = "") -> Generated:
         "# ---- compiled with numba, callees first (cached on disk beside this file) ----",
         f"_NAMES = {tuple(names)!r}",
         f"_PIECES = {pieces!r}",
-        f"_COSTS = {function_costs(code, names)!r}",
-        f"_NEEDS = {piece_callees(code, names, pieces)!r}",
         "_ALIASES = dict(PIECES)",
         "# only the ensemble's loop allocates (numba's threads); the others never keep an array,",
         "# so they need no reference counting (numba's runtime, NRT: code per array view made or",
@@ -178,7 +181,7 @@ def kernel_module(parallel_over: str = "") -> Generated:
         "                globals()[_name] = _jit(_name)",
         "        except Exception:  # not cached: compiled, in shares by several processes",
         "            finish_compiling = compile_kernel(",
-        "                globals(), _jit, _NAMES, _COSTS, _NEEDS, __file__, __name__)",
+        "                globals(), _jit, _NAMES, _PIECES, __file__, __name__)",
         "",
     ]
     return Generated("\n".join(lines))

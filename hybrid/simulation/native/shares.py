@@ -247,23 +247,29 @@ def _stop(workers: list[subprocess.Popen[bytes] | None]) -> None:
 
 
 def compile_kernel(namespace: dict[str, Any], jit: Callable[[str], Any], names: Sequence[str],
-                   costs: Mapping[str, float], needs: Mapping[str, Iterable[str]], path: str,
-                   module: str) -> Callable[[], None]:  # fmt: skip
-    """Compile the pieces of the generated module ``module`` (file ``path``) into ``namespace``.
+                   pieces: Sequence[str], path: str, module: str,
+                   costs: Mapping[str, float] | None = None) -> Callable[[], None]:  # fmt: skip
+    """Compile the ``pieces`` of the generated module ``module`` (file ``path``) into ``namespace``.
 
     ``jit(name)`` compiles the function ``name`` of the module (or loads it
-    from numba's cache); ``names`` lists them callees first; ``needs[piece]``
-    names the functions a piece calls; ``costs`` holds each function's estimated
-    compile time (:func:`function_costs`). Returns ``finish``: this process's share is compiled now,
+    from numba's cache); ``names`` lists them callees first. What each piece
+    calls (:func:`piece_callees`) and, unless ``costs`` gives them, what each
+    function costs to compile (:func:`function_costs`) are read from the
+    module's code here, where they are needed. Returns ``finish``: this process's share is compiled now,
     the workers' pieces are there once ``finish()`` returns (meanwhile this
     process may compile something else: a model). In a worker
     (``$HYBRID_NATIVE_COMPILE_SHARE`` set) only that share is compiled.
     """
+    with open(path, encoding="utf-8") as file:
+        code = file.read()
+    needs = piece_callees(code, names, pieces)
     done: set[str] = set()
     share = os.environ.get(SHARE_ENV)
     if share is not None:
         _compile(namespace, jit, names, needs, [p for p in share.split(",") if p in needs], done)
         return _nothing
+    if costs is None:
+        costs = function_costs(code, names)
     plan = shares(costs, needs, processes(len(needs)), beside=_BESIDE[0])
     workers = [_spawn(path, module, s) for s in plan[1:]]
     try:
