@@ -63,6 +63,7 @@ __all__ = [
     "cache_key",
     "cache_root",
     "compiling",
+    "exclusive",
     "key_state",
     "load_generated",
     "require_numba",
@@ -289,6 +290,28 @@ def compiling(
     finally:
         for handle in held:
             os.close(handle)  # closing releases the lock
+
+
+@contextlib.contextmanager
+def exclusive(path: Path) -> Iterator[None]:
+    """Within, no other process is within ``exclusive`` of the same ``path`` (``flock`` on it,
+    created if missing): for a read, change and write of a shared file. Where ``fcntl`` is
+    missing or ``path`` cannot be opened, nothing is locked."""
+    try:
+        import fcntl
+    except ImportError:
+        yield
+        return
+    try:
+        handle = os.open(path, os.O_RDWR | os.O_CREAT, 0o600)
+    except OSError:
+        yield
+        return
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX)  # a Ctrl-C while waiting stops the wait
+        yield
+    finally:
+        os.close(handle)  # closing releases the lock
 
 
 def load_generated(generated: Generated) -> ModuleType:

@@ -36,7 +36,7 @@ import json
 import math
 
 from hybrid.files import atomic_write
-from hybrid.simulation.native.cache import cache_root
+from hybrid.simulation.native.cache import cache_root, exclusive
 
 __all__ = ["KINDS", "MIN_ESTIMATE_S", "PACE_FILE", "PACE_RANGE", "pace", "record"]
 
@@ -45,6 +45,8 @@ KINDS = ("kernel", "model")
 
 PACE_FILE = "pace.json"
 """The file in the cache root that keeps the last pace of each kind."""
+PACE_LOCK = ".pace.lock"
+"""Beside it: held while a process reads, changes and writes it."""
 MIN_ESTIMATE_S = 5.0
 """A compile estimated shorter keeps no pace: its wait is mostly loading, whatever the
 machine (a small model compiled in a process that has compiled before waited 0.34 s
@@ -61,13 +63,17 @@ def record(waited_s: float, estimated_s: float, kind: str) -> None:
     if not (estimated_s >= MIN_ESTIMATE_S and math.isfinite(waited_s) and waited_s > 0.0):
         return
     least, most = PACE_RANGE
-    kept = _kept()
-    kept[kind] = {"pace": min(most, max(least, waited_s / estimated_s)),
-                  "waited_s": waited_s, "estimated_s": estimated_s}  # fmt: skip
-    # a cache that cannot be written (CannotWrite is an OSError) keeps no pace: the run
-    # goes on without it, and a later notice says the benchmark machine's figures
-    with contextlib.suppress(OSError), atomic_write(cache_root() / PACE_FILE) as stream:
-        stream.write(json.dumps(kept).encode("utf-8"))
+    entry = {"pace": min(most, max(least, waited_s / estimated_s)),
+             "waited_s": waited_s, "estimated_s": estimated_s}  # fmt: skip
+    # one process at a time reads, changes and writes the file: two compiles ending together
+    # (two test workers, two commands) each keep their kind's pace. A cache that cannot be
+    # written (CannotWrite is an OSError) keeps no pace: the run goes on without it, and a
+    # later notice says the benchmark machine's figures
+    with contextlib.suppress(OSError), exclusive(cache_root() / PACE_LOCK):
+        kept = _kept()
+        kept[kind] = entry
+        with atomic_write(cache_root() / PACE_FILE) as stream:
+            stream.write(json.dumps(kept).encode("utf-8"))
 
 
 def pace(kind: str) -> float | None:

@@ -160,3 +160,31 @@ def test_a_compile_records_what_it_waited_against_what_was_estimated(
     assert estimated >= 1.0 and waited > 0.0
     hybrid.simulate(model, t_end=1.0, backend="compiled", handle_sigint=False)
     assert len(kept) == 1  # compiled once: kept once
+
+
+def test_compiles_ending_together_keep_each_kinds_pace(empty_cache: Path) -> None:
+    """The file is read, changed and written by one process at a time: a record waits while
+    another holds the lock, then keeps both kinds (unlocked, it wrote over the other's)."""
+    import threading
+
+    held = cache.exclusive(empty_cache / pace.PACE_LOCK)
+    held.__enter__()
+    done = threading.Event()
+
+    def model_compile() -> None:
+        pace.record(30.0, 15.0, "model")
+        done.set()
+
+    writer = threading.Thread(target=model_compile)
+    try:
+        writer.start()
+        assert not done.wait(0.5)  # it waits for the lock (flock: per open file, so threads too)
+        # meanwhile the holder reads, changes and writes the file
+        (empty_cache / pace.PACE_FILE).write_text(json.dumps({"kernel": {"pace": 3.0}}))
+    finally:
+        held.__exit__(None, None, None)
+    writer.join(10.0)
+    assert done.is_set()
+    kept = json.loads((empty_cache / pace.PACE_FILE).read_text())
+    assert kept["kernel"] == {"pace": 3.0}
+    assert kept["model"] == {"pace": 2.0, "waited_s": 30.0, "estimated_s": 15.0}
