@@ -100,6 +100,10 @@ def kernel(parallel: bool = False, wait: bool = True) -> ModuleType:
             many = kernel_module(_KERNEL["one"].__name__)
             with compiling(many):  # another process compiling it: awaited, then loaded
                 _KERNEL["many"] = load_generated(many)
+            # compiled whole (its signature is explicit): numba writes nothing more to its
+            # cache files, on its first calls either (checked in a fresh cache, compiling
+            # process and loading one), so they are held to a manifest like the others
+            seal(_KERNEL["many"])
         return _KERNEL["many" if parallel else "one"]
 
 

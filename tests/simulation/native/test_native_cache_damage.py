@@ -15,6 +15,8 @@ from __future__ import annotations
 import math
 import os
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -110,3 +112,31 @@ def test_an_intact_cache_says_nothing(compiled_folders: tuple[Path, Path], tmp_p
     code, stderr, jumps = _simulate(cache, tmp_path)
     assert code == 0 and "note" not in stderr, stderr
     assert len(jumps) == len([t for t in bounce_times(12) if t <= 5.0])
+
+
+def test_the_ensemble_loop_is_sealed_and_stays_so(tmp_path: Path) -> None:
+    """The ensemble loop's files are held to a manifest once loaded, and a later process's
+    runs change none of them (a manifest that numba's first calls outdated would report
+    damage that is not there)."""
+    import json
+
+    from hybrid.simulation.native.cache import _digests
+    from hybrid.simulation.native.engine import kernel
+
+    thermostat = hybrid.load(SPECS / "thermostat.yaml")
+    hybrid.simulate_many(thermostat, t_end=30.0, parameters={"a": [0.08, 0.1, 0.12]})
+    folder = Path(kernel(parallel=True).__file__).parent
+    sealed = json.loads((folder / MANIFEST).read_text())
+    assert sealed == _digests(folder) and any(name.endswith(".nbc") for name in sealed)
+    script = tmp_path / "many.py"
+    script.write_text(
+        "import hybrid\n"
+        f"m = hybrid.load({str(SPECS / 'thermostat.yaml')!r})\n"
+        "runs = hybrid.simulate_many(m, t_end=30.0, parameters={'a': [0.09, 0.11]})\n"
+        "print(len(runs))\n"
+    )
+    done = subprocess.run([sys.executable, "-W", "always", str(script)], capture_output=True,
+                          text=True, timeout=600, check=False)  # fmt: skip
+    assert done.returncode == 0 and done.stdout.split() == ["2"], done.stderr
+    assert "damaged" not in done.stderr, done.stderr
+    assert json.loads((folder / MANIFEST).read_text()) == sealed == _digests(folder)
