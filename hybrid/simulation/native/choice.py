@@ -125,10 +125,9 @@ def cached(model: Any) -> tuple[str, str, float]:
     Generates the model's source (no numba import).
     """
     from hybrid.compose import as_system
-    from hybrid.simulation.native.source import generate
-    from hybrid.simulation.native.structure import NativeModel
+    from hybrid.simulation.native.source import native_source
 
-    return _cached_source(generate(NativeModel(as_system(model))))  # a user's model: either type
+    return _cached_source(native_source(as_system(model))[1])  # a user's model: either type
 
 
 def _cached_source(generated: Any) -> tuple[str, str, float]:

@@ -46,8 +46,8 @@ from hybrid.simulation.native.kernel_types import PIECES
 from hybrid.simulation.native.loop import lay_out_work
 from hybrid.simulation.native.pace import record as record_pace
 from hybrid.simulation.native.shares import compiling_beside
-from hybrid.simulation.native.source import generate
-from hybrid.simulation.native.structure import NativeModel
+from hybrid.simulation.native.source import native_source
+from hybrid.simulation.native.structure import structure_key
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
 
@@ -111,9 +111,8 @@ class CompiledNative:
     """A model structure, generated and loaded: what every run of it shares."""
 
     def __init__(self, model: System) -> None:
-        self.native = NativeModel(model)
+        self.native, self.generated = native_source(model)
         self.layout = Layout.of(self.native)
-        self.generated = generate(self.native)
         require_numba()  # imported before the clock starts: the import is not the compile
         # another process's compile of the same code is awaited, saying so; then what is
         # left to compile is said (nothing, after such a wait)
@@ -225,31 +224,12 @@ def _entry_point(dispatcher: Any) -> Callable[..., None]:
     return entry
 
 
-def _structure_key(model: System) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
-    """``(key, objects)``: what identifies a model's structure, parameter and initial values aside.
-
-    ``with_parameters`` and ``with_initial`` keep the locations, edges and
-    signals objects, so the models of a sweep share one entry. The key holds
-    their ids; the cache holds the objects, so no other object can take an id.
-    """
-    objects = tuple(
-        (c.automaton.locations, c.automaton.edges, c.automaton.signals) for c in model.components
-    )
-    names = tuple((c.name, c.automaton.name) for c in model.components)
-    single = model.single
-    # the modes generated are those reachable from the initial one: another start is
-    # another structure (with_initial keeps the locations objects)
-    key = (model.name, single, names, model.initial_mode,
-           tuple(id(o) for trio in objects for o in trio))  # fmt: skip
-    return key, objects
-
-
 def compiled_native(model: System) -> CompiledNative:
     """The :class:`CompiledNative` of ``model``'s structure (generated once per process)."""
     last = _LAST[0]  # the model of the last call, first: a run repeated costs no key
     if last is not None and last[0] is model:
         return last[1]
-    key, objects = _structure_key(model)
+    key, objects = structure_key(model)
     with _CACHE_LOCK:
         hit = _CACHE.get(key)
     if hit is None:

@@ -28,11 +28,14 @@ Examples
 from __future__ import annotations
 
 import re
+import threading
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from hybrid.compose import System
 from hybrid.expr import ir
 from hybrid.expr.rho import guard_to_rho, level_key, within_band
 from hybrid.simulation.native.buffers import T_MODE_TR, TAB_HEADER, TABLES
@@ -47,9 +50,10 @@ from hybrid.simulation.native.structure import (
     sign_name,
     slot_name,
     snap_name,
+    structure_key,
 )
 
-__all__ = ["generate"]
+__all__ = ["generate", "native_source"]
 
 MODEL_BASE_S, MODEL_SECONDS_PER_LINE = 0.4, 0.006
 """A model's compile time, about (measured: thermostat, 100 lines of operations, 0.5 s; the
@@ -423,6 +427,30 @@ def generate(model: NativeModel) -> Generated:
     tab = _table(sizes, tables)
     estimate = MODEL_BASE_S + MODEL_SECONDS_PER_LINE * op_lines
     return Generated(source, library_modules, tab, estimate)
+
+
+_SOURCES: dict[tuple[Any, ...], tuple[tuple[Any, ...], NativeModel, Generated]] = {}
+_SOURCES_LOCK = threading.Lock()
+_SOURCES_SIZE = 16
+
+
+def native_source(model: System) -> tuple[NativeModel, Generated]:
+    """``model``'s :class:`NativeModel` and generated source, made once per structure in a
+    process (:func:`~hybrid.simulation.native.structure.structure_key`): the backend's
+    choice, the compile notice and the compile itself each need the source (UVMS:
+    0.37 s to generate), and the points of a sweep share it.
+    """
+    key, objects = structure_key(model)
+    with _SOURCES_LOCK:
+        hit = _SOURCES.get(key)
+    if hit is None:
+        native = NativeModel(model)
+        hit = (objects, native, generate(native))
+        with _SOURCES_LOCK:
+            if len(_SOURCES) >= _SOURCES_SIZE:
+                _SOURCES.pop(next(iter(_SOURCES)))
+            _SOURCES[key] = hit
+    return hit[1], hit[2]
 
 
 def _table(sizes: list[int], tables: dict[str, list[int]]) -> NDArray[np.int64]:

@@ -39,6 +39,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
+from typing import Any
 
 from hybrid.compose import Component, System
 from hybrid.expr import ir
@@ -63,6 +64,7 @@ __all__ = [
     "sign_name",
     "slot_name",
     "snap_name",
+    "structure_key",
 ]
 
 
@@ -315,3 +317,30 @@ def _renamed_location(loc: Location, ren: Callable[[ir.Expr], ir.Expr]) -> Locat
         signals=MappingProxyType({k: ren(v) for k, v in loc.signals.items()}),
         invariant=ren(loc.invariant),
     )
+
+
+def structure_key(model: System) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+    """``(key, objects)``: what identifies a model's structure, parameter and initial values aside.
+
+    ``with_parameters`` and ``with_initial`` keep the locations, edges and
+    signals objects, so the models of a sweep share one entry. The key holds
+    their ids; a cache keyed by it holds the objects, so no other object can take an id.
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> from hybrid.compose import as_system
+    >>> ball = as_system(hybrid.load("specs/bouncing_ball.yaml"))
+    >>> structure_key(ball)[0] == structure_key(ball.with_parameters({"g": 1.6}))[0]
+    True
+    """
+    objects = tuple(
+        (c.automaton.locations, c.automaton.edges, c.automaton.signals) for c in model.components
+    )
+    names = tuple((c.name, c.automaton.name) for c in model.components)
+    single = model.single
+    # the modes generated are those reachable from the initial one: another start is
+    # another structure (with_initial keeps the locations objects)
+    key = (model.name, single, names, model.initial_mode,
+           tuple(id(o) for trio in objects for o in trio))  # fmt: skip
+    return key, objects

@@ -396,3 +396,24 @@ def test_a_system_started_in_another_mode_is_another_structure(tmp_path: Any) ->
     assert (late["x"][-1], late["y"][-1]) == (0.0, pytest.approx(-3.0))
     assert (early["x"][-1], early["y"][-1]) == (pytest.approx(3.0), pytest.approx(6.0))
     assert early.location[-1] == "c.c1|d.d1"
+
+
+def test_the_source_is_generated_once_per_structure(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The backend's choice, the compile notice and the compile each need the model's
+    source: it is generated once, and again only for another structure."""
+    from hybrid.simulation.native import choice, source
+
+    made: list[Any] = []
+    real = source.generate
+    monkeypatch.setattr(source, "generate", lambda native: made.append(native) or real(native))
+    monkeypatch.setattr(source, "_SOURCES", {})
+    thermostat = hybrid.load(SPECS / "thermostat.yaml")
+    choice.cached(thermostat)
+    choice.compile_notice(thermostat)
+    first = source.native_source(as_system(thermostat))
+    variant = thermostat.with_parameters({"a": 0.2})  # another value: the same structure
+    assert source.native_source(as_system(variant)) == first
+    assert len(made) == 1
+    restarted = thermostat.with_initial(location="on")  # another first mode: another structure
+    assert source.native_source(as_system(restarted)) != first
+    assert len(made) == 2 and made[1].system.initial_mode != made[0].system.initial_mode
