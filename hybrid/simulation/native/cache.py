@@ -105,7 +105,23 @@ def cache_root() -> Path:
 
 
 def cache_key(generated: Generated, numba_version: str) -> str:
-    """The hex key of a generated module (see the module docstring)."""
+    """The hex key of a generated module (see the module docstring), computed once per
+    generated module and numba version in a process (the choice, the notice, the lock and
+    the load each ask; a library's package is read from disk for it)."""
+    found = _KEYS.get(id(generated))
+    if found is not None and found[0] is generated and found[1] == numba_version:
+        return found[2]
+    key = _cache_key(generated, numba_version)
+    if len(_KEYS) >= 64:
+        _KEYS.clear()
+    _KEYS[id(generated)] = (generated, numba_version, key)  # the entry holds the object: its id
+    return key
+
+
+_KEYS: dict[int, tuple[Generated, str, str]] = {}
+
+
+def _cache_key(generated: Generated, numba_version: str) -> str:
     digest = hashlib.sha256()
     for part in (numba_version, sys.version, platform.machine(), generated.source):
         digest.update(part.encode())

@@ -109,3 +109,27 @@ def test_a_second_process_waits_only_while_the_same_key_is_compiled(
     _enter(log, second)
     holder.wait(timeout=60)
     assert log.read_text().splitlines() == order
+
+
+def test_a_key_is_hashed_once_per_module_and_numba_version(monkeypatch: pytest.MonkeyPatch) -> None:
+    import hashlib
+    import platform
+    import sys
+
+    from hybrid.simulation.native import cache
+    from hybrid.simulation.native.kernel_text import Generated
+
+    hashed: list[str] = []
+    real = cache._cache_key
+    monkeypatch.setattr(cache, "_cache_key", lambda g, v: hashed.append(v) or real(g, v))
+    generated = Generated(source=ONE)
+    keys = {cache.cache_key(generated, "0.1") for _ in range(3)}
+    assert len(keys) == 1 and hashed == ["0.1"]
+    # by hand: the versions, the machine and the source, each followed by a zero byte
+    digest = hashlib.sha256()
+    for part in ("0.1", sys.version, platform.machine(), ONE):
+        digest.update(part.encode() + b"\0")
+    assert keys == {digest.hexdigest()[:24]}
+    assert cache.cache_key(generated, "0.2") not in keys  # another numba: another key
+    assert cache.cache_key(Generated(source=ONE + "\n"), "0.1") not in keys
+    assert hashed == ["0.1", "0.2", "0.1"]
