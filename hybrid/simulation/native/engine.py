@@ -47,7 +47,7 @@ from hybrid.simulation.native.loop import lay_out_work
 from hybrid.simulation.native.pace import record as record_pace
 from hybrid.simulation.native.shares import compiling_beside
 from hybrid.simulation.native.source import native_source
-from hybrid.simulation.native.structure import structure_key
+from hybrid.simulation.native.structure import StructureCache
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
 
@@ -59,9 +59,7 @@ __all__ = [
     "simulate_compiled",
 ]
 
-_CACHE_SIZE = 16
-_CACHE: dict[tuple[Any, ...], tuple[tuple[Any, ...], CompiledNative]] = {}
-_CACHE_LOCK = threading.Lock()
+_KERNEL_LOCK = threading.Lock()
 _LAST: list[tuple[System, CompiledNative] | None] = [None]
 """The model of the last :func:`compiled_native` call and its answer."""
 
@@ -79,7 +77,7 @@ def kernel(parallel: bool = False, wait: bool = True) -> ModuleType:
     :mod:`~hybrid.simulation.native.shares`); a later ``kernel()`` waits.
     """
     require_numba()
-    with _CACHE_LOCK:
+    with _KERNEL_LOCK:
         if not _KERNEL:
             from numba.core.errors import NumbaExperimentalFeatureWarning
 
@@ -224,22 +222,17 @@ def _entry_point(dispatcher: Any) -> Callable[..., None]:
     return entry
 
 
+_COMPILED = StructureCache[CompiledNative](16)
+
+
 def compiled_native(model: System) -> CompiledNative:
     """The :class:`CompiledNative` of ``model``'s structure (generated once per process)."""
     last = _LAST[0]  # the model of the last call, first: a run repeated costs no key
     if last is not None and last[0] is model:
         return last[1]
-    key, objects = structure_key(model)
-    with _CACHE_LOCK:
-        hit = _CACHE.get(key)
-    if hit is None:
-        compiled = CompiledNative(model)
-        with _CACHE_LOCK:
-            if len(_CACHE) >= _CACHE_SIZE:
-                _CACHE.pop(next(iter(_CACHE)))
-            hit = _CACHE[key] = (objects, compiled)
-    _LAST[0] = (model, hit[1])  # one tuple, replaced at once; it holds the model (and its id)
-    return hit[1]
+    compiled = _COMPILED.get(model, lambda: CompiledNative(model))
+    _LAST[0] = (model, compiled)  # one tuple, replaced at once; it holds the model (and its id)
+    return compiled
 
 
 def config(settings: Settings) -> tuple[NDArray[np.float64], NDArray[np.int64]]:

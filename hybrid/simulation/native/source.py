@@ -28,9 +28,7 @@ Examples
 from __future__ import annotations
 
 import re
-import threading
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -47,10 +45,10 @@ from hybrid.simulation.native.structure import (
     COMPILED_FORM,
     NativeMode,
     NativeModel,
+    StructureCache,
     sign_name,
     slot_name,
     snap_name,
-    structure_key,
 )
 
 __all__ = ["generate", "native_source"]
@@ -429,9 +427,7 @@ def generate(model: NativeModel) -> Generated:
     return Generated(source, library_modules, tab, estimate)
 
 
-_SOURCES: dict[tuple[Any, ...], tuple[tuple[Any, ...], NativeModel, Generated]] = {}
-_SOURCES_LOCK = threading.Lock()
-_SOURCES_SIZE = 16
+_SOURCES = StructureCache[tuple[NativeModel, Generated]](16)
 
 
 def native_source(model: System) -> tuple[NativeModel, Generated]:
@@ -440,17 +436,12 @@ def native_source(model: System) -> tuple[NativeModel, Generated]:
     choice, the compile notice and the compile itself each need the source (UVMS:
     0.37 s to generate), and the points of a sweep share it.
     """
-    key, objects = structure_key(model)
-    with _SOURCES_LOCK:
-        hit = _SOURCES.get(key)
-    if hit is None:
+
+    def make() -> tuple[NativeModel, Generated]:
         native = NativeModel(model)
-        hit = (objects, native, generate(native))
-        with _SOURCES_LOCK:
-            if len(_SOURCES) >= _SOURCES_SIZE:
-                _SOURCES.pop(next(iter(_SOURCES)))
-            _SOURCES[key] = hit
-    return hit[1], hit[2]
+        return native, generate(native)
+
+    return _SOURCES.get(model, make)
 
 
 def _table(sizes: list[int], tables: dict[str, list[int]]) -> NDArray[np.int64]:

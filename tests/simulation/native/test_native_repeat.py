@@ -25,7 +25,7 @@ from support import REPO, SPECS
 import hybrid
 from hybrid.compose import as_system
 from hybrid.simulation.native.assemble import PACKED_WIDTH, Layout
-from hybrid.simulation.native.structure import NativeModel
+from hybrid.simulation.native.structure import NativeModel, StructureCache
 from hybrid.simulation.result import Jump, Run
 from hybrid.simulation.start import describe_start
 
@@ -406,7 +406,7 @@ def test_the_source_is_generated_once_per_structure(monkeypatch: pytest.MonkeyPa
     made: list[Any] = []
     real = source.generate
     monkeypatch.setattr(source, "generate", lambda native: made.append(native) or real(native))
-    monkeypatch.setattr(source, "_SOURCES", {})
+    monkeypatch.setattr(source, "_SOURCES", StructureCache(16))
     thermostat = hybrid.load(SPECS / "thermostat.yaml")
     choice.cached(thermostat)
     choice.compile_notice(thermostat)
