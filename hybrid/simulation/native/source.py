@@ -233,6 +233,19 @@ def _inlined(body: dict[str, list[list[str]]]) -> list[str]:
     return [*lines, "    return 0.0", ""]
 
 
+def _calls() -> list[str]:
+    """``model``'s dispatch calling each operation's function (for a large model)."""
+    lines: list[str] = []
+    for k, (name, _, code, _) in enumerate(_OPERATIONS):
+        call = f"{name}(i, t, x, p, out)"
+        if name == "model_value":
+            call = f"return {call}"
+        elif name == "model_truth":
+            call = f"return 1.0 if {call} else 0.0"
+        lines += [f"    {'if' if k == 0 else 'elif'} op == {code}:", f"        {call}"]
+    return [*lines, "    return 0.0", ""]
+
+
 def generate(model: NativeModel) -> Generated:
     """The source of the module that runs ``model`` compiled."""
     states = model.state_names
@@ -344,24 +357,6 @@ def generate(model: NativeModel) -> Generated:
     # typing of one huge function costs more than that of its parts (UVMS mission 2: half its
     # compile)
     inline = op_lines < INLINE_LINES
-    dispatch = [
-        "    if op == OP_WATCH:",
-        "        model_watch(i, t, x, p, out)",
-        "    elif op == OP_VALUE:",
-        "        return model_value(i, t, x, p, out)",
-        "    elif op == OP_TRUTH:",
-        "        return 1.0 if model_truth(i, t, x, p, out) else 0.0",
-        "    elif op == OP_RHS:",
-        "        model_rhs(i, t, x, p, out)",
-        "    elif op == OP_ARM:",
-        "        model_arm(i, t, x, p, out)",
-        "    elif op == OP_OUTPUTS:",
-        "        model_outputs(i, t, x, p, out)",
-        "    elif op == OP_RESET:",
-        "        model_reset(i, t, x, p, out)",
-        "    return 0.0",
-        "",
-    ]
     pointers = [
         "def model(op, i, t, xp, pp, outp):",
         f"    x = carray(xp, ({max(1, len(states))},))",
@@ -370,6 +365,8 @@ def generate(model: NativeModel) -> Generated:
     ]
     if inline:
         functions, dispatch, body = [], _inlined(body), {}
+    else:
+        dispatch = _calls()
     if model.functions:  # a library's compiled form may raise: an evaluation failure, as NaN
         body["model_ops"], body["model_failed"] = [], []
         functions += [
