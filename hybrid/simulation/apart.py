@@ -43,7 +43,6 @@ Examples
 from __future__ import annotations
 
 import bisect
-import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
@@ -51,6 +50,7 @@ import numpy as np
 
 from hybrid.compose import System
 from hybrid.simulation.compiled import CompiledMode, CompiledModel
+from hybrid.simulation.held import HeldCache
 from hybrid.simulation.instants import (
     Key,
     first_over_cap,
@@ -121,9 +121,7 @@ def simulate_apart(
     return merge(system, parts, settings)
 
 
-_GROUPS: dict[tuple[int, tuple[int, ...]], tuple[System, System]] = {}
-_GROUPS_SIZE = 64
-_GROUPS_LOCK = threading.Lock()
+_GROUPS = HeldCache[System](64)
 
 
 def group_system(system: System, members: tuple[int, ...]) -> System:
@@ -134,23 +132,13 @@ def group_system(system: System, members: tuple[int, ...]) -> System:
     Each run of ``system`` runs its groups as these systems, and a system run again is
     not compiled again (:func:`~hybrid.simulation.reference.compiled_model`).
     """
-    key = (id(system), members)
-    with _GROUPS_LOCK:
-        found = _GROUPS.get(key)
-        if found is None or found[0] is not system:
-            sub = with_group_requirements(
-                system,
-                System(
-                    system.name,
-                    tuple(system.components[i] for i in members),
-                    file=system.file,
-                    position=system.position,
-                ),
-            )
-            if len(_GROUPS) >= _GROUPS_SIZE:
-                del _GROUPS[next(iter(_GROUPS))]
-            found = _GROUPS[key] = (system, sub)
-    return found[1]
+
+    def make() -> System:
+        components = tuple(system.components[i] for i in members)
+        group = System(system.name, components, file=system.file, position=system.position)
+        return with_group_requirements(system, group)
+
+    return _GROUPS.get((id(system), members), system, make)
 
 
 @dataclass

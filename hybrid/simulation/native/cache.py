@@ -53,6 +53,7 @@ from types import ModuleType
 
 from hybrid.errors import Note, UsageError
 from hybrid.files import atomic_write
+from hybrid.simulation.held import HeldCache
 from hybrid.simulation.native.kernel_text import Generated
 from hybrid.version import install_hint
 
@@ -108,17 +109,11 @@ def cache_key(generated: Generated, numba_version: str) -> str:
     """The hex key of a generated module (see the module docstring), computed once per
     generated module and numba version in a process (the choice, the notice, the lock and
     the load each ask; a library's package is read from disk for it)."""
-    found = _KEYS.get(id(generated))
-    if found is not None and found[0] is generated and found[1] == numba_version:
-        return found[2]
-    key = _cache_key(generated, numba_version)
-    if len(_KEYS) >= 64:
-        _KEYS.clear()
-    _KEYS[id(generated)] = (generated, numba_version, key)  # the entry holds the object: its id
-    return key
+    key = (id(generated), numba_version)
+    return _KEYS.get(key, generated, lambda: _cache_key(generated, numba_version))
 
 
-_KEYS: dict[int, tuple[Generated, str, str]] = {}
+_KEYS = HeldCache[str](64)
 
 
 def _cache_key(generated: Generated, numba_version: str) -> str:

@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 from hybrid.compose import System
 from hybrid.errors import UsageError
 from hybrid.model import Automaton
+from hybrid.simulation.held import HeldCache
 from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import Layout, run_from
@@ -47,7 +48,7 @@ from hybrid.simulation.native.loop import lay_out_work
 from hybrid.simulation.native.pace import record as record_pace
 from hybrid.simulation.native.shares import compiling_beside
 from hybrid.simulation.native.source import native_source
-from hybrid.simulation.native.structure import StructureCache
+from hybrid.simulation.native.structure import structure_key
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
 
@@ -222,7 +223,8 @@ def _entry_point(dispatcher: Any) -> Callable[..., None]:
     return entry
 
 
-_COMPILED = StructureCache[CompiledNative](16)
+_COMPILED = HeldCache[CompiledNative](16)
+"""Each model structure's compiled model (:func:`structure_key`)."""
 
 
 def compiled_native(model: System) -> CompiledNative:
@@ -230,7 +232,8 @@ def compiled_native(model: System) -> CompiledNative:
     last = _LAST[0]  # the model of the last call, first: a run repeated costs no key
     if last is not None and last[0] is model:
         return last[1]
-    compiled = _COMPILED.get(model, lambda: CompiledNative(model))
+    key, objects = structure_key(model)
+    compiled = _COMPILED.get(key, objects, lambda: CompiledNative(model))
     _LAST[0] = (model, compiled)  # one tuple, replaced at once; it holds the model (and its id)
     return compiled
 

@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 from hybrid.compose import System
 from hybrid.expr import ir
 from hybrid.expr.rho import guard_to_rho, level_key, within_band
+from hybrid.simulation.held import HeldCache
 from hybrid.simulation.native.buffers import T_MODE_TR, TAB_HEADER, TABLES
 from hybrid.simulation.native.kernel_text import JIT, Generated, kernel_source
 from hybrid.simulation.native.library import importable
@@ -45,10 +46,10 @@ from hybrid.simulation.native.structure import (
     COMPILED_FORM,
     NativeMode,
     NativeModel,
-    StructureCache,
     sign_name,
     slot_name,
     snap_name,
+    structure_key,
 )
 
 __all__ = ["generate", "native_source"]
@@ -424,7 +425,7 @@ def generate(model: NativeModel) -> Generated:
     return Generated(source, library_modules, tab, estimate)
 
 
-_SOURCES = StructureCache[tuple[NativeModel, Generated]](16)
+_SOURCES = HeldCache[tuple[NativeModel, Generated]](16)
 
 
 def native_source(model: System) -> tuple[NativeModel, Generated]:
@@ -438,7 +439,8 @@ def native_source(model: System) -> tuple[NativeModel, Generated]:
         native = NativeModel(model)
         return native, generate(native)
 
-    return _SOURCES.get(model, make)
+    key, objects = structure_key(model)
+    return _SOURCES.get(key, objects, make)
 
 
 def _table(sizes: list[int], tables: dict[str, list[int]]) -> NDArray[np.int64]:

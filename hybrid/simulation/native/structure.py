@@ -36,11 +36,10 @@ Examples
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
-from typing import Any, Generic, TypeVar
+from typing import Any
 
 from hybrid.compose import Component, System
 from hybrid.expr import ir
@@ -61,7 +60,6 @@ __all__ = [
     "NativeMode",
     "NativeModel",
     "NativeTransition",
-    "StructureCache",
     "replace_levels",
     "sign_name",
     "slot_name",
@@ -346,40 +344,3 @@ def structure_key(model: System) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
     key = (model.name, single, names, model.initial_mode,
            tuple(id(o) for trio in objects for o in trio))  # fmt: skip
     return key, objects
-
-
-T = TypeVar("T")
-
-
-class StructureCache(Generic[T]):
-    """Values made once per model structure (:func:`structure_key`) in a process, the
-    ``size`` last kept (the oldest dropped); threads share it.
-
-    Examples
-    --------
-    >>> import hybrid
-    >>> from hybrid.compose import as_system
-    >>> ball = as_system(hybrid.load("specs/bouncing_ball.yaml"))
-    >>> made = StructureCache[list[str]](4)
-    >>> first = made.get(ball, lambda: ["made"])
-    >>> made.get(ball.with_parameters({"g": 1.6}), lambda: ["again"]) is first
-    True
-    """
-
-    def __init__(self, size: int) -> None:
-        self._size = size
-        self._entries: dict[tuple[Any, ...], tuple[tuple[Any, ...], T]] = {}
-        self._lock = threading.Lock()
-
-    def get(self, model: System, make: Callable[[], T]) -> T:
-        """The value of ``model``'s structure, made by ``make()`` if it has none yet."""
-        key, objects = structure_key(model)
-        with self._lock:
-            hit = self._entries.get(key)
-        if hit is None:
-            made = (objects, make())  # the entry holds the objects: their ids stay theirs
-            with self._lock:
-                if len(self._entries) >= self._size:
-                    self._entries.pop(next(iter(self._entries)))
-                hit = self._entries.setdefault(key, made)
-        return hit[1]

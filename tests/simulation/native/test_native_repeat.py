@@ -24,8 +24,9 @@ from support import REPO, SPECS
 
 import hybrid
 from hybrid.compose import as_system
+from hybrid.simulation.held import HeldCache
 from hybrid.simulation.native.assemble import PACKED_WIDTH, Layout
-from hybrid.simulation.native.structure import NativeModel, StructureCache
+from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Jump, Run
 from hybrid.simulation.start import describe_start
 
@@ -406,7 +407,7 @@ def test_the_source_is_generated_once_per_structure(monkeypatch: pytest.MonkeyPa
     made: list[Any] = []
     real = source.generate
     monkeypatch.setattr(source, "generate", lambda native: made.append(native) or real(native))
-    monkeypatch.setattr(source, "_SOURCES", StructureCache(16))
+    monkeypatch.setattr(source, "_SOURCES", HeldCache(16))
     thermostat = hybrid.load(SPECS / "thermostat.yaml")
     choice.cached(thermostat)
     choice.compile_notice(thermostat)
