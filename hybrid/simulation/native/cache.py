@@ -271,46 +271,37 @@ def compiling(
     when its process ends, however it ends. Where ``fcntl`` is missing or a directory
     cannot be written, nothing is locked.
     """
-    try:
-        import fcntl
-    except ImportError:  # not POSIX: each process compiles what it needs, as before
-        yield
-        return
     numba = require_numba()
     keys = sorted({cache_key(g, numba.__version__) for g in generated})
-    held: list[int] = []
-    try:
+    said = [waiting]
+
+    def wait_once() -> None:
+        if said[0] is not None:
+            said[0]()
+            said[0] = None
+
+    with contextlib.ExitStack() as held:
         for key in keys:
             if key_state(key) != "missing":
                 continue
             directory = cache_root() / key
             try:
                 directory.mkdir(parents=True, exist_ok=True, mode=0o700)
-                handle = os.open(directory / LOCK_FILE, os.O_RDWR | os.O_CREAT, 0o600)
             except OSError:
                 continue  # the compile goes on unlocked (a cache elsewhere, say)
-            held.append(handle)
-            try:
-                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:  # another process is compiling it
-                if waiting is not None:
-                    waiting()
-                    waiting = None
-                fcntl.flock(handle, fcntl.LOCK_EX)  # a Ctrl-C while waiting stops the wait
+            held.enter_context(exclusive(directory / LOCK_FILE, wait_once))
         yield
-    finally:
-        for handle in held:
-            os.close(handle)  # closing releases the lock
 
 
 @contextlib.contextmanager
-def exclusive(path: Path) -> Iterator[None]:
+def exclusive(path: Path, waiting: Callable[[], None] | None = None) -> Iterator[None]:
     """Within, no other process is within ``exclusive`` of the same ``path`` (``flock`` on it,
-    created if missing): for a read, change and write of a shared file. Where ``fcntl`` is
-    missing or ``path`` cannot be opened, nothing is locked."""
+    created if missing; ``waiting()`` is called before waiting for another process that
+    holds it). A lock is released when its process ends, however it ends. Where ``fcntl``
+    is missing or ``path`` cannot be opened, nothing is locked."""
     try:
         import fcntl
-    except ImportError:
+    except ImportError:  # not POSIX: unlocked
         yield
         return
     try:
@@ -319,7 +310,12 @@ def exclusive(path: Path) -> Iterator[None]:
         yield
         return
     try:
-        fcntl.flock(handle, fcntl.LOCK_EX)  # a Ctrl-C while waiting stops the wait
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:  # another process holds it
+            if waiting is not None:
+                waiting()
+            fcntl.flock(handle, fcntl.LOCK_EX)  # a Ctrl-C while waiting stops the wait
         yield
     finally:
         os.close(handle)  # closing releases the lock
