@@ -199,15 +199,16 @@ def run_sweep(args: argparse.Namespace) -> int:
 
 def run_falsify(args: argparse.Namespace) -> int:
     """The ``falsify`` command; returns the exit code."""
-    from hybrid.campaigns.falsify import falsify
-    from hybrid.campaigns.findings import values_text
     from hybrid.campaigns.space import parse_range
-    from hybrid.reader.loader import load
-
-    vary = [parse_range(text) for text in args.vary]
     from hybrid.export.outputs import writable_directory
 
+    vary = [parse_range(text) for text in args.vary]
+    # refused before the imports below (scipy.optimize among them: a second or two)
     out = writable_directory(args.out, "--out") if args.out else None
+    from hybrid.campaigns.falsify import falsify
+    from hybrid.campaigns.findings import values_text
+    from hybrid.reader.loader import load
+
     line = terminal_reporter(args.quiet)
     interrupts = Interrupts(notify=_notifier(line))
     with interrupts.installed():

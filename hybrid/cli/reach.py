@@ -91,10 +91,10 @@ def findings_of(result: ReachResult) -> list[Finding]:
 
 def run_reach(args: argparse.Namespace) -> int:
     """The ``reach`` command; returns the exit code."""
+    _check_args(args)  # before the imports: a refused output costs no half second of them
     from hybrid.reach.api import reach
     from hybrid.reader.loader import load
 
-    _check_args(args)
     model = load(args.file)
     if args.plot is not None:
         from hybrid.reach.picture import axis_index

@@ -2,13 +2,16 @@
 
 The sdist is built from a copy of the source tree and the wheel from the unpacked
 sdist (what ``python -m build`` does), with setuptools' own build backend in a
-virtual environment of their own. Each artifact is then installed with no extras
-into a fresh virtual environment (no site packages but its own), where the
-``hybrid`` command must answer ``--help``, ``validate`` and ``simulate`` a spec
-(the tank of getting-started, whose jump times are known in closed form), and the
-UVMS case study must be absent: neither importable nor registered as a function
-library. Installing needs a package index for the runtime dependencies; where pip
-cannot reach one, the tests are skipped and say so.
+virtual environment of their own. The wheel is then installed with no extras into
+a fresh virtual environment (no site packages but its own), where the ``hybrid``
+command must answer ``--help``, ``validate`` and ``simulate`` a spec (the tank of
+getting-started, whose jump times are known in closed form), and the UVMS case
+study must be absent: neither importable nor registered as a function library.
+The wheel is then uninstalled and the sdist installed in its place, and the same
+must hold. The sdist finds its runtime dependencies there; that it asks for the
+same ones as the wheel is checked, so a second fresh environment (half a minute of
+installing numpy and scipy again) would show nothing more. Installing needs a
+package index; where pip cannot reach one, the tests are skipped and say so.
 """
 
 from __future__ import annotations
@@ -173,24 +176,48 @@ def test_the_wheel_holds_hybrid_only(artifacts: dict[str, Path]) -> None:
     assert "hybrid = hybrid.cli.main:entry" in entry_points
 
 
-@pytest.mark.parametrize("kind", ["wheel", "sdist"])
-def test_a_clean_install_works_as_written(
-    kind: str, artifacts: dict[str, Path], tmp_path: Path
-) -> None:
+_REQUIRES = (
+    "from importlib.metadata import distribution;"
+    "d = distribution('hybrid-automata');"
+    "print(d.version); print(*sorted(d.requires or []), sep='\\n')"
+)
+
+
+def test_a_clean_install_works_as_written(artifacts: dict[str, Path], tmp_path: Path) -> None:
     python = _venv(tmp_path / "venv")
-    _pip_install(python, artifacts[kind], compile_all=False)
-    hybrid = tmp_path / "venv" / "bin" / "hybrid"
+    _pip_install(python, artifacts["wheel"], compile_all=False)
     work = tmp_path / "work"
     work.mkdir()
     shutil.copy(REPO / "docs" / "examples" / "tank.yaml", work / "tank.yaml")
     shutil.copy(REPO / "specs" / "uvms_singularity.yaml", work / "uvms_singularity.yaml")
+    _works_as_written(python, work, "wheel")
+    from_wheel = _run([python, "-c", _REQUIRES], cwd=work)
+    assert from_wheel.returncode == 0, from_wheel.stderr
 
+    removed = _run([python, "-m", "pip", "uninstall", "--yes", "hybrid-automata"], cwd=work)
+    assert removed.returncode == 0, removed.stderr
+    assert not (python.parent / "hybrid").exists()
+    _pip_install(python, "--no-deps", artifacts["sdist"], compile_all=False)
+    from_sdist = _run([python, "-c", _REQUIRES], cwd=work)
+    assert from_sdist.returncode == 0, from_sdist.stderr
+    # the same version and runtime requirements (one line each), so the same environment
+    assert from_sdist.stdout == from_wheel.stdout
+    assert "numpy" in from_sdist.stdout and "scipy" in from_sdist.stdout
+    for output in work.glob("tank.*"):
+        if output.suffix != ".yaml":
+            output.unlink()
+    _works_as_written(python, work, "sdist")
+
+
+def _works_as_written(python: Path, work: Path, kind: str) -> None:
+    """The README's first steps in ``work``, with the ``hybrid`` installed beside ``python``."""
+    hybrid = python.parent / "hybrid"
     shown = _run([hybrid, "--help"], cwd=work, bytecode=True)
-    assert shown.returncode == 0, shown.stderr
-    assert "validate" in shown.stdout and "simulate" in shown.stdout
+    assert shown.returncode == 0, (kind, shown.stderr)
+    assert "validate" in shown.stdout and "simulate" in shown.stdout, kind
 
     valid = _run([hybrid, "validate", "tank.yaml"], cwd=work, bytecode=True)
-    assert (valid.returncode, valid.stdout.strip()) == (0, "tank.yaml: ok"), valid.stderr
+    assert (valid.returncode, valid.stdout.strip()) == (0, "tank.yaml: ok"), (kind, valid.stderr)
 
     ran = _run(
         [hybrid, "simulate", "tank.yaml", "--t-end", "12", "--out", "tank.csv",
@@ -198,17 +225,17 @@ def test_a_clean_install_works_as_written(
         cwd=work,
         bytecode=True,
     )  # fmt: skip
-    assert ran.returncode == 0, ran.stderr
+    assert ran.returncode == 0, (kind, ran.stderr)
     events = json.loads((work / "tank.json").read_text())
-    assert events["termination"]["cause"] == "t_end"
+    assert events["termination"]["cause"] == "t_end", kind
     # 1.5 -> 2 at 0.3 m/s, 2 -> 1 at 0.2 m/s, 1 -> 2 at 0.3 m/s: 5/3, 5/3 + 5, 5/3 + 5 + 10/3
     times = [jump["t"] for jump in events["jumps"]]
-    assert times == pytest.approx([5 / 3, 20 / 3, 10.0], abs=1e-7)
-    assert (work / "tank.csv").read_text().startswith("t,j,location,h,volume")
+    assert times == pytest.approx([5 / 3, 20 / 3, 10.0], abs=1e-7), kind
+    assert (work / "tank.csv").read_text().startswith("t,j,location,h,volume"), kind
 
     # The case study is not installed, nor its function library registered.
     absent = _run([python, "-c", "import uvms_model"], cwd=work, bytecode=True)
-    assert absent.returncode == 1 and "ModuleNotFoundError" in absent.stderr
+    assert absent.returncode == 1 and "ModuleNotFoundError" in absent.stderr, kind
     libraries = _run(
         [python, "-c",
          "from importlib.metadata import entry_points;"
@@ -216,9 +243,9 @@ def test_a_clean_install_works_as_written(
         cwd=work,
         bytecode=True,
     )  # fmt: skip
-    assert libraries.stdout.strip() == "[]", libraries.stderr
+    assert libraries.stdout.strip() == "[]", (kind, libraries.stderr)
     refused = _run([hybrid, "validate", "uvms_singularity.yaml"], cwd=work, bytecode=True)
-    assert refused.returncode == 2
-    assert "Traceback" not in refused.stderr
-    assert refused.stderr.startswith("uvms_singularity.yaml:")
-    assert "function library 'uvms_model'" in refused.stderr
+    assert refused.returncode == 2, kind
+    assert "Traceback" not in refused.stderr, kind
+    assert refused.stderr.startswith("uvms_singularity.yaml:"), kind
+    assert "function library 'uvms_model'" in refused.stderr, kind
