@@ -160,19 +160,6 @@ def reads_library(outputs: Sequence[ir.Expr], ctx: CodeContext) -> bool:
     return _calls([ctx.signals[s] for s in order], ctx.functions)
 
 
-def _state_uses(
-    exprs: Sequence[ir.Expr], definitions: Sequence[ir.Expr], states: Sequence[str]
-) -> dict[str, int]:
-    """How often each state variable read by the outputs and the signals they need is read."""
-    wanted = _state_index(states)
-    uses: dict[str, int] = {}
-    for root in (*exprs, *definitions):
-        for node in ir.walk(root):
-            if isinstance(node, ir.Var) and node.kind == ir.STATE and node.name in wanted:
-                uses[node.name] = uses.get(node.name, 0) + 1
-    return uses
-
-
 _GLOBAL_NAME = re.compile(r"\b_[A-Za-z0-9]\w*")
 """A name a generated source may take from its scope (they all start with ``_``)."""
 
@@ -256,10 +243,18 @@ def _long_form(exprs: Sequence[ir.Expr], ctx: CodeContext) -> MatrixForm | None:
 
 
 def _tiny(exprs: Sequence[ir.Expr], definitions: Sequence[ir.Expr], ctx: CodeContext) -> bool:
-    """True if a function of ``exprs`` reads ``x[i]`` directly (numpy scalars, not floats)."""
-    uses = _state_uses(exprs, definitions, ctx.states)
-    tiny = all(n <= 1 for n in uses.values()) and sum(uses.values()) <= 3
-    return tiny and _float_safe([*exprs, *definitions])
+    """True if a function of ``exprs`` reads ``x[i]`` directly (numpy scalars, not floats):
+    it and the signals it needs read at most three state variables, each once, and no
+    operation where numpy scalars differ from floats (:func:`_float_safe`)."""
+    wanted = _state_index(ctx.states)
+    read: set[str] = set()
+    for root in (*exprs, *definitions):
+        for node in ir.walk(root):
+            if isinstance(node, ir.Var) and node.kind == ir.STATE and node.name in wanted:
+                if node.name in read or len(read) == 3:
+                    return False  # a large function is known to be none after a few nodes
+                read.add(node.name)
+    return _float_safe([*exprs, *definitions])
 
 
 def reads_items(outputs: Sequence[ir.Expr], ctx: CodeContext) -> bool:

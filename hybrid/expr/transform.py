@@ -18,24 +18,43 @@ __all__ = ["bind_parameters", "rename_names"]
 
 
 def bind_parameters(node: ir.Expr, values: Mapping[str, float]) -> ir.Expr:
-    """Replace every parameter by its value (expression depth is capped, so recursion is safe)."""
+    """Replace every parameter by its value (expression depth is capped, so recursion is safe).
+
+    A sub-expression that reads no parameter is returned as it is, the same object:
+    models that differ in parameter values share it, and whatever is remembered of it
+    (:func:`hybrid.expr.ir.names_in`) is found again.
+
+    >>> x = ir.Bin("*", ir.Var("x", "state"), ir.Num(2.0))
+    >>> bound = bind_parameters(ir.Bin("+", x, ir.Var("g", "param")), {"g": 9.81})
+    >>> bound.right, bound.left is x
+    (Num(value=9.81, col=0), True)
+    """
     if isinstance(node, ir.Var):
         if node.kind == ir.PARAM:
             return ir.Num(float(values[node.name]), node.col)
         return node
     if isinstance(node, ir.Call):
-        return replace(node, args=tuple(bind_parameters(a, values) for a in node.args))
+        args = tuple(bind_parameters(a, values) for a in node.args)
+        return node if _same(args, node.args) else replace(node, args=args)
     if isinstance(node, ir.Unary | ir.Not):
-        return replace(node, operand=bind_parameters(node.operand, values))
+        operand = bind_parameters(node.operand, values)
+        return node if operand is node.operand else replace(node, operand=operand)
     if isinstance(node, ir.Bin):
-        return replace(
-            node, left=bind_parameters(node.left, values), right=bind_parameters(node.right, values)
-        )
+        left, right = bind_parameters(node.left, values), bind_parameters(node.right, values)
+        if left is node.left and right is node.right:
+            return node
+        return replace(node, left=left, right=right)
     if isinstance(node, ir.Cmp):
-        return replace(node, operands=tuple(bind_parameters(a, values) for a in node.operands))
+        operands = tuple(bind_parameters(a, values) for a in node.operands)
+        return node if _same(operands, node.operands) else replace(node, operands=operands)
     if isinstance(node, ir.BoolOp):
-        return replace(node, values=tuple(bind_parameters(a, values) for a in node.values))
+        items = tuple(bind_parameters(a, values) for a in node.values)
+        return node if _same(items, node.values) else replace(node, values=items)
     return node
+
+
+def _same(new: tuple[ir.Expr, ...], old: tuple[ir.Expr, ...]) -> bool:
+    return all(a is b for a, b in zip(new, old, strict=True))
 
 
 _RENAMED_KINDS = (ir.STATE, ir.SIGNAL, ir.INPUT)
