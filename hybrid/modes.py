@@ -81,9 +81,30 @@ class Binder:
         key = (i, id(node))
         found = self._bound.get(key)
         if found is None or found[0] is not node:
-            found = (node, bind_parameters(node, self.system.components[i].automaton.parameters))
+            found = (node, _bound_copy(node, self.system.components[i].automaton.parameters))
             self._bound[key] = found
         return found[1]
+
+
+_COPIES: dict[int, tuple[ir.Expr, tuple[str, ...], ir.Expr]] = {}
+"""Bound copies by the expression's identity (held), with the values of what it reads."""
+_COPIES_MAX = 1 << 16
+
+
+def _bound_copy(node: ir.Expr, parameters: Mapping[str, float]) -> ir.Expr:
+    """``bind_parameters(node, parameters)``, the same object again wherever the values of
+    the parameters ``node`` reads are the same, bit for bit: the variants of a sweep share
+    the bound expressions their changed parameters do not reach, and whatever is kept of
+    them (a compiled function, keyed by what it computes)."""
+    values = tuple(float(parameters[p]).hex() for p in sorted(ir.names_in(node, ir.PARAM)))
+    found = _COPIES.get(id(node))
+    if found is not None and found[0] is node and found[1] == values:
+        return found[2]
+    bound = bind_parameters(node, parameters)
+    if len(_COPIES) >= _COPIES_MAX:
+        _COPIES.clear()
+    _COPIES[id(node)] = (node, values, bound)
+    return bound
 
 
 def transitions_of(

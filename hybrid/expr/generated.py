@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable, Mapping
-from types import FunctionType
+from types import CodeType, FunctionType
 from typing import Any
 
 __all__ = ["FRAME_PREFIX", "define"]
@@ -37,7 +37,7 @@ def define(name: str, source: str, scope: Mapping[str, Any]) -> Callable[..., An
     that the cyclic garbage collector counts and follows.
     """
     namespace: dict[str, Any] = {"__builtins__": {}, **scope}
-    code = compile(source, f"{FRAME_PREFIX}{name}>", "exec")
+    code = _code(name, source)
     exec(code, namespace)  # the source is generated from checked IR (module docstring)
     function: Callable[..., Any] = namespace.pop(name)
     if len(namespace) != len(scope) + 1 or not isinstance(function, FunctionType):
@@ -56,6 +56,23 @@ def define(name: str, source: str, scope: Mapping[str, Any]) -> Callable[..., An
     return again
 
 
+def _code(name: str, source: str) -> CodeType:
+    """``source`` compiled, once per name and text: the variants of a sweep generate the
+    same source for every function their changed parameters do not reach."""
+    key = (name, source)
+    code = _CODES.get(key)
+    if code is None:
+        code = compile(source, f"{FRAME_PREFIX}{name}>", "exec")
+        with _LOCK:
+            if len(_CODES) >= _CODES_MAX:
+                del _CODES[next(iter(_CODES))]
+            _CODES[key] = code
+    return code
+
+
+_CODES: dict[tuple[str, str], CodeType] = {}
+"""Compiled sources, oldest first."""
+_CODES_MAX = 4096
 _SHARED: dict[tuple[tuple[str, int], ...], dict[str, Any]] = {}
 """A namespace per scope (by its names and the identities of their objects), oldest first."""
 _SHARED_MAX = 256
