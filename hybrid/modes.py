@@ -70,7 +70,9 @@ class Binder:
     ``mode_of(system, key, binder=Binder(system))`` gives the same view as
     without it, but an expression met again in another mode is not bound
     again: its bound copy is reused (the same object, so whoever caches by
-    expression, as the compiled model does, finds it again).
+    expression, as the compiled model does, finds it again). Another model
+    whose parameters an expression reads with the same values gets the same
+    copy too (:func:`_bound_copy`).
     """
 
     def __init__(self, system: System) -> None:
