@@ -28,6 +28,7 @@ from types import MappingProxyType
 from hybrid.compose import System
 from hybrid.expr import ir
 from hybrid.expr.transform import bind_parameters
+from hybrid.held import HeldCache
 from hybrid.model import Edge
 
 __all__ = ["Binder", "Mode", "ModeView", "TransitionView", "mode_of", "transitions_of"]
@@ -88,9 +89,8 @@ class Binder:
         return found[1]
 
 
-_COPIES: dict[int, tuple[ir.Expr, tuple[str, ...], ir.Expr]] = {}
-"""Bound copies by the expression's identity (held), with the values of what it reads."""
-_COPIES_MAX = 1 << 16
+_COPIES = HeldCache[ir.Expr](1 << 16)
+"""Bound copies by the expression's identity (held) and the values of what it reads."""
 
 
 def _bound_copy(node: ir.Expr, parameters: Mapping[str, float]) -> ir.Expr:
@@ -99,14 +99,7 @@ def _bound_copy(node: ir.Expr, parameters: Mapping[str, float]) -> ir.Expr:
     the bound expressions their changed parameters do not reach, and whatever is kept of
     them (a compiled function, keyed by what it computes)."""
     values = tuple(float(parameters[p]).hex() for p in sorted(ir.names_in(node, ir.PARAM)))
-    found = _COPIES.get(id(node))
-    if found is not None and found[0] is node and found[1] == values:
-        return found[2]
-    bound = bind_parameters(node, parameters)
-    if len(_COPIES) >= _COPIES_MAX:
-        _COPIES.clear()
-    _COPIES[id(node)] = (node, values, bound)
-    return bound
+    return _COPIES.get((id(node), values), node, lambda: bind_parameters(node, parameters))
 
 
 def transitions_of(

@@ -20,6 +20,8 @@ from collections.abc import Callable, Mapping
 from types import CodeType, FunctionType
 from typing import Any
 
+from hybrid.held import HeldCache
+
 __all__ = ["FRAME_PREFIX", "define"]
 
 FRAME_PREFIX = "<hybrid:"
@@ -59,20 +61,12 @@ def define(name: str, source: str, scope: Mapping[str, Any]) -> Callable[..., An
 def _code(name: str, source: str) -> CodeType:
     """``source`` compiled, once per name and text: the variants of a sweep generate the
     same source for every function their changed parameters do not reach."""
-    key = (name, source)
-    code = _CODES.get(key)
-    if code is None:
-        code = compile(source, f"{FRAME_PREFIX}{name}>", "exec")
-        with _LOCK:
-            if len(_CODES) >= _CODES_MAX:
-                del _CODES[next(iter(_CODES))]
-            _CODES[key] = code
-    return code
+    filename = f"{FRAME_PREFIX}{name}>"
+    return _CODES.get((name, source), None, lambda: compile(source, filename, "exec"))
 
 
-_CODES: dict[tuple[str, str], CodeType] = {}
-"""Compiled sources, oldest first."""
-_CODES_MAX = 4096
+_CODES = HeldCache[CodeType](4096)
+"""Compiled sources by function name and text."""
 _SHARED: dict[tuple[tuple[str, int], ...], dict[str, Any]] = {}
 """A namespace per scope (by its names and the identities of their objects), oldest first."""
 _SHARED_MAX = 256

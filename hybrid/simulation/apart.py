@@ -49,8 +49,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from hybrid.compose import System
+from hybrid.held import HeldCache
 from hybrid.simulation.compiled import CompiledMode, CompiledModel
-from hybrid.simulation.held import HeldCache
 from hybrid.simulation.instants import (
     Key,
     first_over_cap,

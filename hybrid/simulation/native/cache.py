@@ -53,7 +53,7 @@ from types import ModuleType
 
 from hybrid.errors import Note, UsageError
 from hybrid.files import atomic_write
-from hybrid.simulation.held import HeldCache
+from hybrid.held import HeldCache
 from hybrid.simulation.native.kernel_text import Generated
 from hybrid.version import install_hint
 

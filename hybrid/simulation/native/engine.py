@@ -28,8 +28,8 @@ from numpy.typing import NDArray
 
 from hybrid.compose import System
 from hybrid.errors import UsageError
+from hybrid.held import HeldCache
 from hybrid.model import Automaton
-from hybrid.simulation.held import HeldCache
 from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import Layout, run_from

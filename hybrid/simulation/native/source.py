@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 from hybrid.compose import System
 from hybrid.expr import ir
 from hybrid.expr.rho import guard_to_rho, level_key, within_band
-from hybrid.simulation.held import HeldCache
+from hybrid.held import HeldCache
 from hybrid.simulation.native.buffers import T_MODE_TR, TAB_HEADER, TABLES
 from hybrid.simulation.native.kernel_text import JIT, Generated, kernel_source
 from hybrid.simulation.native.library import importable

@@ -24,7 +24,7 @@ from support import REPO, SPECS
 
 import hybrid
 from hybrid.compose import as_system
-from hybrid.simulation.held import HeldCache
+from hybrid.held import HeldCache
 from hybrid.simulation.native.assemble import PACKED_WIDTH, Layout
 from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Jump, Run

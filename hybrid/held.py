@@ -1,4 +1,4 @@
-"""Values kept per key of object ids, with the objects held: the caches of one process.
+"""Values kept per key (of object ids, with the objects held): the caches of one process.
 
 A key made of ``id()`` values is only valid while its objects live; each entry holds
 them, so no other object can take one of their ids while the entry stands. At most
