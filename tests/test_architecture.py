@@ -21,7 +21,7 @@ from support import REPO
 PACKAGE = REPO / "hybrid"
 
 LAYERS: tuple[frozenset[str], ...] = (
-    frozenset({"errors", "version", "lazy", "allocation", "progress", "held"}),
+    frozenset({"errors", "version", "lazy", "allocation", "progress", "held", "frames"}),
     frozenset({"expr", "files"}),
     frozenset({"model"}),
     frozenset({"binding"}),

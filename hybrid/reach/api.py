@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import UsageError
 from hybrid.expr import ir
+from hybrid.frames import in_frame_room
 from hybrid.model import Automaton, Forbidden
 from hybrid.reach.affine import TIME, Condition, Forms, Rows
 from hybrid.reach.boxes import meets_many
@@ -61,6 +62,7 @@ INITIAL_MODES = 16
 corner candidates of each, the random runs from the first."""
 
 
+@in_frame_room
 def reach(
     model: Automaton | System,
     t_end: float | None = None,

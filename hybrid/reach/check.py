@@ -47,11 +47,13 @@ from hybrid.analysis.explore import DEFAULT_MAX_BYTES, DEFAULT_MAX_STATES, Progr
 from hybrid.analysis.findings import Finding, Report
 from hybrid.compose import System, expect_model
 from hybrid.errors import SpecError, UsageError
+from hybrid.frames import in_frame_room
 from hybrid.model import Automaton
 
 __all__ = ["check"]
 
 
+@in_frame_room
 def check(
     model: Automaton | System,
     *,

@@ -20,6 +20,7 @@ from pydantic import ValidationError
 from hybrid.allocation import gc_paused
 from hybrid.compose import System
 from hybrid.errors import Position, SpecError, UsageError, brief
+from hybrid.frames import in_frame_room
 from hybrid.model import Automaton
 from hybrid.reader.build import build_automaton
 from hybrid.reader.messages import closest, validation_problems
@@ -30,6 +31,7 @@ from hybrid.reader.yamlpos import YamlDocument, read_yaml_file, read_yaml_text
 __all__ = ["load", "load_document", "load_text"]
 
 
+@in_frame_room
 def load(path: str | Path, parameters: Mapping[str, float] | None = None) -> Automaton | System:
     """Load an automaton or system spec file.
 
@@ -84,6 +86,7 @@ def _path_given(path: object) -> str | Path:
     return path
 
 
+@in_frame_room
 def load_text(
     text: str,
     parameters: Mapping[str, float] | None = None,

@@ -20,6 +20,7 @@ import numpy as np
 
 from hybrid.compose import System
 from hybrid.errors import UsageError
+from hybrid.frames import in_frame_room
 from hybrid.model import Automaton
 from hybrid.simulation.apart import independent_groups, simulate_apart
 from hybrid.simulation.compiled import CompiledModel
@@ -38,6 +39,7 @@ from hybrid.simulation.start import run_inputs
 __all__ = ["compiled_model", "monitor_for", "simulate_reference"]
 
 
+@in_frame_room
 def simulate_reference(
     model: System,
     settings: Settings,
@@ -46,7 +48,12 @@ def simulate_reference(
     handle_sigint: bool,
     progress: Callable[[float, int, int], None] | None,
 ) -> Run:
-    """A run on the scipy backend: the event loop, or components apart when independent."""
+    """A run on the scipy backend: the event loop, or components apart when independent.
+
+    Run with room on the frame stack (:mod:`hybrid.frames`): the model's functions,
+    called thousands of times from one depth, would otherwise map a chunk of it each
+    time at some depths of the caller's.
+    """
     compiled = compiled_model(model, inputs)
     x0 = np.array(_initial_vector(model, compiled, initial), dtype=float)
     # a solution that blows up overflows inside the solver's linear algebra; the run

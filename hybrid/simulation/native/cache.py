@@ -53,8 +53,8 @@ from types import ModuleType
 
 from hybrid.errors import Note, UsageError
 from hybrid.files import atomic_write
+from hybrid.frames import with_frame_room
 from hybrid.held import HeldCache
-from hybrid.simulation.native.frames import with_frame_room
 from hybrid.simulation.native.kernel_text import Generated
 from hybrid.version import install_hint
 
@@ -231,7 +231,7 @@ def seal(module: ModuleType) -> None:
 def _import(name: str, path: Path) -> ModuleType:
     """The generated module at ``path``, imported (which does no work), then built (its
     ``build()`` compiles it or loads it from numba's cache, with room for numba's recursion:
-    :mod:`~hybrid.simulation.native.frames`)."""
+    :mod:`~hybrid.frames`)."""
     spec = importlib.util.spec_from_file_location(name, path)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)

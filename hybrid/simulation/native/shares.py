@@ -79,7 +79,7 @@ spec = importlib.util.spec_from_file_location(name, path)
 module = importlib.util.module_from_spec(spec)
 sys.modules[name] = module
 spec.loader.exec_module(module)
-from hybrid.simulation.native.frames import with_frame_room
+from hybrid.frames import with_frame_room
 with_frame_room(module.build)
 """
 

@@ -12,12 +12,15 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
-from hybrid.simulation.native import cache, frames, shares
-from hybrid.simulation.native.frames import with_frame_room
+import hybrid
+from hybrid import frames
+from hybrid.frames import in_frame_room, with_frame_room
+from hybrid.simulation.native import cache, shares
 
 resource = pytest.importorskip("resource")  # page-fault counts: not on Windows
 
@@ -55,8 +58,83 @@ def test_the_same_calls_without_it_fault_at_every_crossing() -> None:
 
 def test_it_returns_and_raises_what_the_call_does() -> None:
     assert with_frame_room(divmod, 7, 2) == (3, 1)
+    assert with_frame_room(int, "ff", base=16) == 255
     with pytest.raises(ZeroDivisionError):
         with_frame_room(divmod, 1, 0)
+    roomy = in_frame_room(divmod)
+    assert roomy(7, 2) == (3, 1) and roomy.__wrapped__ is divmod
+
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _at(depth: int, fn: Callable[[], int]) -> int:
+    return _at(depth - 1, fn) if depth else fn()
+
+
+def _worst_faults_of_a_run(simulate: Callable[[], object]) -> int:
+    """The most page faults a run cost, called from each depth 0 to 239 of this test's."""
+
+    def faults() -> int:
+        before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+        simulate()
+        return int(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before)
+
+    simulate()
+    return max(_at(depth, faults) for depth in range(240))  # a chunk's frames of _at and more
+
+
+def test_a_scipy_run_costs_no_page_faults_from_any_depth() -> None:
+    model = hybrid.load(ROOT / "specs" / "thermostat.yaml")
+    worst = _worst_faults_of_a_run(lambda: hybrid.simulate(model, t_end=50.0, handle_sigint=False))
+    assert worst < 200
+
+
+@pytest.mark.skipif(sys.version_info >= (3, 13), reason="3.13 and later may keep a chunk back")
+def test_the_same_run_outside_the_room_faults_at_some_depth() -> None:
+    """What the room is for: the scipy backend's run itself, called without it."""
+    from hybrid.compose import as_system
+    from hybrid.simulation.reference import simulate_reference
+    from hybrid.simulation.settings import Settings
+
+    model = as_system(hybrid.load(ROOT / "specs" / "thermostat.yaml"))
+    settings = Settings(t_end=50.0)
+    plain = simulate_reference.__wrapped__  # type: ignore[attr-defined]
+    assert _worst_faults_of_a_run(lambda: plain(model, settings, None, None, False, None)) >= 500
+
+
+def _in_the_room() -> bool:
+    frame = sys._getframe()
+    while frame is not None:
+        if frame.f_code is frames._call.__code__:
+            return True
+        frame = frame.f_back
+    return False
+
+
+def test_load_check_and_reach_do_their_work_in_the_room(monkeypatch: pytest.MonkeyPatch) -> None:
+    from hybrid.reach import api as reach_api
+    from hybrid.reach import check as reach_check
+    from hybrid.reader import loader
+
+    seen: list[tuple[str, bool]] = []
+
+    def spy(module: object, name: str) -> None:
+        inner = getattr(module, name)
+
+        def spied(*args: object, **kwargs: object) -> object:
+            seen.append((name, _in_the_room()))
+            return inner(*args, **kwargs)
+
+        monkeypatch.setattr(module, name, spied)
+
+    spy(loader, "read_yaml_file")
+    spy(reach_check, "analysis_check")
+    spy(reach_api, "explore")
+    model = hybrid.load(ROOT / "specs" / "thermostat.yaml")
+    hybrid.check(model)
+    hybrid.reach(model, t_end=1.0)
+    assert seen == [("read_yaml_file", True), ("analysis_check", True), ("explore", True)]
 
 
 # a generated module in miniature: its build() writes down who called it
