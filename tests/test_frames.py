@@ -112,7 +112,10 @@ def _in_the_room() -> bool:
     return False
 
 
-def test_load_check_and_reach_do_their_work_in_the_room(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_load_check_reach_and_import_do_their_work_in_the_room(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from hybrid.interchange import importer
     from hybrid.reach import api as reach_api
     from hybrid.reach import check as reach_check
     from hybrid.reader import loader
@@ -131,10 +134,13 @@ def test_load_check_and_reach_do_their_work_in_the_room(monkeypatch: pytest.Monk
     spy(loader, "read_yaml_file")
     spy(reach_check, "analysis_check")
     spy(reach_api, "explore")
+    spy(importer, "read_model")
     model = hybrid.load(ROOT / "specs" / "thermostat.yaml")
     hybrid.check(model)
     hybrid.reach(model, t_end=1.0)
-    assert seen == [("read_yaml_file", True), ("analysis_check", True), ("explore", True)]
+    importer.import_spaceex(ROOT / "tests" / "data" / "spaceex" / "bball" / "bball.xml")
+    assert {name for name, _ in seen} == {"read_yaml_file", "analysis_check", "explore", "read_model"}
+    assert all(in_room for _, in_room in seen)
 
 
 # a generated module in miniature: its build() writes down who called it

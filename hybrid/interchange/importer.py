@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from hybrid.errors import Position, SpecError
+from hybrid.frames import in_frame_room
 from hybrid.interchange.cfg import SpaceExConfig, parse_cfg, read_cfg
 from hybrid.interchange.emit import SEMANTICS, automaton_text
 from hybrid.interchange.flatten import Flat, Leaf, flatten
@@ -52,6 +53,7 @@ class ImportResult:
     notes: list[str] = field(default_factory=list)
 
 
+@in_frame_room
 def import_spaceex(
     xml: str | Path, cfg: str | Path | None = None, system: str | None = None
 ) -> ImportResult:
@@ -78,6 +80,7 @@ def import_spaceex(
     return _translate(model, config, system)
 
 
+@in_frame_room
 def import_spaceex_text(
     xml_text: str,
     cfg_text: str | None = None,
