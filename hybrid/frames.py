@@ -18,7 +18,7 @@ of 1 MiB for the frame, and the call's own frames fill the rest of that chunk
 chunk is mapped, not written: the slots nobody uses cost no memory. It costs
 about 10 us a call (mapping and unmapping the chunk), so it goes around whole
 pieces of work: a compile, a run on the scipy backend, a load, a check, a reach,
-an import.
+an import, the replay of a compiled run's requirements.
 Where chunks are kept back this changes nothing but that.
 
 The same crossings slow down any Python work that calls one function many

@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from hybrid.frames import in_frame_room
 from hybrid.modes import Mode
 from hybrid.simulation.compiled import CompiledModel
 from hybrid.simulation.dense import StepCurve, polynomial_curve
@@ -44,6 +45,7 @@ from hybrid.simulation.result import RequirementResult, Run
 __all__ = ["replay"]
 
 
+@in_frame_room
 def replay(
     monitor: Monitor, model: CompiledModel, layout: Layout, run: Run
 ) -> dict[str, RequirementResult]:

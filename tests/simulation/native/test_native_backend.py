@@ -114,6 +114,35 @@ def test_a_compiled_run_is_monitored_without_compiling_the_scipy_sides_modes(
     assert asked == []
 
 
+def test_a_compiled_runs_monitor_replays_it_with_room_on_the_frame_stack(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The replay calls the margins at every step: a chunk's end at its depth would cost a
+    mapped chunk each call (:mod:`hybrid.frames`), so it runs in the room."""
+    from hybrid import frames
+    from hybrid.simulation.monitor import Monitor
+
+    def in_room() -> bool:
+        frame = sys._getframe()
+        while frame is not None and frame.f_code is not frames._call.__code__:
+            frame = frame.f_back  # type: ignore[assignment]
+        return frame is not None
+
+    text = (SPECS / "thermostat.yaml").read_text()
+    model = hybrid.load_text(text + '\nrequirements: [{name: mild, always: "T <= 21.5"}]\n')
+    seen: list[bool] = []
+    original = Monitor.point
+
+    def point(self: Monitor, *args: object) -> object:
+        seen.append(in_room())
+        return original(self, *args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(Monitor, "point", point)
+    run = hybrid.simulate(model, t_end=10.0, rtol=1e-10, atol=1e-12, backend="compiled")
+    assert not run.requirements["mild"].holds
+    assert seen and all(seen)
+
+
 def test_what_the_compiled_backend_cannot_do_is_refused(ball: hybrid.Automaton) -> None:
     with pytest.raises(UsageError, match="method 'LSODA' needs backend='scipy'"):
         hybrid.simulate(ball, t_end=1.0, method="LSODA", backend="compiled")
