@@ -41,6 +41,7 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
 import functools
 from collections.abc import Callable
 from typing import Any, ParamSpec, TypeVar
@@ -59,7 +60,9 @@ def _call(fn: Callable[..., Any], args: tuple[Any, ...], kwargs: dict[str, Any])
     return fn(*args, **kwargs)
 
 
-_call.__code__ = _call.__code__.replace(co_stacksize=RESERVED_SLOTS)
+# an interpreter whose code objects cannot be given more stack makes plain calls (no room)
+with contextlib.suppress(AttributeError, TypeError, ValueError):
+    _call.__code__ = _call.__code__.replace(co_stacksize=RESERVED_SLOTS)
 
 
 def with_frame_room(fn: Callable[P, T], *args: P.args, **kwargs: P.kwargs) -> T:
