@@ -130,7 +130,7 @@ def group_system(system: System, members: tuple[int, ...]) -> System:
     each time asked.
 
     Each run of ``system`` runs its groups as these systems, and a system run again is
-    not compiled again (:func:`~hybrid.simulation.reference.compiled_model`).
+    not compiled again (:func:`~hybrid.simulation.reuse.compiled_model`).
     """
 
     def make() -> System:

@@ -111,7 +111,7 @@ class CompiledModel:
         self.terms_failure = EvalFailure()
         """Where a mode's ``terms`` record failures (read and cleared by the watch)."""
         self.running = False
-        """A run is stepping it (``reference.running``): it is not given other inputs then."""
+        """A run is stepping it (``reuse.running``): it is not given other inputs then."""
         self.inputs: dict[str, list[Callable[[float], float]]] = {}
         """Each input's slot: item 0 is the callable the compiled functions read
         (:class:`~hybrid.expr.codegen.CodeContext`); :meth:`bind_inputs` fills them."""

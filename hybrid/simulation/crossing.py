@@ -53,7 +53,6 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 from hybrid.simulation.dense import StepCurve
 
@@ -216,6 +215,8 @@ def _locate(fn: Any, curve: StepCurve, a: float, wa: float, b: float, wb: float)
     """
     if not (wa > 0.0 and math.isfinite(wa) and math.isfinite(wb)):
         return b
+    from scipy.optimize import brentq  # here, at an event: the module itself loads no scipy
+
     phi = _phi(fn, curve, a, wa, b, wb)
 
     def at_or_below(t: float) -> float:
@@ -248,6 +249,8 @@ def _dip(
     lowest = wb - (wc - wa) ** 2 / (8.0 * curvature)
     if not lowest <= 0.5 * wb:
         return None
+    from scipy.optimize import minimize_scalar  # here, at a dip: as brentq in _locate
+
     phi = _phi(fn, curve, ta, wa, tc, wc)
     span = tc - ta
     best = minimize_scalar(

@@ -27,11 +27,12 @@ Examples
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.integrate import RK23, RK45, DenseOutput, OdeSolver
-from scipy.integrate._ivp.rk import RkDenseOutput
+
+if TYPE_CHECKING:  # scipy.integrate is imported where a step of its solvers is read
+    from scipy.integrate import DenseOutput, OdeSolver
 
 __all__ = ["StepCurve", "polynomial_curve", "step_curve"]
 
@@ -146,6 +147,8 @@ class _PolynomialCurve(StepCurve):
         return result
 
     def dense_output(self) -> DenseOutput:
+        from scipy.integrate._ivp.rk import RkDenseOutput
+
         return RkDenseOutput(self.t0, self.t1, self.x0, self.q)
 
 
@@ -175,13 +178,26 @@ class _SolverCurve(StepCurve):
         return dense
 
 
+_RUNGE_KUTTA: tuple[type, ...] = ()
+"""scipy's explicit Runge-Kutta solvers whose steps are polynomials (set on the first step)."""
+
+
+def _runge_kutta() -> tuple[type, ...]:
+    global _RUNGE_KUTTA
+    from scipy.integrate import RK23, RK45
+
+    _RUNGE_KUTTA = (RK45, RK23)
+    return _RUNGE_KUTTA
+
+
 def step_curve(solver: OdeSolver, x0: np.ndarray | None = None) -> StepCurve:
     """The curve of ``solver``'s last accepted step (``x0``: the state at its start, if known)."""
     t0, t1 = float(solver.t_old), float(solver.t)
     x1 = solver.y.copy()
-    if isinstance(solver, (RK45, RK23)):
-        start = solver.y_old.copy() if x0 is None else x0
-        return _PolynomialCurve(t0, t1, start, x1, solver.K.T.dot(solver.P))
+    if isinstance(solver, _RUNGE_KUTTA or _runge_kutta()):
+        rk: Any = solver  # RK45 or RK23: their stages and interpolation matrix
+        start = rk.y_old.copy() if x0 is None else x0
+        return _PolynomialCurve(t0, t1, start, x1, rk.K.T.dot(rk.P))
     dense = solver.dense_output()
     start = np.asarray(dense(t0), dtype=float) if x0 is None else x0
     return _SolverCurve(t0, t1, start, x1, dense)

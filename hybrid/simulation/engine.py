@@ -201,7 +201,8 @@ def _simulate_compiled(
             progress=progress,
         )  # fmt: skip
         return only
-    from hybrid.simulation.reference import compiled_model, monitor_for
+    from hybrid.simulation.monitor import monitor_for
+    from hybrid.simulation.reuse import compiled_model
 
     reference = compiled_model(model, None)
     monitor = monitor_for(reference, settings)

@@ -116,7 +116,6 @@ from dataclasses import replace
 from typing import Any, Protocol
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 from hybrid.compose import System
 from hybrid.expr import ir
@@ -141,6 +140,7 @@ __all__ = [
     "cut_results",
     "join_groups",
     "margin_table",
+    "monitor_for",
     "owners",
     "watched_requirements",
     "with_group_requirements",
@@ -227,6 +227,12 @@ class MarginTable:
 
 _LOCK = threading.Lock()
 _TABLES: weakref.WeakKeyDictionary[CompiledModel, MarginTable | None] = weakref.WeakKeyDictionary()
+
+
+def monitor_for(compiled: CompiledModel, settings: Settings) -> Monitor | None:
+    """A requirement monitor for one run of ``compiled`` (None if it has no requirement)."""
+    table = margin_table(compiled)
+    return None if table is None else Monitor(table, settings)
 
 
 def margin_table(compiled: CompiledModel) -> MarginTable | None:
@@ -549,6 +555,8 @@ class Monitor:
             value: float = phi(t)
             return value
 
+        from scipy.optimize import brentq  # here: a run that violates nothing never loads it
+
         try:
             root: float = brentq(bracketed, ta, tb, xtol=_TOL, rtol=_TOL)
         except (ValueError, RuntimeError):
@@ -566,6 +574,8 @@ def _minimise(phi: Any, left: Sample, mid: Sample | None, right: Sample) -> tupl
     the start or end of a stretch, a tie) a bounded search looks for a point that
     makes one first.
     """
+    from scipy.optimize import minimize_scalar  # here: as brentq in Monitor._crossing
+
     ta, va, tc, vc = left[0], left[1], right[0], right[1]
     if mid is not None and mid[1] < va and mid[1] < vc:
         tb, vb = mid[0], mid[1]

@@ -12,31 +12,23 @@ are not loaded by a process that does not run them.
 
 from __future__ import annotations
 
-import threading
-from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
 from hybrid.compose import System
 from hybrid.errors import UsageError
 from hybrid.frames import in_frame_room
-from hybrid.model import Automaton
 from hybrid.simulation.apart import independent_groups, simulate_apart
 from hybrid.simulation.compiled import CompiledModel
 from hybrid.simulation.interrupts import sigint_watch
 from hybrid.simulation.loop import EventLoop
-from hybrid.simulation.monitor import (
-    Monitor,
-    cut_results,
-    join_groups,
-    margin_table,
-)
+from hybrid.simulation.monitor import cut_results, join_groups, monitor_for
 from hybrid.simulation.result import Run
+from hybrid.simulation.reuse import compiled_model, running
 from hybrid.simulation.settings import Settings
-from hybrid.simulation.start import run_inputs
 
-__all__ = ["compiled_model", "monitor_for", "simulate_reference"]
+__all__ = ["simulate_reference"]
 
 
 @in_frame_room
@@ -89,59 +81,6 @@ def _groups(model: System) -> list[tuple[int, ...]]:
     """The groups simulated apart: independent components, joined where a requirement spans them."""
     groups = independent_groups(model)
     return join_groups(model, groups) if len(groups) > 1 and model.requirements else groups
-
-
-def monitor_for(compiled: CompiledModel, settings: Settings) -> Monitor | None:
-    """A requirement monitor for one run of ``compiled`` (None if it has no requirement)."""
-    table = margin_table(compiled)
-    return None if table is None else Monitor(table, settings)
-
-
-_CACHE = threading.local()
-_CACHE_SIZE = 8
-
-
-def compiled_model(
-    model: System, inputs: Mapping[str, Callable[[float], float]] | None
-) -> CompiledModel:
-    """The compiled model of ``model``, reused across runs of the same model in a thread.
-
-    Compiling a mode's functions costs far more than a jump; a sweep, a falsification,
-    reach's candidate runs or a benchmark simulate one model many times, with other
-    inputs or none. The run's inputs are put in the compiled functions' slots
-    (:meth:`~hybrid.simulation.compiled.CompiledModel.bind_inputs`); free inputs given
-    none are held at their nominal values (:func:`run_inputs`). A model a run of this
-    thread is still using (an input that simulates it again) is compiled afresh.
-    """
-    cache: dict[int, tuple[Automaton | System, CompiledModel]] = (
-        getattr(_CACHE, "models", None) or {}
-    )
-    _CACHE.models = cache
-    hit = cache.get(id(model))
-    if hit is not None and hit[0] is model:
-        if not hit[1].running:
-            hit[1].bind_inputs(run_inputs(model, inputs))
-            # a failure recorded by an earlier run of this model must not end this one
-            hit[1].failure.clear()
-            hit[1].flow_failure.clear()
-            hit[1].terms_failure.clear()
-            return hit[1]
-        return CompiledModel(model, run_inputs(model, inputs))
-    compiled = CompiledModel(model, run_inputs(model, inputs))
-    if len(cache) >= _CACHE_SIZE:
-        cache.pop(next(iter(cache)))
-    cache[id(model)] = (model, compiled)
-    return compiled
-
-
-@contextmanager
-def running(compiled: CompiledModel) -> Iterator[CompiledModel]:
-    """``compiled`` marked in use while a run steps it (:func:`compiled_model` leaves it be)."""
-    before, compiled.running = compiled.running, True
-    try:
-        yield compiled
-    finally:
-        compiled.running = before
 
 
 def _initial_vector(

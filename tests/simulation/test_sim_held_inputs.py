@@ -1,7 +1,7 @@
 """Inputs held piecewise constant (reach's witnesses, the falsifier), and runs with other inputs.
 
 A model is compiled once per thread and run again with other inputs put in its
-slots (``reference.compiled_model``): each run reads its own inputs, and a run
+slots (``reuse.compiled_model``): each run reads its own inputs, and a run
 that starts while another still steps the model gets a compiled model of its own.
 """
 
@@ -17,7 +17,7 @@ import hybrid
 from hybrid.compose import as_system
 from hybrid.errors import UsageError
 from hybrid.simulation.inputs import PiecewiseConstant
-from hybrid.simulation.reference import compiled_model
+from hybrid.simulation.reuse import compiled_model
 
 HELD = PiecewiseConstant(np.array([0.0, 1.0, 3.0]), np.array([1.0, -2.0, 0.5]))
 

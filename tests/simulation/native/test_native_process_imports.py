@@ -46,6 +46,23 @@ def test_a_compiled_run_leaves_the_scipy_engine_out(code: str) -> None:
     assert _loaded_after(code) == []
 
 
+REQUIREMENT = (
+    "model = hybrid.load_text(open({path!r}).read()"
+    " + '\\nrequirements: [{{name: r, always: \"{condition}\"}}]\\n')\n"
+)
+
+
+def test_a_compiled_runs_requirement_monitor_loads_only_scipys_optimizers() -> None:
+    """Replayed over a compiled run, a requirement's margins are searched between samples
+    (scipy.optimize, imported then), without the scipy engine or its integrators."""
+    code = REQUIREMENT.format(path=str(SPECS / "thermostat.yaml"), condition="T <= 21.5")
+    code += (
+        "run = hybrid.simulate(model, 10.0, backend='compiled')\n"
+        "assert not run.requirements['r'].holds\n"
+    )
+    assert _loaded_after(code) == ["scipy.optimize"]
+
+
 def test_a_scipy_run_loads_it() -> None:
     """The check above can fail: a scipy run in the same kind of process loads all of it."""
     loaded = _loaded_after("hybrid.simulate(model, 10.0)")
