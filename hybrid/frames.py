@@ -1,4 +1,4 @@
-"""Room on the interpreter's frame stack for numba's compiles (CPython gh-142183).
+"""Room on the interpreter's frame stack for deep or call-heavy work (CPython gh-142183).
 
 Since 3.11 CPython keeps a thread's Python frames in chunks of 16 KiB. A call
 that finds no room in the current chunk maps a new one, and the chunk is

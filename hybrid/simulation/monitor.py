@@ -555,7 +555,7 @@ class Monitor:
             value: float = phi(t)
             return value
 
-        from scipy.optimize import brentq  # here: a run that violates nothing never loads it
+        from scipy.optimize import brentq  # here, not with the module: see _minimise
 
         try:
             root: float = brentq(bracketed, ta, tb, xtol=_TOL, rtol=_TOL)
@@ -574,7 +574,9 @@ def _minimise(phi: Any, left: Sample, mid: Sample | None, right: Sample) -> tupl
     the start or end of a stretch, a tie) a bounded search looks for a point that
     makes one first.
     """
-    from scipy.optimize import minimize_scalar  # here: as brentq in Monitor._crossing
+    # imported here, as brentq in Monitor._crossing: importing the monitor (a compiled run
+    # replays requirements through it) loads no scipy until a margin is refined
+    from scipy.optimize import minimize_scalar
 
     ta, va, tc, vc = left[0], left[1], right[0], right[1]
     if mid is not None and mid[1] < va and mid[1] < vc:
