@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import sys
 from collections.abc import Callable
 from typing import Any, ParamSpec, TypeVar
 
@@ -57,7 +58,14 @@ times 16 KiB holding the frame and 1,000 slots more, here 1 MiB (131,072 slots).
 
 
 def _call(fn: Callable[..., Any], args: tuple[Any, ...], kwargs: dict[str, Any]) -> Any:
+    # this frame's object made now (its slots are allocated, not written): an exception
+    # leaving the frame later needs none made, which out of memory turned a MemoryError
+    # into "SystemError: error return without exception set"
+    _frame_object(0)
     return fn(*args, **kwargs)
+
+
+_frame_object = sys._getframe
 
 
 # an interpreter whose code objects cannot be given more stack makes plain calls (no room)

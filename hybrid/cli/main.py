@@ -354,6 +354,13 @@ def _run(args: argparse.Namespace) -> int:
         placed = isinstance(exc, UsageError) and exc.at is not None  # file:line:column first
         print(str(exc) if placed else f"{getattr(args, 'file', 'hybrid')}: {exc}", file=sys.stderr)
         return EXIT_INVALID
+    except MemoryError as exc:  # the machine's fault: one line, as for a full disk
+        detail = f": {exc}" if str(exc) else ""
+        hint = " (fewer points: a larger --dt or a shorter --t-end)" if args.command in (
+            "simulate", "sweep", "falsify") else ""  # fmt: skip
+        print(f"{getattr(args, 'file', 'hybrid')}: out of memory{detail}; nothing more was "
+              f"written{hint}", file=sys.stderr)  # fmt: skip
+        return EXIT_INVALID
     except BrokenPipeError as exc:
         if _reader_gone(sys.stdout):  # `hybrid ... | head`: the reader has all it wanted
             return EXIT_OK

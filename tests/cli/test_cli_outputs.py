@@ -12,10 +12,12 @@ names.
 from __future__ import annotations
 
 import errno
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
-from support import SPECS, assert_no_traceback, main_in_process, read_csv, run_cli
+from support import REPO, SPECS, assert_no_traceback, main_in_process, read_csv, run_cli
 
 THERMOSTAT = str(SPECS / "thermostat.yaml")
 BALL = str(SPECS / "bouncing_ball.yaml")
@@ -151,3 +153,46 @@ def test_a_reader_that_stops_early_is_not_a_broken_worker() -> None:
     said = writer.stderr.read().decode()
     assert writer.wait(timeout=300) == 0, said
     assert said == ""
+
+
+# A process given HEADROOM bytes of address space more than it holds once the command
+# line's module is imported (scipy's import fits in it; the run's points do not).
+MEMORY_BOUND = """
+import resource, sys
+from hybrid.cli.main import entry
+with open("/proc/self/statm") as f:
+    held = int(f.read().split()[0]) * resource.getpagesize()
+limit = held + int(sys.argv.pop(1))
+resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+sys.argv[0] = "hybrid"
+sys.exit(entry())
+"""
+
+
+@pytest.mark.skipif(not Path("/proc/self/statm").exists(), reason="reads /proc (Linux)")
+@pytest.mark.parametrize(
+    ("headroom", "t_end", "dt"),
+    [
+        (2**30, "9.99", "1e-7"),  # steps of a million points each: a large array fails
+        (400 * 2**20, "9999", "1e-4"),  # steps of a few thousand: memory fills to the last byte
+    ],
+)
+def test_a_run_out_of_memory_ends_in_one_line(
+    tmp_path: Path, headroom: int, t_end: str, dt: str
+) -> None:
+    """A machine fault, as a full disk is: one line naming the file, exit 2, no traceback.
+
+    Memory filled to the last byte used to end in "SystemError: error return without
+    exception set": the frame stack's room (:mod:`hybrid.frames`) made its frame's
+    object, half a megabyte, only as the MemoryError left it, and that failed too.
+    """
+    out = tmp_path / "run.npz"
+    argv = [str(headroom), "simulate", THERMOSTAT, "--t-end", t_end, "--dt", dt, "--out", str(out)]
+    done = subprocess.run([sys.executable, "-c", MEMORY_BOUND, *argv], capture_output=True,
+                          text=True, cwd=REPO, timeout=300, check=False)  # fmt: skip
+    assert_no_traceback(done.stderr)
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert lines[-1].startswith(f"{THERMOSTAT}: out of memory"), done.stderr
+    assert "a larger --dt" in lines[-1]
+    assert not out.exists()
