@@ -44,6 +44,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import sys
+import threading
 from collections.abc import Callable
 from typing import Any, ParamSpec, TypeVar
 
@@ -73,10 +74,25 @@ with contextlib.suppress(AttributeError, TypeError, ValueError):
     _call.__code__ = _call.__code__.replace(co_stacksize=RESERVED_SLOTS)
 
 
+_INSIDE = threading.local()
+"""Whether this thread's call is in the room already (``inside``)."""
+
+
 def with_frame_room(fn: Callable[P, T], *args: P.args, **kwargs: P.kwargs) -> T:
     """``fn(*args, **kwargs)``, called from a frame whose chunk leaves its callees about
-    66,000 slots."""
-    result: T = _call(fn, args, kwargs)
+    66,000 slots.
+
+    Called in the room already (``check`` running ``reach``, a spec loaded while another
+    is), it calls ``fn`` plainly: a second room's frame would fit in what is left of the
+    first chunk and leave its callees a few hundred slots there.
+    """
+    if getattr(_INSIDE, "inside", False):
+        return fn(*args, **kwargs)
+    _INSIDE.inside = True
+    try:
+        result: T = _call(fn, args, kwargs)
+    finally:
+        _INSIDE.inside = False
     return result
 
 
@@ -85,7 +101,6 @@ def in_frame_room(fn: Callable[P, T]) -> Callable[P, T]:
 
     @functools.wraps(fn)
     def roomy(*args: P.args, **kwargs: P.kwargs) -> T:
-        result: T = _call(fn, args, kwargs)
-        return result
+        return with_frame_room(fn, *args, **kwargs)
 
     return roomy

@@ -49,6 +49,28 @@ def test_calls_in_the_room_cross_no_chunk_end() -> None:
     assert with_frame_room(_faults_of_a_sweep) < CALLS_AT_EACH_DEPTH
 
 
+def test_a_room_inside_a_room_is_a_plain_call() -> None:
+    """``check`` runs ``reach``, an import loads the spec it wrote: each in the room. A
+    second room's frame would fit in what the first chunk has left and leave its callees a
+    few hundred slots (2,969 faults for this sweep, measured without the rule)."""
+
+    def thirty_frames_down(depth: int = 30) -> int:
+        return thirty_frames_down(depth - 1) if depth else with_frame_room(_faults_of_a_sweep)
+
+    _faults_of_a_sweep()
+    assert with_frame_room(with_frame_room, _faults_of_a_sweep) < CALLS_AT_EACH_DEPTH
+    assert with_frame_room(thirty_frames_down) < CALLS_AT_EACH_DEPTH
+    assert in_frame_room(in_frame_room(_faults_of_a_sweep))() < CALLS_AT_EACH_DEPTH
+
+
+def test_the_room_is_left_when_its_call_raises() -> None:
+    with pytest.raises(ZeroDivisionError):
+        with_frame_room(divmod, 1, 0)
+    _faults_of_a_sweep()
+    assert with_frame_room(_faults_of_a_sweep) < CALLS_AT_EACH_DEPTH  # a room again, not plain
+    assert not frames._INSIDE.inside
+
+
 @pytest.mark.skipif(sys.version_info >= (3, 13), reason="3.13 and later may keep a chunk back")
 def test_the_same_calls_without_it_fault_at_every_crossing() -> None:
     """What the room is for, measured the same way: the sweep can see it."""
