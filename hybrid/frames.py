@@ -18,8 +18,9 @@ of 1 MiB for the frame, and the call's own frames fill the rest of that chunk
 chunk is mapped, not written: the slots nobody uses cost no memory. It costs
 about 10 us a call (mapping and unmapping the chunk), so it goes around whole
 pieces of work: a compile, a run on the scipy backend, a load, a check, a reach,
-an import, the replay of a compiled run's requirements.
-Where chunks are kept back this changes nothing but that.
+an import, the replay of a compiled run's requirements; one made in the room
+already (``check`` running ``reach``) is a plain call there. Where chunks are
+kept back this changes nothing but that.
 
 The same crossings slow down any Python work that calls one function many
 times from one depth, at some depths of the caller's. Called from 80 depths
