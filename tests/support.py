@@ -157,6 +157,16 @@ def assert_no_traceback(stderr: str) -> None:
     assert 'File "' not in stderr, stderr
 
 
+def in_the_frame_room() -> bool:
+    """Whether the caller runs under :mod:`hybrid.frames`' room (its frame is on the stack)."""
+    from hybrid import frames
+
+    frame: Any = sys._getframe()
+    while frame is not None and frame.f_code is not frames._call.__code__:
+        frame = frame.f_back
+    return frame is not None
+
+
 def main_in_process(*args: str | Path) -> int:
     """``hybrid ARGS`` in this process (same code path as the console script); the exit code."""
     from hybrid.cli import main

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from support import in_the_frame_room
 
 import hybrid
 from hybrid import frames
@@ -125,15 +126,6 @@ def test_the_same_run_outside_the_room_faults_at_some_depth() -> None:
     assert _worst_faults_of_a_run(lambda: plain(model, settings, None, None, False, None)) >= 500
 
 
-def _in_the_room() -> bool:
-    frame = sys._getframe()
-    while frame is not None:
-        if frame.f_code is frames._call.__code__:
-            return True
-        frame = frame.f_back
-    return False
-
-
 def test_load_check_reach_and_import_do_their_work_in_the_room(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -148,7 +140,7 @@ def test_load_check_reach_and_import_do_their_work_in_the_room(
         inner = getattr(module, name)
 
         def spied(*args: object, **kwargs: object) -> object:
-            seen.append((name, _in_the_room()))
+            seen.append((name, in_the_frame_room()))
             return inner(*args, **kwargs)
 
         monkeypatch.setattr(module, name, spied)

@@ -9,7 +9,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 from scipy.integrate._ivp.rk import RK45
-from support import REPO, SPECS, assert_no_traceback, read_csv, read_json, run_cli
+from support import (
+    REPO,
+    SPECS,
+    assert_no_traceback,
+    in_the_frame_room,
+    read_csv,
+    read_json,
+    run_cli,
+)
 
 import hybrid
 from hybrid.compose import as_system
@@ -119,14 +127,7 @@ def test_a_compiled_runs_monitor_replays_it_with_room_on_the_frame_stack(
 ) -> None:
     """The replay calls the margins at every step: a chunk's end at its depth would cost a
     mapped chunk each call (:mod:`hybrid.frames`), so it runs in the room."""
-    from hybrid import frames
     from hybrid.simulation.monitor import Monitor
-
-    def in_room() -> bool:
-        frame = sys._getframe()
-        while frame is not None and frame.f_code is not frames._call.__code__:
-            frame = frame.f_back  # type: ignore[assignment]
-        return frame is not None
 
     text = (SPECS / "thermostat.yaml").read_text()
     model = hybrid.load_text(text + '\nrequirements: [{name: mild, always: "T <= 21.5"}]\n')
@@ -134,7 +135,7 @@ def test_a_compiled_runs_monitor_replays_it_with_room_on_the_frame_stack(
     original = Monitor.point
 
     def point(self: Monitor, *args: object) -> object:
-        seen.append(in_room())
+        seen.append(in_the_frame_room())
         return original(self, *args)  # type: ignore[arg-type]
 
     monkeypatch.setattr(Monitor, "point", point)
