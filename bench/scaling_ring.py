@@ -7,8 +7,8 @@ on, else 0) and reads ``p{i-1}`` through an input, so no component is
 independent of the others and the system is simulated as one product, to
 ``t = 20``. Each size runs in fresh processes, after an import and a tiny
 warm-up simulation: the first ``simulate`` of the ring in the process (its
-modes compiled as the run meets them) and the second (all compiled), in CPU
-seconds; in another process the peak of memory allocated while each call runs
+modes compiled as the run meets them) and the second (all compiled), each
+after a full collection of what came before it, in CPU seconds; in another process the peak of memory allocated while each call runs
 (tracemalloc, which slows the calls, so its times are not used). Reported:
 medians over ``repeats`` processes and the growth exponent between
 consecutive sizes, ``log(v2 / v1) / log(n2 / n1)`` (linear reads 1; the
@@ -65,7 +65,10 @@ def measure(n: int, memory: bool) -> dict[str, Any]:
     With the CPU times, the part of each spent in the cyclic garbage collector's full
     collections (``gc.callbacks``): each walks every object of the process, the
     imported libraries' included, and how many a call meets depends on how much it
-    allocates, in steps.
+    allocates, in steps. Each call starts after a full collection, so that it
+    collects only what it allocated itself: without it, the second call at one size
+    and not at another walked the heap for objects the first call had left (the
+    functions it compiled), depending only on where the collector's counts stood.
     """
     import gc
     import time
@@ -85,6 +88,7 @@ def measure(n: int, memory: bool) -> dict[str, Any]:
 
     gc.callbacks.append(clock)
     for call in ("first", "second"):
+        gc.collect()  # what earlier calls left is not this call's to collect
         if memory:
             tracemalloc.start()
         full[0] = 0.0
