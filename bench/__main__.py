@@ -70,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     report["components"] = components
     from bench import scaling_ring
 
-    ring = scaling_ring.run(2 if quick else 3)
+    ring = scaling_ring.run(2 if quick else 5)
     print("coupled ring", json.dumps(ring))
     report["coupled_ring"] = ring
     from bench import sweep_throughput

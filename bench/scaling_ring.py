@@ -129,10 +129,18 @@ def _exponents(rows: list[dict[str, Any]], key: str) -> list[float]:
 
 
 def run(repeats: int = 3) -> dict[str, Any]:
-    """Medians per size over ``repeats`` processes, and the exponents between sizes."""
+    """Medians per size over ``repeats`` processes, and the exponents between sizes.
+
+    The sizes take turns (each repeat runs every size once), so that a stretch of time
+    when the machine is slower falls on all of them alike, not on one size's processes.
+    """
+    measured: dict[int, list[dict[str, Any]]] = {n: [] for n in SIZES}
+    for _ in range(repeats):
+        for n in SIZES:
+            measured[n].append(_in_subprocess(n, memory=False))
     rows = []
     for n in SIZES:
-        times = [_in_subprocess(n, memory=False) for _ in range(repeats)]
+        times = measured[n]
         memory = _in_subprocess(n, memory=True)
         rows.append(
             {
