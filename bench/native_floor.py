@@ -9,7 +9,9 @@ threads of the process), medians over the repeats:
   Ctrl-C handling (``handle_sigint=True``) against :func:`bench.floor.single`
   (both a Python call into compiled code; each timing a loop of
   :data:`IN_A_ROW` calls); the same with ``handle_sigint=False`` and the largest
-  jump-time difference to the floor are extras;
+  jump-time difference to the floor are extras; and the floor's own loop with its
+  model called through a function pointer, as the compiled loop calls the model
+  (:mod:`bench.floor_pointer`), against the floor;
 - an ensemble of 10,000 thermostat runs (20 switches each, initial temperatures
   spread), ``hybrid.simulate_many`` against :func:`bench.floor.ensemble`, per run;
 - ``hybrid.sweep(..., backend="compiled")`` of 1,000 thermostat points against
@@ -33,7 +35,7 @@ from typing import Any
 import numpy as np
 
 import hybrid
-from bench import floor
+from bench import floor, floor_pointer
 from bench.harness import Comparison, compare
 
 __all__ = ["ensemble", "memory", "run", "single_runs", "sweep"]
@@ -95,6 +97,13 @@ def single_runs(repeats: int = 9) -> list[Comparison]:
             "sigint_handling_cost_s": c.contender_median_s - quiet.contender_median_s,
         }
         results.append(c)
+        pointer = _compare(f"floor, its model behind a function pointer / floor: {name}",
+                           ("bench.floor_pointer.single", lambda k=kind, q=p, x=x0, a=kwargs:
+                            floor_pointer.single(k, q, x, a["t_end"], a["max_jumps"], RTOL, ATOL)),
+                           ("bench.floor.single", base), repeats, inner=IN_A_ROW)  # fmt: skip
+        pointer.extra = {"compiled_over_pointer_floor": c.contender_median_s
+                         / pointer.contender_median_s}  # fmt: skip
+        results.append(pointer)
     return results
 
 

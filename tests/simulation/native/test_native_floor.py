@@ -58,3 +58,35 @@ def test_floor_meets_the_closed_forms() -> None:
     assert got["counts"] == [3, 3]
     assert max(abs(a - b) for a, b in zip(got["many"][0], switches[:3], strict=True)) < 1e-8
     assert abs(got["many"][1][0] - 10 * math.log(11 / 8)) < 1e-8
+
+
+_POINTER = """
+import json
+import numpy as np
+from bench import floor, floor_pointer
+cases = [(floor.BALL, np.array([9.81, 0.95]), np.array([10.0, 0.0]), 1e3, 40),
+         (floor.THERMOSTAT, np.array([0.1, 10.0, 30.0, 18.0, 22.0]), np.array([20.0]), 1e4, 20)]
+found = []
+for kind, p, x0, t_end, jumps in cases:
+    plain, behind = floor.single(kind, p, x0, t_end, jumps), floor_pointer.single(kind, p, x0, t_end, jumps)
+    found.append([[a.tolist() for a in plain], [a.tolist() for a in behind]])
+print(json.dumps(found))
+"""
+
+
+def test_the_floor_with_its_model_behind_a_pointer_is_the_floor() -> None:
+    """bench/floor_pointer.py: the floor's code, the model called through its address.
+
+    Its points and jumps must be the floor's, bit for bit (the same arithmetic in
+    the same order), or its time says nothing about the pointer. Compiled (the
+    pointer is numba's), so it needs the ``fast`` extra.
+    """
+    import pytest
+
+    pytest.importorskip("numba")
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    out = subprocess.run([sys.executable, "-c", _POINTER], capture_output=True, text=True, env=env,
+                         cwd=ROOT, check=True, timeout=600)  # fmt: skip
+    for (plain_points, plain_jumps), (points, jumps) in json.loads(out.stdout.splitlines()[-1]):
+        assert len(plain_jumps) in (20, 40)
+        assert jumps == plain_jumps and points == plain_points
