@@ -75,13 +75,9 @@ def watch_factory(terms: tuple[Term, ...]) -> Factory:
     """
     # the functions are taken from their sequence at each call: as cells of a closure they
     # would be one object each, made at every stay (hundreds in a system of many components)
-    names = ", ".join(f"_f{i}" for i in range(len(terms)))
-    lines = [
-        "def make(_fns, _b0):",
-        "    _fns = (*_fns,)",
-        "    def watch(t, x):",
-        f"        {names}, = _fns",
-    ]
+    lines = ["def make(_fns, _b0):", "    _fns = (*_fns,)", "    def watch(t, x):"]
+    if terms:
+        lines.append(f"        {', '.join(f'_f{i}' for i in range(len(terms)))}, = _fns")
     lines += [*_least(terms, "_f{}(t, x)"), "    return watch"]
     factory: Factory = define("make", "\n".join(lines) + "\n", {"_inf": math.inf})
     return factory

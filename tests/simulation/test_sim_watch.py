@@ -62,6 +62,10 @@ def test_a_term_that_fails_is_left_out() -> None:
     assert make([lambda t, x: math.nan, lambda t, x: math.nan], 0.0)(0.0, np.zeros(1)) == math.inf
 
 
+def test_a_watch_of_no_term_is_infinite() -> None:
+    assert watch_factory(())([], 0.0)(0.0, np.zeros(1)) == math.inf
+
+
 def test_making_a_watch_of_many_terms_makes_no_object_per_term() -> None:
     signs, shifted = [1.0] * TERMS, [k % 2 == 0 for k in range(TERMS)]
     make = watch_factory(tuple(zip(signs, shifted, strict=True)))
