@@ -8,8 +8,9 @@ independent of the others and the system is simulated as one product, to
 ``t = 20``. Each size runs in fresh processes, after an import and a tiny
 warm-up simulation: the first ``simulate`` of the ring in the process (its
 modes compiled as the run meets them) and the second (all compiled), each
-after a full collection of what came before it, in CPU seconds; in another process the peak of memory allocated while each call runs
-(tracemalloc, which slows the calls, so its times are not used). Reported:
+after a full collection of what came before it, in CPU seconds; in another
+process the peak of memory allocated while each call runs (tracemalloc, which
+slows the calls, so its times are not used). Reported:
 medians over ``repeats`` processes and the growth exponent between
 consecutive sizes, ``log(v2 / v1) / log(n2 / n1)`` (linear reads 1; the
 target is at most 1.15).
@@ -128,7 +129,7 @@ def _exponents(rows: list[dict[str, Any]], key: str) -> list[float]:
     ]
 
 
-def run(repeats: int = 3) -> dict[str, Any]:
+def run(repeats: int = 5) -> dict[str, Any]:
     """Medians per size over ``repeats`` processes, and the exponents between sizes.
 
     The sizes take turns (each repeat runs every size once), so that a stretch of time
