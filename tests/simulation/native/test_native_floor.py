@@ -14,6 +14,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[3]
 
 _CODE = """
@@ -81,8 +83,6 @@ def test_the_floor_with_its_model_behind_a_pointer_is_the_floor() -> None:
     the same order), or its time says nothing about the pointer. Compiled (the
     pointer is numba's), so it needs the ``fast`` extra.
     """
-    import pytest
-
     pytest.importorskip("numba")
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     out = subprocess.run([sys.executable, "-c", _POINTER], capture_output=True, text=True, env=env,
