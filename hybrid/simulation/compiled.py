@@ -46,6 +46,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import replace
 from typing import Any
 
+from hybrid.allocation import gc_paused
 from hybrid.compose import System
 from hybrid.errors import UsageError
 from hybrid.expr import ir
@@ -162,25 +163,34 @@ class CompiledModel:
             self.inputs.setdefault(name, [fn])[0] = fn
 
     def mode(self, key: Mode) -> CompiledMode:
-        """The compiled mode ``key`` (compiled on first use, then cached)."""
+        """The compiled mode ``key`` (compiled on first use, then cached).
+
+        Compiling allocates many small objects and keeps most of them (as loading a
+        model does): the cyclic collector is paused meanwhile
+        (:func:`~hybrid.allocation.gc_paused`), so that its passes, full ones among
+        them, do not walk the process's objects again and again while the run
+        compiles the modes it meets.
+        """
         compiled = self._modes.get(key)
         if compiled is None:
-            if self.parts is not None:
-                compiled = self.parts.mode(key)
-            else:
-                compiled = self._compile(mode_of(self.system, key, binder=self._binder))
+            with gc_paused():
+                if self.parts is not None:
+                    compiled = self.parts.mode(key)
+                else:
+                    compiled = self._compile(mode_of(self.system, key, binder=self._binder))
             self._modes[key] = compiled
         return compiled
 
     def target(self, mode: CompiledMode, tr: CompiledTransition) -> CompiledMode:
-        """The compiled mode ``tr`` leads to from ``mode``."""
+        """The compiled mode ``tr`` leads to from ``mode`` (compiled as :meth:`mode` does)."""
         if tr.move is None:
             return self.mode(tr.view.target)
         i, location = tr.move
         key = (*mode.key[:i], location, *mode.key[i + 1 :])
         found = self._modes.get(key)
         if found is None and self.parts is not None:  # built from ``mode``'s parts
-            found = self._modes[key] = self.parts.mode(key, mode, i)
+            with gc_paused():
+                found = self._modes[key] = self.parts.mode(key, mode, i)
         return found if found is not None else self.mode(key)
 
     def _rho(self, cond: ir.Expr) -> ir.Expr:
