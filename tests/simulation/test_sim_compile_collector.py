@@ -15,32 +15,16 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
-import hybrid
+from bench.scaling_ring import ring
 from hybrid.compose import as_system
 from hybrid.simulation.compiled import CompiledModel
 
 SIZE = 40
 
 
-def _thermostat(i: int, n: int) -> str:
-    prev = (i - 1) % n
-    return f"""
-automaton: th{i}
-state: {{T{i}: {{initial: {18 + (i % 7) * 0.5}, bounds: [0, 40]}}}}
-signals: {{p{i}: 0}}
-inputs: [p{prev}]
-locations:
-  off: {{flow: {{T{i}: -0.1*(T{i} - 10) + 0.05*p{prev}}}, invariant: T{i} >= 18}}
-  on: {{flow: {{T{i}: 0.1*(30 - T{i}) + 0.05*p{prev}}}, signals: {{p{i}: 1}}, invariant: T{i} <= 22}}
-edges:
-  - {{name: heat, from: off, to: on, guard: T{i} <= 18}}
-  - {{name: rest, from: on, to: off, guard: T{i} >= 22}}
-"""
-
-
 def _ring(n: int) -> CompiledModel:
-    system = hybrid.compose(*[hybrid.load_text(_thermostat(i, n)) for i in range(n)])
-    return CompiledModel(as_system(system))
+    """The compiled model of the benchmark's ring of ``n`` coupled thermostats."""
+    return CompiledModel(as_system(ring(n)))
 
 
 @contextmanager

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import gc
 import math
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 
 import numpy as np
 
+from hybrid.allocation import gc_paused
 from hybrid.simulation.events import watch_factory
 
 TERMS = 300
@@ -31,17 +31,6 @@ def _by_hand(signs: list[float], shifted: list[bool], b0: float, t: float, x: np
         for k, (s, sh) in enumerate(zip(signs, shifted, strict=True))
     ]
     return min(values, default=math.inf)
-
-
-@contextmanager
-def _collector_off() -> Iterator[None]:
-    was = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if was:
-            gc.enable()
 
 
 def test_the_watch_is_the_least_signed_shifted_term() -> None:
@@ -71,7 +60,7 @@ def test_making_a_watch_of_many_terms_makes_no_object_per_term() -> None:
     make = watch_factory(tuple(zip(signs, shifted, strict=True)))
     fns = [_term(k) for k in range(TERMS)]
     make(fns, 0.0)  # anything made once per process is made now
-    with _collector_off():
+    with gc_paused():
         before = len(gc.get_objects())
         watches = [make(fns, 1e-9) for _ in range(10)]
         made = len(gc.get_objects()) - before
