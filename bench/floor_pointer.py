@@ -46,27 +46,21 @@ RHS, WATCH, RESET = 0, 1, 2
 
 
 def _model(kind: int) -> Any:
-    """The model of ``kind`` (:data:`bench.floor.BALL` or ``THERMOSTAT``) as the backend calls one."""
+    """The model of ``kind`` (:data:`bench.floor.BALL` or ``THERMOSTAT``) as the backend calls one:
+    the floor's own right-hand side, watch and reset, over the arrays at the pointers."""
+    d, n_p = (2, 2) if kind == floor.BALL else (1, 5)  # states, parameters
+    rhs, watch, reset = floor._rhs, floor._watch, floor._reset
+    carray = numba.carray
 
     def model(op: int, m: int, t: float, x: Any, p: Any, out: Any) -> float:
+        y, q = carray(x, d), carray(p, n_p)
         if op == RHS:
-            if kind == floor.BALL:
-                out[0] = x[1]
-                out[1] = -p[0]
-            elif m == 0:
-                out[0] = -p[0] * (x[0] - p[1])
-            else:
-                out[0] = p[0] * (p[2] - x[0])
+            rhs(kind, m, y, q, carray(out, d))
             return 0.0
         if op == WATCH:
-            if kind == floor.BALL:
-                return x[0]
-            return x[0] - p[3] if m == 0 else p[4] - x[0]
-        if kind == floor.BALL:  # RESET: the state in place, the mode returned
-            x[0] = 0.0
-            x[1] = -p[1] * x[1]
-            return 0.0
-        return float(1 - m)
+            value: float = watch(kind, m, y, q)
+            return value
+        return float(reset(kind, m, y, q))  # the state in place, the mode returned
 
     return numba.njit(model_signature(), **_JIT)(model)
 
