@@ -21,7 +21,8 @@ from support import REPO
 PACKAGE = REPO / "hybrid"
 
 LAYERS: tuple[frozenset[str], ...] = (
-    frozenset({"errors", "version", "lazy", "allocation", "progress", "held", "frames"}),
+    frozenset({"errors", "version", "lazy", "allocation", "progress", "held", "frames",
+               "interrupted"}),
     frozenset({"expr", "files"}),
     frozenset({"model"}),
     frozenset({"binding"}),

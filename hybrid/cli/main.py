@@ -18,6 +18,7 @@ from typing import Any, TextIO
 
 from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_INVALID, EXIT_OK
 from hybrid.errors import Note, SimulationError, SpecError, UsageError
+from hybrid.interrupted import caused_by_interrupt
 from hybrid.version import __version__
 
 __all__ = ["EXIT_FINDINGS", "EXIT_INVALID", "EXIT_OK", "build_parser", "entry", "main"]
@@ -204,7 +205,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt as exc:
         said = str(exc) or said  # what was stopped, when the code that stopped it knows
     except Exception as exc:
-        if not _caused_by_interrupt(exc):
+        if not caused_by_interrupt(exc):
             raise
     _STOPPED[0] = True
     with _no_further_interrupts():
@@ -217,7 +218,8 @@ _STOPPED = [False]
 
 
 def entry() -> int:
-    """The ``hybrid`` command (console script and ``python -m hybrid``): :func:`main`, then exit.
+    """The ``hybrid`` command: :func:`main`, then exit (called by :func:`hybrid.__main__.entry`,
+    the console script and ``python -m hybrid``, once it has imported this module).
 
     Once :func:`main` has returned, the command's work is done and said: a Ctrl-C
     while the interpreter shuts down would only turn its exit code into death by
@@ -254,19 +256,6 @@ def _quiet_after_interrupt(unraisable: Any) -> None:
     seen = interrupts is not None and interrupts.interrupted()
     if not (_STOPPED[0] or seen):
         sys.__unraisablehook__(unraisable)
-
-
-def _caused_by_interrupt(exc: BaseException) -> bool:
-    """Whether a Ctrl-C is behind ``exc``: an extension module whose initialisation
-    was interrupted raises ``ImportError: initialization failed`` from it."""
-    seen: set[int] = set()
-    cause: BaseException | None = exc
-    while cause is not None and id(cause) not in seen:
-        if isinstance(cause, KeyboardInterrupt):
-            return True
-        seen.add(id(cause))
-        cause = cause.__cause__ or cause.__context__
-    return False
 
 
 @contextlib.contextmanager

@@ -173,7 +173,7 @@ def test_the_wheel_holds_hybrid_only(artifacts: dict[str, Path]) -> None:
     tops = {n.split("/", 1)[0] for n in names if not n.split("/", 1)[0].endswith(".dist-info")}
     assert tops == {"hybrid"}
     assert "hybrid.functions" not in entry_points
-    assert "hybrid = hybrid.cli.main:entry" in entry_points
+    assert "hybrid = hybrid.__main__:entry" in entry_points
 
 
 _REQUIRES = (
