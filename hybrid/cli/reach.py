@@ -132,8 +132,10 @@ def run_reach(args: argparse.Namespace) -> int:
 
 def _text(result: ReachResult, file: str) -> str:
     lines = [f"{p.position}: {p.verdict}: {p.message}" for p in result.properties]
+    # with no forbidden entry nothing is proved, though the exit code is that of "proved"
+    said = result.verdict if result.properties else "no forbidden state to decide (properties: forbidden)"
     lines.append(
-        f"{file}: {result.verdict}: {len(result.sets)} sets, t <= {result.t_end:g}, "
+        f"{file}: {said}: {len(result.sets)} sets, t <= {result.t_end:g}, "
         f"{result.max_jumps} jumps, step {result.step:g}, {result.seconds:.3g} s"
         + ("" if result.complete else " (search stopped early: nothing is proved)")
     )

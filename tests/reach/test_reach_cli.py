@@ -62,6 +62,17 @@ def test_exit_codes_follow_the_verdicts(tmp_path: Path) -> None:
     assert re.search(r"meets it from t = 1\.49\d*,", unknown.stdout), unknown.stdout
 
 
+def test_a_model_with_no_forbidden_entry_is_not_said_proved(tmp_path: Path) -> None:
+    """Nothing to decide: the sets are computed, exit 0, and the summary does not say
+    "proved" (it did: a user read it as a proof of something)."""
+    plain = HEATER.split("properties:")[0]
+    done = run_cli("reach", _spec(tmp_path, plain, "n.yaml"), "--t-end", "6")
+    assert done.returncode == 0, done.stderr
+    (line,) = done.stdout.splitlines()
+    assert line.startswith(f"{tmp_path / 'n.yaml'}: no forbidden state to decide (properties: forbidden): ")
+    assert "proved" not in line and "t <= 6," in line
+
+
 def test_a_model_that_is_not_affine_is_refused_at_its_place(tmp_path: Path) -> None:
     done = run_cli("reach", _spec(tmp_path, NONLINEAR), "--t-end", "1")
     assert done.returncode == 2
