@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from hybrid.errors import did_you_mean
 from hybrid.expr import ir
 from hybrid.expr.functions import BUILTINS, Function
-from hybrid.expr.habits import habit
+from hybrid.expr.habits import function_habit, habit
 
 __all__ = [
     "MAX_DEPTH",
@@ -76,6 +76,16 @@ _NODE_NAMES = {
 }
 _CONSTANTS = {"pi": math.pi}
 _BOOLS = {"true": True, "false": False}
+_KIND_WORDS = {
+    ir.STATE: "a state variable",
+    ir.PARAM: "a parameter",
+    ir.SIGNAL: "a signal",
+    ir.INPUT: "an input",
+    ir.CONST: "a constant",
+    "t": "the time",
+    "pi": "a constant",
+}
+"""How a message names each kind of variable, the time and the constants."""
 _NUM, _BOOL = "number", "boolean"
 
 
@@ -279,6 +289,20 @@ class _Converter:
         fname = node.func.id
         func = self.scope.function(fname)
         if func is None:
+            if fname in self.scope.vectors:
+                raise ExprError(
+                    f"'{fname}' is a vector of {self.scope.vectors[fname]} values, not a "
+                    f"function: pick one with {fname}[k], from 0 (MATLAB's {fname}(1) is "
+                    f"{fname}[0])",
+                    col,
+                )
+            kind = self.scope.variables.get(fname)
+            if kind is not None or fname in ("t", *_CONSTANTS):
+                what = _KIND_WORDS.get(kind or fname, "a value")
+                raise ExprError(f"'{fname}' is {what}, not a function: write {fname}", col)
+            instead = function_habit(fname)
+            if instead is not None:
+                raise ExprError(f"unknown function '{fname}': {instead}", col)
             names = [*BUILTINS, *self.scope.functions]
             raise ExprError(f"unknown function '{fname}'{did_you_mean(fname, names)}", col)
         if node.keywords:

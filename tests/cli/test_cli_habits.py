@@ -56,9 +56,44 @@ def test_an_operator_from_c_or_matlab_is_named(
     assert result.stderr.strip() == f"{spec}:12:{column}: {message}"
 
 
+# The flow of v starts at column 22 of line 8 ("    flow: {h: v, v: '" is 21 characters).
+FLOWS = [
+    # (flow of v as typed, column of the culprit, what the message says)
+    ("2h", 22, "'2h' is not a product here: write '2 * h'"),
+    ("-1.5e-2v + 1", 23, "'1.5e-2v' is not a product here: write '1.5e-2 * v'"),
+    ("h;", 23, "';' ends nothing here: an expression is one line without it"),
+    ("pow(h, 2)", 22, "unknown function 'pow': write a ** b for pow(a, b)"),
+    ("-mod(h, k)", 23, "unknown function 'mod': there is no modulo function: "
+                       "for MATLAB's mod(x, m) write x - m * floor(x / m)"),
+    ("ln(h)", 22, "unknown function 'ln': log is the natural logarithm: write log(x)"),
+    ("h(1)", 22, "'h' is a state variable, not a function: write h"),
+    ("-k(1)", 23, "'k' is a parameter, not a function: write k"),
+    ("t(1)", 22, "'t' is the time, not a function: write t"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("flow", "column", "message"), FLOWS, ids=[f for f, _, _ in FLOWS])
+def test_a_function_or_literal_from_c_or_matlab_is_named(
+    flow: str, column: int, message: str, tmp_path: Path
+) -> None:
+    """MATLAB's and C's spellings of products, functions and indexing: before, '2h' was
+    Python's "invalid decimal literal", pow and mod "unknown function" and h(1) "unknown
+    function 'h'"."""
+    spec = tmp_path / "flows.yaml"
+    spec.write_text(SPEC.replace("GUARD", "h <= 0").replace("v: -1}", f"v: '{flow}'}}"))
+    result = run_cli("validate", spec)
+    assert result.returncode == 2
+    assert_no_traceback(result.stderr)
+    assert result.stderr.strip() == f"{spec}:8:{column}: {message}"
+
+
 def test_the_operators_we_spell_that_way_still_parse(tmp_path: Path) -> None:
     spec = tmp_path / "ours.yaml"
-    spec.write_text(SPEC.replace("GUARD", "h == 0 or (h != 1 and not v >= 0 and h <= k)"))
+    spec.write_text(
+        SPEC.replace("GUARD", "h == 0 or (h != 1 and not v >= 0 and h <= k)").replace(
+            "v: -1}", "v: '-1e-3*h + 2.5e+2 * v + .5 - 1.e1'}"
+        )
+    )
     result = run_cli("validate", spec)
     assert (result.returncode, result.stderr) == (0, "")
 
