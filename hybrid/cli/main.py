@@ -142,6 +142,19 @@ def build_parser() -> argparse.ArgumentParser:
         help="override a parameter (comp.NAME in a system)",
     )
     p.add_argument(
+        "--init",
+        type=_param,
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="start a state variable at VALUE (named as in the --out columns)",
+    )
+    p.add_argument(
+        "--initial-location",
+        metavar="LOC",
+        help="start in location LOC (an automaton; a system's are set per component)",
+    )
+    p.add_argument(
         "--input",
         type=_assignment,
         action="append",

@@ -69,6 +69,8 @@ def run_simulate(args: argparse.Namespace) -> int:
                 settings=settings_from(args),
                 dense=args.plot is not None,
                 inputs=inputs or None,
+                initial=dict(args.init) or None,
+                initial_location=args.initial_location,
                 progress=line,
                 backend=backend,
             )

@@ -17,7 +17,6 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from hybrid.compose import System
-from hybrid.errors import UsageError
 from hybrid.frames import in_frame_room
 from hybrid.simulation.apart import independent_groups, simulate_apart
 from hybrid.simulation.compiled import CompiledModel
@@ -27,6 +26,7 @@ from hybrid.simulation.monitor import cut_results, join_groups, monitor_for
 from hybrid.simulation.result import Run
 from hybrid.simulation.reuse import compiled_model, running
 from hybrid.simulation.settings import Settings
+from hybrid.simulation.start import initial_vector
 
 __all__ = ["simulate_reference"]
 
@@ -47,7 +47,7 @@ def simulate_reference(
     time at some depths of the caller's.
     """
     compiled = compiled_model(model, inputs)
-    x0 = np.array(_initial_vector(model, compiled, initial), dtype=float)
+    x0 = np.array(initial_vector(model, compiled.state_names, initial), dtype=float)
     # a solution that blows up overflows inside the solver's linear algebra; the run
     # sees the non-finite state and ends with a message, so numpy's warnings are noise
     with sigint_watch(handle_sigint) as interrupts, np.errstate(all="ignore"):
@@ -83,13 +83,3 @@ def _groups(model: System) -> list[tuple[int, ...]]:
     return join_groups(model, groups) if len(groups) > 1 and model.requirements else groups
 
 
-def _initial_vector(
-    model: System, compiled: CompiledModel, initial: Mapping[str, float] | None
-) -> list[float]:
-    x0 = model.initial_vector()
-    if initial:
-        for name, value in initial.items():
-            if name not in compiled.state_names:
-                raise UsageError(f"initial value for unknown state variable '{name}'")
-            x0[compiled.state_names.index(name)] = float(value)
-    return x0

@@ -34,13 +34,14 @@ input u is held at the midpoint 1 of its range [-1, 3] (give it a value with --i
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from hybrid.compose import Model, System, as_system
+from hybrid.errors import UsageError, did_you_mean
 from hybrid.model import Automaton, Range
 
-__all__ = ["Held", "describe_start", "held_inputs", "run_inputs"]
+__all__ = ["Held", "describe_start", "held_inputs", "initial_vector", "run_inputs", "state_slot"]
 
 
 class Held:
@@ -197,3 +198,29 @@ def _describe_start(
         "inputs": held,
         "notes": notes,
     }
+
+
+def initial_vector(
+    model: System, state_names: Sequence[str], initial: Mapping[str, float] | None
+) -> list[float]:
+    """The initial state, ``initial`` overriding some values (names as in ``state_names``)."""
+    x0 = model.initial_vector()
+    for name, value in (initial or {}).items():
+        x0[state_slot(state_names, name)] = float(value)
+    return x0
+
+
+def state_slot(state_names: Sequence[str], name: str) -> int:
+    """The place of state variable ``name`` given an initial value (else a UsageError).
+
+    >>> state_slot(("h", "v"), "v")
+    1
+    >>> state_slot(("h", "v"), "hh")
+    Traceback (most recent call last):
+    hybrid.errors.UsageError: initial value for unknown state variable 'hh'; did you mean 'h'?
+    """
+    if name not in state_names:
+        raise UsageError(
+            f"initial value for unknown state variable '{name}'{did_you_mean(name, state_names)}"
+        )
+    return list(state_names).index(name)

@@ -51,6 +51,7 @@ from hybrid.simulation.native.source import native_source
 from hybrid.simulation.native.structure import structure_key
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings
+from hybrid.simulation.start import initial_vector
 
 __all__ = [
     "CompiledNative",
@@ -379,14 +380,3 @@ def _ticker(
     return tick
 
 
-def initial_vector(
-    model: System, state_names: tuple[str, ...], initial: Mapping[str, float] | None
-) -> list[float]:
-    """The initial state; for a system, ``initial`` overrides some values (as the engine does)."""
-    x0 = model.initial_vector()
-    if isinstance(model, System) and initial:
-        for name, value in initial.items():
-            if name not in state_names:
-                raise UsageError(f"initial value for unknown state variable '{name}'")
-            x0[state_names.index(name)] = float(value)
-    return x0

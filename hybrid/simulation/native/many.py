@@ -44,6 +44,7 @@ from hybrid.simulation.native.features import check_supported, refuse_requiremen
 from hybrid.simulation.native.interruptible import run_in_worker
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings, merged
+from hybrid.simulation.start import state_slot
 
 __all__ = ["Ensemble", "simulate_many"]
 
@@ -313,9 +314,7 @@ def simulate_many(
         params[:, _slot(model, compiled, key)] = column
     x0s = np.tile(np.array(model.initial_vector(), dtype=float), (n, 1))
     for name, column in starts.items():
-        if name not in native.state_names:
-            raise UsageError(f"initial value for unknown state variable '{name}'")
-        x0s[:, native.state_names.index(name)] = column
+        x0s[:, state_slot(native.state_names, name)] = column
     ensemble = Ensemble(model, compiled, settings, params, params_table, starts)
     if threads is not None and (isinstance(threads, bool) or not isinstance(threads, numbers.Integral)
                                 or threads < 1):  # fmt: skip
