@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
+import re
 import select
 import sys
 import warnings
@@ -25,11 +26,97 @@ __all__ = ["EXIT_FINDINGS", "EXIT_INVALID", "EXIT_OK", "build_parser", "entry", 
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse that exits with code 2 and one line of error (no usage block)."""
+    """argparse that exits with code 2 and one line of error (no usage block).
+
+    The line names a flag the command does not have with the one meant (another
+    tool's spelling, a typo, ``_`` for ``-``), also when argparse would only say
+    that a required flag is missing (``--tend 5``), and MATLAB's solver names.
+    """
+
+    _given: list[str]
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        # no abbreviations: `--initial h=2` would be taken as `--initial-location h=2`,
+        # and every new flag could make an abbreviation a user relies on ambiguous
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
+
+    def parse_known_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> tuple[argparse.Namespace, list[str]]:
+        self._given = list(sys.argv[1:] if args is None else args)
+        parsed, extras = super().parse_known_args(args, namespace)
+        unknown = self._unknown_flags(extras)
+        if unknown and self._subcommand():
+            self.error(f"unrecognized argument {unknown[0]}")
+        return parsed, extras
 
     def error(self, message: str) -> None:  # type: ignore[override]
+        if message.startswith("the following arguments are required") and self._subcommand():
+            unknown = self._unknown_flags(getattr(self, "_given", []))
+            if unknown:  # the likely cause: a flag spelled otherwise
+                message = f"unrecognized argument {unknown[0]}"
+        if message.startswith("unrecognized argument "):
+            message += _flag_hint(message.split()[2], self._flags())
+        elif message.startswith("argument --method: invalid choice: "):
+            from hybrid.simulation.settings import method_hint
+
+            hint = method_hint(message.split("'")[1])
+            message = f"argument --method: {hint}" if hint else message
+        elif ": invalid choice: '" in message:  # a command, a format: the closest choice
+            from hybrid.errors import did_you_mean
+
+            given, _, listed = message.split(": invalid choice: '", 1)[1].partition("'")
+            choices = re.findall(r"'([^']*)'", listed)
+            meant = _CHOICE_HABITS.get(given.lower())
+            message += f"; did you mean '{meant}'?" if meant in choices else did_you_mean(
+                given, choices
+            )
         sys.stderr.write(f"hybrid: error: {message}\n")
         raise SystemExit(EXIT_INVALID)
+
+    def _subcommand(self) -> bool:
+        return " " in self.prog  # "hybrid simulate"; the top parser's is "hybrid"
+
+    def _flags(self) -> list[str]:
+        return [o for a in self._actions for o in a.option_strings]
+
+    def _unknown_flags(self, words: Sequence[str]) -> list[str]:
+        """The words that look like flags and are none of this command's (not "-1")."""
+        flags = set(self._flags())
+        return [
+            w for w in words
+            if w.startswith("-") and w != "-" and not w[1:2].isdigit() and w[1:2] != "."
+            and w.split("=", 1)[0] not in flags
+        ]  # fmt: skip
+
+
+_FLAG_HABITS = {
+    "-o": "--out", "--output": "--out", "-p": "--param", "--set": "--param",
+    "--parameter": "--param", "--params": "--param", "--x0": "--init", "--ic": "--init",
+    "--initial": "--init", "--tf": "--t-end", "--tfinal": "--t-end", "--tspan": "--t-end",
+    "--tend": "--t-end", "--tmax": "--t-end", "--duration": "--t-end", "--reltol": "--rtol",
+    "--abstol": "--atol", "--maxstep": "--max-step", "--solver": "--method",
+}  # fmt: skip
+"""Flags of other tools (MATLAB's odeset names, C habits) and ours."""
+
+_CHOICE_HABITS = {"numba": "compiled", "jit": "compiled", "solve_ivp": "scipy"}
+"""Values people give for a choice, and ours (``--backend numba`` is ``compiled``)."""
+
+
+def _flag_hint(word: str, flags: Sequence[str]) -> str:
+    """``"; did you mean '--out'?"`` for an unknown flag, or ``""``.
+
+    >>> _flag_hint("--t_end=5", ["--t-end", "--out"]), _flag_hint("-o", ["--out"])
+    ("; did you mean '--t-end'?", "; did you mean '--out'?")
+    """
+    name = word.split("=", 1)[0]
+    for meant in (_FLAG_HABITS.get(name.lower()), name.replace("_", "-").lower()):
+        if meant in flags:
+            return f"; did you mean '{meant}'?"
+    from hybrid.errors import did_you_mean
+
+    return did_you_mean(name, [f for f in flags if f.startswith("--")])
 
 
 def _param(text: str) -> tuple[str, float]:

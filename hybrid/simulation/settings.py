@@ -38,6 +38,7 @@ __all__ = [
     "BACKENDS",
     "CHOICES",
     "DEFAULTS",
+    "MATLAB_SOLVERS",
     "MAX_GRID_POINTS",
     "MAX_JUMPS_PER_INSTANT",
     "MAX_STEPS",
@@ -48,10 +49,38 @@ __all__ = [
     "finite_number",
     "merged",
     "merged_values",
+    "method_hint",
 ]
 
 METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 """The integration methods of :func:`scipy.integrate.solve_ivp` a run may use."""
+
+MATLAB_SOLVERS = {
+    "ode45": ("RK45", "the same Dormand-Prince 5(4) pair"),
+    "ode23": ("RK23", "the same Bogacki-Shampine 3(2) pair"),
+    "ode78": ("DOP853", "the nearest: an explicit Runge-Kutta pair of order 8"),
+    "ode89": ("DOP853", "the nearest: an explicit Runge-Kutta pair of order 8"),
+    "ode113": ("LSODA", "the nearest: variable-order Adams, switching to BDF when stiff"),
+    "ode15s": ("BDF", "the nearest: variable-order BDF for stiff flows"),
+    "ode23s": ("Radau", "the nearest: an implicit one-step method for stiff flows"),
+    "ode23t": ("Radau", "the nearest: an implicit one-step method for stiff flows"),
+    "ode23tb": ("Radau", "the nearest: an implicit one-step method for stiff flows"),
+}
+"""MATLAB's solvers and the method to give instead, with why (the message of a MATLAB name)."""
+
+
+def method_hint(name: str) -> str:
+    """What to write for a method that is not one of :data:`METHODS`: MATLAB's solvers named.
+
+    >>> method_hint("ode45")
+    "MATLAB's ode45 is 'RK45' here (the same Dormand-Prince 5(4) pair)"
+    >>> method_hint("Euler")
+    ''
+    """
+    found = MATLAB_SOLVERS.get(name.lower())
+    if found is None:
+        return ""
+    return f"MATLAB's {name} is '{found[0]}' here ({found[1]})"
 
 BACKENDS = ("scipy", "compiled")
 """``scipy``: the solve_ivp engine (the reference); ``compiled``: hybrid.simulation.native."""
@@ -267,7 +296,11 @@ class Settings:
                     f"t_end={self.t_end:g} (the limit is {MAX_GRID_POINTS:.0e}): raise it"
                 )
         if self.method not in METHODS:
-            raise UsageError(f"unknown method '{self.method}'; choose one of {', '.join(METHODS)}")
+            hint = method_hint(str(self.method))
+            raise UsageError(
+                f"unknown method '{self.method}'"
+                + (f": {hint}" if hint else f"; choose one of {', '.join(METHODS)}")
+            )
         if self.backend is not None and self.backend not in CHOICES:
             raise UsageError(f"unknown backend '{self.backend}'; choose one of {', '.join(CHOICES)}")
         for flag in ("dense", "zeno"):

@@ -178,3 +178,58 @@ def test_a_python_mistake_is_named(code: str, said: str) -> None:
     )
     assert result.returncode == 1
     assert result.stderr.strip().splitlines()[-1].endswith(said), result.stderr
+
+
+FLAGS = [
+    # (words after the spec, the one error line)
+    (["--tend", "5"], "unrecognized argument --tend; did you mean '--t-end'?"),
+    (["--t_end=5"], "unrecognized argument --t_end=5; did you mean '--t-end'?"),
+    (["--t-end", "5", "-o", "x.csv"], "unrecognized argument -o; did you mean '--out'?"),
+    (["--t-end", "5", "--set", "e=0.5"], "unrecognized argument --set; did you mean '--param'?"),
+    (["--t-end", "5", "--x0", "h=3"], "unrecognized argument --x0; did you mean '--init'?"),
+    (["--t-end", "5", "--RelTol", "1e-8"], "unrecognized argument --RelTol; did you mean '--rtol'?"),
+    (["--t-end", "5", "--max_jumps", "3"],
+     "unrecognized argument --max_jumps; did you mean '--max-jumps'?"),
+    (["--t-end", "5", "--rtool", "1e-8"], "unrecognized argument --rtool; did you mean '--rtol'?"),
+    (["--t-end", "5", "--zzz"], "unrecognized argument --zzz"),
+    # no abbreviations: this one was taken as --initial-location h=2
+    (["--t-end", "5", "--initial", "h=2"], "unrecognized argument --initial; did you mean '--init'?"),
+    (["--t-end", "5", "--max-j", "3"], "unrecognized argument --max-j; did you mean '--max-jumps'?"),
+    (["--t-end", "5", "--method", "ode45"],
+     "argument --method: MATLAB's ode45 is 'RK45' here (the same Dormand-Prince 5(4) pair)"),
+    (["--t-end", "5", "--method", "ode15s"],
+     "argument --method: MATLAB's ode15s is 'BDF' here (the nearest: variable-order BDF for "
+     "stiff flows)"),
+    (["--t-end", "5", "--backend", "numba"],
+     "argument --backend: invalid choice: 'numba' (choose from 'scipy', 'compiled', 'auto'); "
+     "did you mean 'compiled'?"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("words", "said"), FLAGS, ids=[" ".join(w) for w, _ in FLAGS])
+def test_a_flag_from_another_tool_is_named_with_ours(
+    words: list[str], said: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before, '--tend 5' said only that --t-end is required, '-o' and '--RelTol' were
+    "unrecognized arguments" without a hint, and MATLAB's ode45 an invalid choice."""
+    from support import SPECS, main_in_process
+
+    assert main_in_process("simulate", SPECS / "bouncing_ball.yaml", *words) == 2
+    captured = capsys.readouterr()
+    assert (captured.out, captured.err) == ("", f"hybrid: error: {said}\n")
+
+
+def test_a_mistyped_command_is_named_in_a_real_process() -> None:
+    result = run_cli("simulat", "specs/bouncing_ball.yaml", "--t-end", "1")
+    assert result.returncode == 2
+    assert_no_traceback(result.stderr)
+    assert result.stderr.strip().endswith("; did you mean 'simulate'?")
+
+
+def test_the_python_api_names_matlab_solvers_too() -> None:
+    import hybrid
+    from hybrid.errors import UsageError
+
+    with pytest.raises(UsageError, match=r"unknown method 'ode23': MATLAB's ode23 is 'RK23'"):
+        hybrid.simulate(hybrid.load(REPO / "specs" / "bouncing_ball.yaml"), t_end=1.0,
+                        method="ode23")  # fmt: skip

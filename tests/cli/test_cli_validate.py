@@ -57,7 +57,7 @@ def test_bad_flag_exits_2_without_traceback(
     assert result.returncode == 2
     assert result.stdout == ""
     assert "Traceback" not in result.stderr
-    assert result.stderr.splitlines() == ["hybrid: error: unrecognized arguments: --no-such-flag"]
+    assert result.stderr.splitlines() == ["hybrid: error: unrecognized argument --no-such-flag"]
 
 
 @pytest.mark.parametrize(
