@@ -26,6 +26,7 @@ __all__ = [
     "Position",
     "SimulationError",
     "SpecError",
+    "UnknownArgument",
     "UnknownName",
     "UsageError",
     "brief",
@@ -177,6 +178,17 @@ class UnknownName(UsageError, KeyError):
     >>> error = UnknownName("no state variable or signal 'zz'")
     >>> isinstance(error, KeyError), str(error)
     (True, "no state variable or signal 'zz'")
+    """
+
+
+class UnknownArgument(UsageError, TypeError):
+    """A keyword a function does not take (``tspan=`` for ``t_end=``): a :class:`UsageError`
+    that names the one meant, and the ``TypeError`` Python would have raised.
+
+    Examples
+    --------
+    >>> isinstance(UnknownArgument("f() got an unexpected keyword argument 'x'"), TypeError)
+    True
     """
 
 

@@ -23,7 +23,7 @@ PACKAGE = REPO / "hybrid"
 LAYERS: tuple[frozenset[str], ...] = (
     frozenset({"errors", "version", "lazy", "allocation", "progress", "held", "frames",
                "interrupted"}),
-    frozenset({"expr", "files"}),
+    frozenset({"expr", "files", "keywords"}),
     frozenset({"model"}),
     frozenset({"binding"}),
     frozenset({"compose"}),

@@ -45,6 +45,7 @@ from hybrid.campaigns.sweep import campaign_backend, campaign_settings, executor
 from hybrid.campaigns.targets import Constant, check_names, split
 from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import UsageError
+from hybrid.keywords import keywords_of, named_keywords
 from hybrid.model import Automaton
 from hybrid.progress import Progress, Tracker, reporter
 from hybrid.simulation.interrupts import sigint_watch
@@ -116,6 +117,7 @@ class Falsification:
         )
 
 
+@named_keywords
 def falsify(
     model: Automaton | System,
     requirement: str,
@@ -194,7 +196,7 @@ def falsify(
     """
     expect_model(model, "falsify")
     seed = checked_seed(seed)
-    chosen, solver = campaign_settings("falsify", settings, t_end, solver)
+    chosen, solver = campaign_settings("falsify", settings, t_end, solver, keywords_of(falsify))
     t_end, (backend, announce) = chosen.t_end, campaign_backend(backend, chosen)
     if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
         raise UsageError(f"budget must be a whole number >= 1, got {budget!r}")

@@ -44,6 +44,7 @@ from hybrid.campaigns.targets import INPUT, check_names
 from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import UsageError
 from hybrid.files import writable_target
+from hybrid.keywords import keywords_of, named_keywords, refused_argument
 from hybrid.model import Automaton
 from hybrid.progress import Progress, Tracker, reporter
 from hybrid.simulation.interrupts import sigint_watch
@@ -67,7 +68,11 @@ SOLVER_OPTIONS = (
 
 
 def campaign_settings(
-    what: str, settings: Settings | None, t_end: float | None, solver: Mapping[str, Any]
+    what: str,
+    settings: Settings | None,
+    t_end: float | None,
+    solver: Mapping[str, Any],
+    taken: Sequence[str] = (),
 ) -> tuple[Settings, dict[str, Any]]:
     """The settings of a campaign's runs, and the options of them that are not the defaults.
 
@@ -84,8 +89,8 @@ def campaign_settings(
     (1e-09, {'rtol': 1e-09})
     """
     unknown = sorted(set(solver) - set(SOLVER_OPTIONS))
-    if unknown:
-        raise UsageError(f"{what}() got an unexpected keyword '{unknown[0]}'")
+    if unknown:  # named with the keyword meant (``taken``: the campaign's own too)
+        raise refused_argument(what, unknown[0], (*taken, *SOLVER_OPTIONS))
     chosen = merged(settings, t_end, **solver)
     options = {k: getattr(chosen, k) for k in SOLVER_OPTIONS}
     return chosen, {k: v for k, v in options.items() if v != DEFAULTS[k]}
@@ -107,6 +112,7 @@ def campaign_backend(backend: str | None, chosen: Settings) -> tuple[str, bool]:
     return asked or "auto", asked is not None
 
 
+@named_keywords
 def sweep(
     model: Automaton | System,
     t_end: float | None = None,
@@ -218,7 +224,7 @@ def sweep(
     seed = checked_seed(seed)
     if resume and out is None:
         raise UsageError("resume=True finishes the campaign writing out=: give out")
-    chosen, solver = campaign_settings("sweep", settings, t_end, solver)
+    chosen, solver = campaign_settings("sweep", settings, t_end, solver, keywords_of(sweep))
     t_end, (backend, announce) = chosen.t_end, campaign_backend(backend, chosen)
     if parameters:
         model = model.with_parameters(dict(parameters))

@@ -33,6 +33,7 @@ from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import UsageError
 from hybrid.expr import ir
 from hybrid.frames import in_frame_room
+from hybrid.keywords import named_keywords
 from hybrid.model import Automaton, Forbidden
 from hybrid.reach.affine import TIME, Condition, Forms, Rows
 from hybrid.reach.boxes import meets_many
@@ -63,6 +64,7 @@ corner candidates of each, the random runs from the first."""
 
 
 @in_frame_room
+@named_keywords
 def reach(
     model: Automaton | System,
     t_end: float | None = None,

@@ -27,6 +27,7 @@ Examples
 from __future__ import annotations
 
 import math
+import sys
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -155,14 +156,31 @@ def bound_excursions(
     return tuple(found)
 
 
-def warn_excursions(found: Sequence[BoundExcursion], stacklevel: int = 3) -> None:
-    """One :class:`BoundsWarning` per excursion (one per variable)."""
+def warn_excursions(found: Sequence[BoundExcursion], stacklevel: int | None = None) -> None:
+    """One :class:`BoundsWarning` per excursion (one per variable), at the user's call
+    (``stacklevel``: else the first caller outside hybrid)."""
+    level = stacklevel or _users_call()
     for excursion in found:
-        warnings.warn(excursion.message, BoundsWarning, stacklevel=stacklevel)
+        warnings.warn(excursion.message, BoundsWarning, stacklevel=level)
+
+
+def _users_call() -> int:
+    """The ``stacklevel`` (for the function that calls this) of the first frame outside the
+    ``hybrid`` package: the user's call, however many of our frames lie between."""
+    frame = sys._getframe(1)
+    level = 1
+    while frame.f_back is not None and frame.f_code.co_filename.startswith(_PACKAGE):
+        frame = frame.f_back
+        level += 1
+    return level
+
+
+_PACKAGE = __file__.rsplit("simulation", 1)[0]
+"""The directory of the ``hybrid`` package (with its separator)."""
 
 
 def warn_ensemble(
-    found: Mapping[int, Sequence[BoundExcursion]], runs: int, stacklevel: int = 3
+    found: Mapping[int, Sequence[BoundExcursion]], runs: int, stacklevel: int | None = None
 ) -> None:
     """One :class:`BoundsWarning` per variable over many runs (``found``: by run number).
 
@@ -184,11 +202,12 @@ def warn_ensemble(
         for excursion in found[run]:
             counts[excursion.variable] = counts.get(excursion.variable, 0) + 1
             first.setdefault(excursion.variable, (run, excursion))
+    level = stacklevel or _users_call()
     for variable, (run, e) in first.items():
         warnings.warn(
             f"{variable} left its declared bounds [{e.lower:g}, {e.upper:g}] in "
             f"{counts[variable]} of {runs} runs; the first, run {run}, at t={e.t:.9g} j={e.j} "
             f"({variable} = {e.value:.9g})",
             BoundsWarning,
-            stacklevel=stacklevel,
+            stacklevel=level,
         )

@@ -18,6 +18,7 @@ from typing import Any
 
 from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import UsageError
+from hybrid.keywords import named_keywords
 from hybrid.model import Automaton
 from hybrid.progress import Reporter, Tracker
 from hybrid.simulation.bounds import bound_excursions, warn_excursions
@@ -32,6 +33,7 @@ _OPTIONS = ("t_start", "max_jumps", "rtol", "atol", "max_step", "method", "dt", 
 """The options :func:`simulate` passes to :func:`~hybrid.simulation.settings.merged_values`."""
 
 
+@named_keywords
 def simulate(
     model: Automaton | System,
     t_end: float | None = None,

@@ -181,6 +181,14 @@ class Run:
         hint = f"; did you mean '{close[0]}'?" if close else ""
         raise UnknownName(f"no state variable or signal '{name}'{hint}")
 
+    def __getattr__(self, name: str) -> Any:
+        """Called only for a name a run does not have: what to write instead.
+
+        scipy's ``sol.y``, ``sol.status`` and ``sol.t_events``, and a column read as
+        ``run.h``, are named with ours; anything else gets the closest attribute.
+        """
+        raise AttributeError(_no_attribute(self.__dict__, name), name=name, obj=self)
+
     def __len__(self) -> int:
         return int(self.t.shape[0])
 
@@ -302,3 +310,34 @@ class Run:
         from hybrid.simulation.display import run_html
 
         return run_html(self)
+
+
+_SCIPY_HABITS = {
+    "y": "the states are run.states, one row per point (scipy's sol.y is run.states.T; "
+    "the names are run.state_names), and one variable is run['name']",
+    "x": "the states are run.states, one row per point (MATLAB's [t, x] = ode45(...) is "
+    "run.t, run.states; the names are run.state_names), and one variable is run['name']",
+    "status": "how the run ended is run.termination (.cause, .message, .t, .j)",
+    "success": "how the run ended is run.termination (.cause == 't_end' when it ran to the end)",
+    "message": "how the run ended is run.termination (.cause, .message, .t, .j)",
+    "t_events": "the jumps are run.jumps (each with .t, .edge, .source, .target)",
+    "y_events": "the jumps are run.jumps (each with .t, .edge, .before, .after)",
+    "sol": "with dense=True the interpolants of the stays are run.segments",
+}
+"""Attributes of scipy's ``solve_ivp`` result (``sol.y``...) and where a run has them."""
+
+
+def _no_attribute(found: Mapping[str, Any], name: str) -> str:
+    """The message of an attribute a run does not have (``found``: its ``__dict__``)."""
+    said = f"'Run' object has no attribute '{name}'"
+    if name.startswith("__"):
+        return said
+    if name in _SCIPY_HABITS:
+        return f"{said}: {_SCIPY_HABITS[name]}"
+    names = (*found.get("state_names", ()), *found.get("signal_names", ()))
+    if name in names:
+        return f"{said}: a state variable's or signal's column is run[{name!r}]"
+    from hybrid.errors import did_you_mean
+
+    public = [a for a in (*dir(Run), *found) if not a.startswith("_")]
+    return said + did_you_mean(name, public)

@@ -598,7 +598,7 @@ class RecordedRun(Run):
         if name in _COLUMNS and "_rows" in self.__dict__:
             self._unpack()
             return self.__dict__[name]
-        raise AttributeError(f"'Run' object has no attribute '{name}'")
+        return super().__getattr__(name)  # what to write instead
 
     def __len__(self) -> int:
         rows = self.__dict__.get("_rows")

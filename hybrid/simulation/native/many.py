@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 
 from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import OutOfRange, UsageError
+from hybrid.keywords import named_keywords
 from hybrid.model import Automaton
 from hybrid.simulation.bounds import BoundExcursion, bound_excursions, warn_ensemble
 from hybrid.simulation.interrupts import immediate
@@ -219,6 +220,7 @@ class Ensemble(Sequence[Run]):
         return self.model.with_parameters(dict(zip(names, values, strict=True)))
 
 
+@named_keywords
 def simulate_many(
     model: Automaton | System,
     t_end: float | None = None,
