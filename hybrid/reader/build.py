@@ -29,7 +29,7 @@ from hybrid.expr.parse import (
 )
 from hybrid.model import Automaton, Edge, Location
 from hybrid.reader.characters import ascii_only
-from hybrid.reader.messages import closest
+from hybrid.reader.messages import closest, derivative_hint
 from hybrid.reader.problems import Problems
 from hybrid.reader.requirements import build_requirements
 from hybrid.reader.schema import AutomatonSpec, SignalSpec
@@ -69,7 +69,8 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
             if var not in spec.state:
                 problems.at_key(
                     (*base, "flow", var),
-                    f"flow of '{var}': not a state variable{closest(var, state_names)}",
+                    f"flow of '{var}': not a state variable"
+                    + (derivative_hint(var, state_names) or closest(var, state_names)),
                 )
                 continue
             flow[var] = problems.expression((*base, "flow", var), source, scope, "number")

@@ -8,6 +8,7 @@ key points at its parent mapping.
 
 from __future__ import annotations
 
+import re
 import types
 from typing import Annotated, Any, Union, get_args, get_origin
 
@@ -16,13 +17,47 @@ from pydantic import BaseModel, ValidationError
 from hybrid.errors import Position, did_you_mean
 from hybrid.reader.yamlpos import PositionMap
 
-__all__ = ["closest", "describe_path", "validation_problems"]
+__all__ = ["closest", "derivative_hint", "derivative_of", "describe_path", "validation_problems"]
 
 
 def closest(name: str, candidates: list[str]) -> str:
     """``"; did you mean 'x'?"`` for the closest candidate, or ``""`` (a looser match
-    than for names in expressions: keys and locations are few)."""
+    than for names in expressions: keys and locations are few; the same name in
+    another case first: ``X`` for ``x``)."""
+    same = [c for c in candidates if c.lower() == name.lower() and c != name]
+    if same:
+        return f"; did you mean '{same[0]}'?"
     return did_you_mean(name, candidates, cutoff=0.5)
+
+
+_DERIVATIVE = re.compile(
+    r"d(?P<a>\w+)\s*/\s*dt|der\((?P<b>\w+)\)|d\((?P<c>\w+)\)\s*/\s*dt|"
+    r"(?P<d>\w+?)(?:'|_dot|dot|_prime)|d(?P<e>\w+)"
+)
+
+
+def derivative_of(key: str, state_names: list[str] | Any) -> str | None:
+    """The state variable ``key`` writes the derivative of, as other tools do, or None.
+
+    >>> [derivative_of(k, ["x", "T"]) for k in ("x'", "dx/dt", "der(x)", "Tdot", "dT", "y'")]
+    ['x', 'x', 'x', 'T', 'T', None]
+    """
+    found = _DERIVATIVE.fullmatch(key.strip())
+    if found is None:
+        return None
+    name = next(v for v in found.groupdict().values() if v is not None)
+    return name if name in state_names else None
+
+
+def derivative_hint(key: str, state_names: list[str] | Any) -> str:
+    """``": a flow is keyed by ..."`` for a flow key that writes a derivative, else ``""``."""
+    name = derivative_of(key, state_names)
+    if name is None:
+        return ""
+    return (
+        f": a flow is keyed by the state variable itself, and its value is the derivative: "
+        f"write {name}: ..."
+    )
 
 
 def describe_path(path: tuple[Any, ...]) -> str:
@@ -121,9 +156,12 @@ def validation_problems(
                 message = "must not be empty"
             if loc and loc[-1] == "[key]":  # a mapping key: point at the key itself
                 key_path = loc[:-1]
-                problems.append(
-                    (positions.key(key_path), f"{describe_path(key_path)}: the key {message}")
-                )
+                said = f"{describe_path(key_path)}: the key {message}"
+                if len(key_path) >= 2 and key_path[-2] == "flow" and isinstance(data, dict):
+                    state = data.get("state")
+                    hint = derivative_hint(str(key_path[-1]), state if isinstance(state, dict) else [])
+                    said = f"{describe_path(key_path)}{hint}" if hint else said
+                problems.append((positions.key(key_path), said))
                 continue
             problems.append((positions.value(loc), f"{describe_path(loc)}: {message}{shown}"))
     return problems

@@ -169,6 +169,38 @@ MISTAKES = [
         12,
         ("flow of 'heigth': not a state variable", "did you mean 'height'?"),
     ),
+    # a derivative written as other tools write it (before: "not a state variable",
+    # or "the key must be a name")
+    Mistake(
+        "flow-keyed-as-matlab-derivative",
+        ball("flow: {height: velocity,", "flow: {\"height'\": velocity,"),
+        10,
+        12,
+        ("locations.falling.flow.height'", "a flow is keyed by the state variable itself",
+         "write height: ..."),
+    ),
+    Mistake(
+        "flow-keyed-as-modelica-derivative",
+        ball("flow: {height: velocity,", "flow: {der(height): velocity,"),
+        10,
+        12,
+        ("a flow is keyed by the state variable itself", "write height: ..."),
+    ),
+    Mistake(
+        "flow-keyed-as-dot-name",
+        ball("flow: {height: velocity,", "flow: {height_dot: velocity,"),
+        10,
+        12,
+        ("flow of 'height_dot': not a state variable: a flow is keyed by the state "
+         "variable itself, and its value is the derivative: write height: ...",),
+    ),
+    Mistake(
+        "flow-of-a-variable-in-another-case",
+        ball("flow: {height: velocity,", "flow: {Height: velocity,"),
+        10,
+        12,
+        ("flow of 'Height': not a state variable; did you mean 'height'?",),
+    ),
     Mistake(
         "undeclared-label",
         ball("    to: falling\n", "    to: falling\n    label: bounce\n"),
