@@ -124,7 +124,8 @@ def validation_problems(
             parent, key = loc[:-1], str(loc[-1])
             model = _model_at(root, parent)
             valid = _field_names(model) if model else []
-            hint = closest(key, valid)
+            meant = _KEY_SYNONYMS.get(key.lower())
+            hint = f"; did you mean '{meant}'?" if meant in valid else closest(key, valid)
             if not hint and valid:
                 hint = f"; valid keys here: {', '.join(valid)}"
             where = describe_path(parent)
@@ -145,6 +146,10 @@ def validation_problems(
             got = _value_at(data, loc)
             shown = f" (got {_short(got)})" if got is not _MISSING else ""
             message = item["msg"]
+            plain = _plain_type_message(kind, loc, got)
+            if plain is not None:
+                problems.append((positions.value(loc), f"{describe_path(loc)}: {plain}"))
+                continue
             if kind == "string_pattern_mismatch":
                 message = "must be a name: an ASCII letter or _ then ASCII letters, digits or _"
             elif (
@@ -168,6 +173,42 @@ def validation_problems(
 
 
 _MISSING = object()
+
+_KEY_SYNONYMS = {
+    "transitions": "edges", "jumps": "edges", "modes": "locations", "states": "state",
+    "variables": "state", "vars": "state", "init": "initial", "initial_value": "initial",
+    "x0": "initial", "start": "initial", "params": "parameters", "constants": "parameters",
+    "ode": "flow", "odes": "flow", "dynamics": "flow", "derivatives": "flow", "der": "flow",
+    "inv": "invariant", "condition": "guard", "when": "guard", "update": "reset",
+    "assign": "reset", "assignment": "reset", "assignments": "reset", "action": "reset",
+    "outputs": "signals", "source": "from", "target": "to", "dest": "to",
+}  # fmt: skip
+"""Keys other tools (and textbooks) use, and ours: suggested where ours is valid."""
+
+_CONDITIONS = ("guard", "invariant", "when", "always", "eventually")
+
+
+def _plain_type_message(kind: str, loc: tuple[Any, ...], got: Any) -> str | None:
+    """A message without pydantic's words for the type errors a first spec makes, or None."""
+    if kind == "model_type" and len(loc) == 2 and loc[0] == "state":
+        shown = _short(got) if got is not _MISSING else "..."
+        return (
+            f"a state variable is a mapping: write {loc[1]}: {{initial: {shown}}} "
+            "(with bounds: and unit: if you like)"
+        )
+    if kind in ("model_type", "dict_type"):
+        return f"expected a mapping of names (got {_short(got)})"
+    if kind in ("float_type", "float_parsing") and isinstance(got, str):
+        return (
+            f"expected a number, got the text {got!r} (a unit goes under a state "
+            "variable's or signal's unit:, not in the value)"
+            if any(c.isalpha() for c in got) and any(c.isdigit() for c in got)
+            else None
+        )
+    if kind == "string_type" and loc and loc[-1] in _CONDITIONS and isinstance(got, list):
+        joined = " and ".join(str(c) for c in got)
+        return f"one condition, not a list: join them with 'and': {joined}"
+    return None
 
 
 def _is_tag(part: str) -> bool:

@@ -201,6 +201,45 @@ MISTAKES = [
         12,
         ("flow of 'Height': not a state variable; did you mean 'height'?",),
     ),
+    # first specs written as other tools or textbooks write them (before: pydantic's
+    # "valid dictionary or instance of StateVarSpec", "did you mean 'locations'?" for
+    # `transitions`, 'unit' for `init`)
+    Mistake(
+        "state-variable-as-a-number",
+        ball("  velocity: {initial: 0.0}", "  velocity: 0.0"),
+        5,
+        13,
+        ("state.velocity: a state variable is a mapping: write velocity: {initial: 0.0}",),
+    ),
+    Mistake(
+        "transitions-for-edges",
+        ball("edges:", "transitions:"),
+        12,
+        1,
+        ("unknown key 'transitions' in the top level; did you mean 'edges'?",),
+    ),
+    Mistake(
+        "init-for-initial",
+        ball("  height: {initial: 10.0}", "  height: {init: 10.0}"),
+        4,
+        12,
+        ("unknown key 'init' in state.height; did you mean 'initial'?",),
+    ),
+    Mistake(
+        "invariant-as-a-list",
+        ball("invariant: height >= 0", "invariant: [height >= 0, velocity <= 100]"),
+        11,
+        16,
+        ("locations.falling.invariant: one condition, not a list: join them with 'and': "
+         "height >= 0 and velocity <= 100",),
+    ),
+    Mistake(
+        "unit-in-a-value",
+        ball("{g: 9.81,", "{g: 9.81 m/s^2,"),
+        2,
+        17,
+        ("parameters.g: expected a number, got the text '9.81 m/s^2' (a unit goes under",),
+    ),
     Mistake(
         "undeclared-label",
         ball("    to: falling\n", "    to: falling\n    label: bounce\n"),
