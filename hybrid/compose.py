@@ -462,17 +462,23 @@ def check_system(system: System) -> None:
     """Clashing names, unbound or ambiguous inputs: one :class:`SpecError` naming the places."""
     problems: list[tuple[Position, str]] = []
     seen_comp: dict[str, Position] = {}
+    twice: set[str] = set()
     for c in system.components:
         if c.name in seen_comp:
+            twice.add(c.name)
             problems.append(
                 (
                     c.position,
-                    f"component name '{c.name}' is used twice (also at line {seen_comp[c.name].line})",
+                    f"component name '{c.name}' is used twice (also at line "
+                    f"{seen_comp[c.name].line}): give each an `as:` name (the automaton's "
+                    "name is the default)",
                 )
             )
         seen_comp[c.name] = c.position
     owner: dict[str, tuple[str, str, Position]] = {}
     for c in system.components:
+        if c.name in twice:  # its names clash because it is there twice: said above
+            continue
         a = c.automaton
         declared = [(s.name, "state variable", s.position) for s in a.states]
         declared += [(n, "signal", a.signal_positions.get(n, a.position)) for n in a.signal_names]

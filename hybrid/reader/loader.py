@@ -19,7 +19,7 @@ from pydantic import ValidationError
 
 from hybrid.allocation import gc_paused
 from hybrid.compose import System
-from hybrid.errors import Position, SpecError, UsageError, brief
+from hybrid.errors import Position, SpecError, UsageError, brief, did_you_mean
 from hybrid.frames import in_frame_room
 from hybrid.model import Automaton
 from hybrid.reader.build import build_automaton
@@ -176,7 +176,9 @@ def _components(
         except SpecError as exc:
             if exc.position == where and exc.message.endswith(": not found"):
                 exc = SpecError(
-                    f"component spec '{comp.spec}' not found (looked in {base_dir})", where
+                    f"component spec '{comp.spec}' not found (looked in {base_dir})"
+                    + _nearby_spec(base_dir, comp.spec),
+                    where,
                 )
             problems.extend(exc.problems)
             continue
@@ -217,3 +219,12 @@ def _kind(data: Any) -> str:
     if data is None:
         return "nothing"
     return f"a {type(data).__name__} value"
+
+
+def _nearby_spec(base_dir: Path, name: str) -> str:
+    """``"; did you mean 'x.yaml'?"`` for the closest spec file beside the system, or ``""``."""
+    try:
+        found = [p.name for p in base_dir.iterdir() if p.suffix in (".yaml", ".yml")][:1000]
+    except OSError:
+        return ""
+    return did_you_mean(Path(name).name, found)

@@ -126,6 +126,8 @@ def validation_problems(
             valid = _field_names(model) if model else []
             meant = _KEY_SYNONYMS.get(key.lower())
             hint = f"; did you mean '{meant}'?" if meant in valid else closest(key, valid)
+            if not parent and key in _OTHER_KIND and key not in valid:
+                hint = _OTHER_KIND[key]
             if not hint and valid:
                 hint = f"; valid keys here: {', '.join(valid)}"
             where = describe_path(parent)
@@ -182,7 +184,16 @@ _KEY_SYNONYMS = {
     "inv": "invariant", "condition": "guard", "when": "guard", "update": "reset",
     "assign": "reset", "assignment": "reset", "assignments": "reset", "action": "reset",
     "outputs": "signals", "source": "from", "target": "to", "dest": "to",
+    "file": "spec", "path": "spec", "model": "spec", "alias": "as",
 }  # fmt: skip
+
+_OTHER_KIND = {
+    "components": ": components belong to a system, which starts with `system: NAME` "
+    "(this spec starts with `automaton:`)",
+    "locations": ": locations belong to an automaton, which starts with `automaton: NAME` "
+    "(this spec starts with `system:`; its automata are its components' specs)",
+}
+"""A top-level key of the other kind of spec: what the spec's first key should be."""
 """Keys other tools (and textbooks) use, and ours: suggested where ours is valid."""
 
 _CONDITIONS = ("guard", "invariant", "when", "always", "eventually")
@@ -195,6 +206,11 @@ def _plain_type_message(kind: str, loc: tuple[Any, ...], got: Any) -> str | None
         return (
             f"a state variable is a mapping: write {loc[1]}: {{initial: {shown}}} "
             "(with bounds: and unit: if you like)"
+        )
+    if kind == "model_type" and len(loc) == 2 and loc[0] == "components" and isinstance(got, str):
+        return (
+            f"a component is a mapping: write - spec: {got} (with as:, parameters: and "
+            "initial: if you like)"
         )
     if kind in ("model_type", "dict_type"):
         return f"expected a mapping of names (got {_short(got)})"
