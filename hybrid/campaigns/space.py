@@ -325,19 +325,33 @@ def _count(name: str, count: int) -> int:
 
 
 def parse_grid(text: str) -> Axis | tuple[str, int]:
-    """``NAME=LO:HI:N`` (an Axis), or ``NAME=N``: ``N`` values across the declared range.
+    """``NAME=LO:HI:N`` (an Axis), ``NAME=N`` (``N`` values across the declared range), or
+    ``NAME=V1,V2,...`` (those values, in that order; brackets around them are allowed).
 
     Examples
     --------
     >>> parse_grid("init.x=5"), parse_grid("e=0.5:0.9:3").count
     (('init.x', 5), 3)
+    >>> parse_grid("e=0.9,0.5,0.7").given, parse_grid("e=[0.5, 0.7]").given
+    ((0.9, 0.5, 0.7), (0.5, 0.7))
     """
     name, sep, rest = text.partition("=")
+    listed = rest.strip()
+    if listed.startswith("[") and listed.endswith("]"):
+        listed = listed[1:-1]
+    if sep and name.strip() and ":" not in rest and "," in listed:
+        try:
+            values = [float(v) for v in listed.split(",")]
+        except ValueError:
+            raise UsageError(f"'{text}': the listed values must be numbers") from None
+        return Axis.listed(name.strip(), values)
     if sep and name.strip() and ":" not in rest:
         try:
             return name.strip(), int(rest)
         except ValueError:
-            raise UsageError(f"expected NAME=LO:HI:N or NAME=N, got '{text}'") from None
+            raise UsageError(
+                f"expected NAME=LO:HI:N, NAME=N or NAME=V1,V2,..., got '{text}'"
+            ) from None
     return Axis.parse(text, grid=True)
 
 

@@ -47,7 +47,8 @@ def add_campaign_commands(
     p.add_argument("file", metavar="FILE", help="spec or system file")
     p.add_argument("--grid", action="append", default=[], metavar="NAME=LO:HI:N",
                    help="N values from LO to HI (a parameter, init.x or input.u; NAME=N: across "
-                        "the declared set of init.x or input.u); repeatable")  # fmt: skip
+                        "the declared set of init.x or input.u; NAME=V1,V2,...: those "
+                        "values); repeatable")  # fmt: skip
     p.add_argument("--vary", action="append", default=[], metavar="NAME=LO:HI",
                    help="a range to draw --sample points from (a bare init.x or input.u: its "
                         "declared range; none: every declared range); repeatable")  # fmt: skip

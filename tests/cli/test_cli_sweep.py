@@ -108,6 +108,25 @@ def test_invalid_usage_is_exit_2_with_one_line(
         assert len(err.strip().splitlines()) == 1
 
 
+def test_a_grid_of_listed_values_runs_them_in_their_order(
+    spec: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--grid k=0.1,0.01,[...]``: the values as given (the API's grid={"k": [...]}).
+    The heater cools as x = 20 e^(-k t): the requirement x >= 15 fails by t = 5 exactly
+    when 20 e^(-5k) < 15, k > ln(4/3) / 5 = 0.0575 (k = 0.1, not 0.01 or 0.05)."""
+    assert _sweep(spec, "--grid", "k=0.1,0.01,0.05", "--out", "listed.csv") == 1
+    rows = Path("listed.csv").read_text().splitlines()
+    header = rows[0].split(",")
+    table = [dict(zip(header, line.split(","), strict=True)) for line in rows[1:]]
+    assert [float(r["k"]) for r in table] == [0.1, 0.01, 0.05]
+    assert [r["warm.holds"] for r in table] == ["false", "true", "true"]
+    assert float(table[0]["warm.violated_at"]) == pytest.approx(10 * math.log(4 / 3), abs=1e-5)
+    assert _sweep(spec, "--grid", "k=[0.02, 0.03]", "--out", "bracketed.csv") == 0
+    capsys.readouterr()
+    assert _sweep(spec, "--grid", "k=0.1,x", "--out", "r.csv") == 2
+    assert "'k=0.1,x': the listed values must be numbers" in capsys.readouterr().err
+
+
 def test_seeded_samples_from_the_command_line(spec: Path) -> None:
     args = (spec, "--vary", "k=0:0.1", "--sample", "5", "--seed", "3")
     assert _sweep(*args, "--out", "a.csv") in (0, 1)
