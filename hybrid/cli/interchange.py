@@ -49,6 +49,11 @@ def run_import(args: argparse.Namespace) -> int:
     from hybrid.interchange import import_spaceex
 
     xml = Path(args.file)
+    if xml.suffix.lower() in (".yaml", ".yml"):  # the other direction
+        raise UsageError(
+            "import reads a SpaceEx model (.xml); to write this spec as one, "
+            f"use hybrid export spaceex {xml} --out MODEL.xml"
+        )
     writable_directory(args.out, "--out")
     cfg = Path(args.cfg) if args.cfg else None
     if cfg is None and xml.with_suffix(".cfg").is_file():
@@ -71,8 +76,15 @@ def run_export(args: argparse.Namespace) -> int:
     from hybrid.reader.loader import load
 
     xml = Path(args.out)
+    if Path(args.file).suffix.lower() in (".xml", ".cfg"):  # the other direction
+        raise UsageError(
+            "export writes a spec as SpaceEx; to read this SpaceEx model, "
+            f"use hybrid import spaceex {args.file} --out DIR"
+        )
     if xml.suffix.lower() != ".xml":
-        raise UsageError(f"--out must name a .xml file, got '{xml}'")
+        raise UsageError(
+            f"--out must name a .xml file (its .cfg is written beside it), got '{xml}'"
+        )
     writable_file(xml, "--out")
     writable_file(xml.with_suffix(".cfg"), "--out (its .cfg)")
     result = export_spaceex(load(args.file))

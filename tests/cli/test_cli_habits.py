@@ -233,3 +233,22 @@ def test_the_python_api_names_matlab_solvers_too() -> None:
     with pytest.raises(UsageError, match=r"unknown method 'ode23': MATLAB's ode23 is 'RK23'"):
         hybrid.simulate(hybrid.load(REPO / "specs" / "bouncing_ball.yaml"), t_end=1.0,
                         method="ode23")  # fmt: skip
+
+
+def test_import_and_export_given_the_other_direction_say_which_to_use(tmp_path: Path) -> None:
+    """Before: importing a YAML spec said "malformed XML: not well-formed", and exporting a
+    SpaceEx model read the .xml as a spec."""
+    spec = REPO / "specs" / "bouncing_ball.yaml"
+    model = REPO / "tests" / "data" / "spaceex" / "bball" / "bball.xml"
+    done = run_cli("import", "spaceex", spec, "--out", tmp_path / "imported")
+    assert done.returncode == 2 and not (tmp_path / "imported").exists()
+    assert done.stderr.strip() == (
+        f"{spec}: import reads a SpaceEx model (.xml); to write this spec as one, use "
+        f"hybrid export spaceex {spec} --out MODEL.xml"
+    )
+    done = run_cli("export", "spaceex", model, "--out", tmp_path / "out.xml")
+    assert done.returncode == 2 and not (tmp_path / "out.xml").exists()
+    assert done.stderr.strip() == (
+        f"{model}: export writes a spec as SpaceEx; to read this SpaceEx model, use "
+        f"hybrid import spaceex {model} --out DIR"
+    )
