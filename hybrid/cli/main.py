@@ -220,22 +220,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="scipy (reference, the default), compiled (numba, the 'fast' extra) or auto "
         "(compiled when the model is loaded already, else scipy; docs/backends.md)",
     )
-    p.add_argument(
-        "--param",
-        type=_param,
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="override a parameter (comp.NAME in a system)",
-    )
-    p.add_argument(
-        "--init",
-        type=_param,
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="start a state variable at VALUE (named as in the --out columns)",
-    )
+    for flag, meaning in (
+        ("--param", "override a parameter (comp.NAME in a system)"),
+        ("--init", "start a state variable at VALUE (named as in the --out columns)"),
+    ):
+        p.add_argument(
+            flag, type=_param, action="append", default=[], metavar="NAME=VALUE", help=meaning
+        )
     p.add_argument(
         "--initial-location",
         metavar="LOC",
