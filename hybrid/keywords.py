@@ -62,9 +62,11 @@ def named_keywords(function: Callable[P, R]) -> Callable[P, R]:
         try:
             return function(*args, **kwargs)
         except TypeError as exc:
-            refused = [k for k in kwargs if k not in taken]
-            tb = exc.__traceback__
-            if not refused or tb is None or tb.tb_next is not None:  # raised inside
+            tb, said = exc.__traceback__, str(exc)
+            if tb is None or tb.tb_next is not None or "unexpected keyword argument" not in said:
+                raise  # raised inside the function, or a refusal of another kind
+            refused = [k for k in kwargs if k not in taken and f"'{k}'" in said]
+            if not refused:
                 raise
             raise refused_argument(function.__name__, refused[0], taken) from None
 

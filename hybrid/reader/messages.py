@@ -186,6 +186,7 @@ _KEY_SYNONYMS = {
     "outputs": "signals", "source": "from", "target": "to", "dest": "to",
     "file": "spec", "path": "spec", "model": "spec", "alias": "as",
 }  # fmt: skip
+"""Keys other tools (and textbooks) use, and ours: suggested where ours is valid."""
 
 _OTHER_KIND = {
     "components": ": components belong to a system, which starts with `system: NAME` "
@@ -194,7 +195,6 @@ _OTHER_KIND = {
     "(this spec starts with `system:`; its automata are its components' specs)",
 }
 """A top-level key of the other kind of spec: what the spec's first key should be."""
-"""Keys other tools (and textbooks) use, and ours: suggested where ours is valid."""
 
 _CONDITIONS = ("guard", "invariant", "when", "always", "eventually")
 

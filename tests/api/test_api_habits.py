@@ -52,6 +52,15 @@ def test_a_keyword_of_another_tool_is_named_with_ours(
     assert isinstance(caught.value, TypeError) and isinstance(caught.value, hybrid.UsageError)
 
 
+def test_another_refusal_of_the_call_is_left_as_python_says_it() -> None:
+    """A missing model beside a keyword the campaign takes (rtol goes to its **solver):
+    Python's "missing 1 required positional argument", not a refused 'rtol'."""
+    with pytest.raises(TypeError) as caught:
+        hybrid.sweep(t_end=1.0, grid={"e": [0.5]}, rtol=1e-8)  # type: ignore[call-arg]
+    assert not isinstance(caught.value, UnknownArgument)
+    assert "missing 1 required positional argument: 'model'" in str(caught.value)
+
+
 def test_a_type_error_inside_the_function_is_not_taken_for_a_keyword() -> None:
     """Only the refusal of the call itself is renamed: a TypeError raised while the
     function runs (here by the model's input, a function of the wrong arity) is not."""
