@@ -37,6 +37,7 @@ if TYPE_CHECKING:
     from hybrid.simulation.native.many import Ensemble, simulate_many
     from hybrid.simulation.result import Jump, Run, Termination
     from hybrid.simulation.settings import Settings
+del TYPE_CHECKING  # not a name of the package
 
 __all__ = [
     "Automaton",
