@@ -330,7 +330,7 @@ _SCIPY_HABITS = {
 def _no_attribute(found: Mapping[str, Any], name: str) -> str:
     """The message of an attribute a run does not have (``found``: its ``__dict__``)."""
     said = f"'Run' object has no attribute '{name}'"
-    if name.startswith("__"):
+    if name.startswith("_"):  # probes (copy, pickle, IPython's _repr_latex_): no search
         return said
     if name in _SCIPY_HABITS:
         return f"{said}: {_SCIPY_HABITS[name]}"

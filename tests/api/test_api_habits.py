@@ -97,3 +97,6 @@ def test_an_attribute_a_run_lacks_says_where_it_is(backend: str, attribute: str,
     assert str(caught.value).startswith(f"'Run' object has no attribute '{attribute}'")
     assert said in str(caught.value)
     assert not hasattr(run, "__no_such_dunder__")  # copy and pickle probe these
+    with pytest.raises(AttributeError) as probed:  # IPython probes _repr_latex_ and others: no search
+        run._repr_latex_  # noqa: B018
+    assert str(probed.value) == "'Run' object has no attribute '_repr_latex_'"
