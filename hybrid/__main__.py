@@ -10,10 +10,7 @@ are imported ends in one line and exit 130, as it does later
 
 import sys
 
-from hybrid.interrupted import caused_by_interrupt
-
-EXIT_ABANDONED = 130
-"""The exit code of Ctrl-C (:data:`hybrid.cli.exits.EXIT_ABANDONED`, not imported here)."""
+from hybrid.interrupted import EXIT_ABANDONED, caused_by_interrupt
 
 
 def entry() -> int:

@@ -1,4 +1,5 @@
-"""Whether a Ctrl-C is behind an exception: imported before anything else of the command.
+"""Whether a Ctrl-C is behind an exception, and the command's exit code then: imported
+before anything else of the command (``hybrid/__main__.py``).
 
 Examples
 --------
@@ -14,7 +15,11 @@ Examples
 
 from __future__ import annotations
 
-__all__ = ["caused_by_interrupt"]
+__all__ = ["EXIT_ABANDONED", "caused_by_interrupt"]
+
+EXIT_ABANDONED = 130
+"""The exit code of a command stopped by Ctrl-C before it computed anything, or whose
+outputs a Ctrl-C abandoned (:mod:`hybrid.cli.exits` lists it with the others)."""
 
 
 def caused_by_interrupt(exc: BaseException) -> bool:

@@ -8,9 +8,10 @@
   exit 1, outputs written).
 """
 
+from hybrid.interrupted import EXIT_ABANDONED  # defined where `hybrid/__main__` reads it
+
 __all__ = ["EXIT_ABANDONED", "EXIT_FINDINGS", "EXIT_INVALID", "EXIT_OK"]
 
 EXIT_OK = 0
 EXIT_FINDINGS = 1
 EXIT_INVALID = 2
-EXIT_ABANDONED = 130
