@@ -238,12 +238,17 @@ def brief(value: object, width: int = 60) -> str:
 def did_you_mean(name: str, candidates: Iterable[str], cutoff: float = 0.6) -> str:
     """``"; did you mean 'x'?"`` for the closest candidate, or ``""`` if none is close.
 
+    The same name in another case comes first (difflib finds ``x`` no closer to
+    ``X`` than to ``y``).
+
     Examples
     --------
-    >>> did_you_mean("flwo", ["flow", "signals"])
-    "; did you mean 'flow'?"
+    >>> did_you_mean("flwo", ["flow", "signals"]), did_you_mean("X", ["y", "x"])
+    ("; did you mean 'flow'?", "; did you mean 'x'?")
     """
-    match = difflib.get_close_matches(name, list(candidates), n=1, cutoff=cutoff)
+    names = list(candidates)
+    match = [c for c in names if c != name and c.lower() == name.lower()][:1]
+    match = match or difflib.get_close_matches(name, names, n=1, cutoff=cutoff)
     return f"; did you mean '{match[0]}'?" if match else ""
 
 

@@ -22,11 +22,7 @@ __all__ = ["closest", "derivative_hint", "derivative_of", "describe_path", "vali
 
 def closest(name: str, candidates: list[str]) -> str:
     """``"; did you mean 'x'?"`` for the closest candidate, or ``""`` (a looser match
-    than for names in expressions: keys and locations are few; the same name in
-    another case first: ``X`` for ``x``)."""
-    same = [c for c in candidates if c.lower() == name.lower() and c != name]
-    if same:
-        return f"; did you mean '{same[0]}'?"
+    than for names in expressions: keys and locations are few)."""
     return did_you_mean(name, candidates, cutoff=0.5)
 
 
