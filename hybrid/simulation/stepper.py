@@ -9,7 +9,8 @@ through ``np.linalg.norm`` and the smallest step through ``np.nextafter``. About
 15 microseconds a step, on a step that a cheap model computes in 30.
 
 :class:`SteppedRK45` and :class:`SteppedRK23` are scipy's classes with the same
-step written again: the same stages (the same ``np.dot`` of the same arrays),
+step written again: the same stages (the same dot products of the same arrays:
+``a.dot(b)`` is the C function ``np.dot`` wraps, without its dispatch),
 the same step-size control, the same arithmetic in the same order on the same
 doubles, so every accepted step, every rejected one and every interpolant is
 **bit-identical** to scipy's (tests/simulation/test_stepper.py compares them
@@ -84,7 +85,7 @@ class _Stepped:
         self._keeps = keeps
         K = self.K  # written in place at every step: its views are made once
         # per stage: the rows of K so far (transposed), its row of A and its time, as
-        # scipy's rk_step reads them (np.dot of the same views of the same arrays)
+        # scipy's rk_step reads them (dot products of the same views of the same arrays)
         self._stages = [
             (s, K[:s].T, self.A[s][:s], float(self.C[s])) for s in range(1, len(self.C))
         ]
@@ -122,22 +123,22 @@ class _Stepped:
             K[0] = self.f
             if keeps:
                 for s, k_s, a, c in stages:
-                    K[s] = fun(t + c * h, y + np.dot(k_s, a) * h, False)
-                y_new = y + h * np.dot(k_body, B)
+                    K[s] = fun(t + c * h, y + k_s.dot(a) * h, False)
+                y_new = y + h * k_body.dot(B)
                 K[-1] = fun(t + h, y_new)
             elif as_float:
                 for s, k_s, a, c in stages:
-                    K[s] = fun(t + c * h, y + np.dot(k_s, a) * h)
-                y_new = y + h * np.dot(k_body, B)
+                    K[s] = fun(t + c * h, y + k_s.dot(a) * h)
+                y_new = y + h * k_body.dot(B)
                 K[-1] = fun(t + h, y_new)
             else:
                 for s, k_s, a, c in stages:
-                    K[s] = fun(_float64(t + c * h), y + np.dot(k_s, a) * h)
-                y_new = y + h * np.dot(k_body, B)
+                    K[s] = fun(_float64(t + c * h), y + k_s.dot(a) * h)
+                y_new = y + h * k_body.dot(B)
                 K[-1] = fun(_float64(t + h), y_new)
             # the error norm (scipy's norm: np.linalg.norm is sqrt(x . x) for a real vector)
             scale = atol + np.maximum(np.abs(y), np.abs(y_new)) * rtol
-            err = np.dot(k_all, E) * h / scale
+            err = k_all.dot(E) * h / scale
             error_norm = math.sqrt(float(err.dot(err))) / err.size**0.5
             if error_norm < 1:
                 if error_norm == 0:
