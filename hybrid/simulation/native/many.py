@@ -393,41 +393,28 @@ def _run_excursions(model: System, settings: Settings, names: Sequence[str],
                             atol=settings.atol)  # fmt: skip
 
 
-_FMIN, _FMAX = np.fmin.reduce, np.fmax.reduce
-
-
 def _chunk_excursions(ensemble: Ensemble, arrays: b.RunArrays, lo: int) -> None:
     """Record the runs of a chunk (from run ``lo``) whose stored points leave the bounds.
 
-    The chunk is screened at once (every run's valid points, every bounded
-    variable); only the runs found beyond are read one by one.
+    Each run's loop kept the smallest and largest value of each state over its
+    stored points (NaN left out) in its scratch, as a single run's does
+    (:func:`~hybrid.simulation.bounds.bound_excursions` reads them the same way):
+    only the runs whose extremes pass a bound are read, point by point.
     """
     settings, names = ensemble.settings, ensemble.compiled.layout.state_names
     bounded = [var for var in ensemble.model.states
                if not (math.isinf(var.lower) and math.isinf(var.upper)) and var.name in names]  # fmt: skip
     if not bounded:
         return
-    counts = arrays.oi[:, b.I_POINTS] * (arrays.oi[:, b.I_OVERFLOW] == 0)  # overflowed: run alone
-    used = int(counts.max()) if counts.size else 0  # the rows past every run's points: unread
-    limits = []
+    d = len(names)
+    at = int(arrays.wi[0, b.W_EXTREMES])  # the same layout in every row
+    beyond = np.zeros(arrays.oi.shape[0], dtype=bool)
     for var in bounded:
-        x = arrays.pts[:, :used, b.P_X + names.index(var.name)]
+        k = names.index(var.name)
         low = var.lower - (settings.atol + settings.rtol * abs(var.lower))
         high = var.upper + (settings.atol + settings.rtol * abs(var.upper))
-        # the block's extremes (NaN left out) within, the unused tails too: no run's point
-        # beyond (a tail beyond only sends the chunk to the exact look below)
-        if x.size and ((low != -math.inf and _FMIN(x, axis=None) < low)
-                       or (high != math.inf and _FMAX(x, axis=None) > high)):  # fmt: skip
-            limits.append((x, low, high))
-    if not limits:
-        return
-    valid = np.arange(used) < counts[:, None]
-    beyond = np.zeros(valid.shape[0], dtype=bool)
-    for x, low, high in limits:
-        with np.errstate(invalid="ignore"):  # the unused tail of a row holds anything
-            out = (x < low) | (x > high)
-        beyond |= np.any(out & valid, axis=1)
-    d = len(names)
+        beyond |= (arrays.wf[:, at + k] < low) | (arrays.wf[:, at + d + k] > high)
+    beyond &= arrays.oi[:, b.I_OVERFLOW] == 0  # overflowed: run alone, checked there
     for r in np.flatnonzero(beyond).tolist():
         pts = arrays.pts[r, : int(arrays.oi[r, b.I_POINTS])]
         found = _run_excursions(ensemble.model, settings, names, pts[:, b.P_T],
