@@ -99,6 +99,11 @@ class StayEnd:
 class StayIntegrator:
     """Integrates the stays of one run (settings, recorder, Ctrl-C and progress are the run's)."""
 
+    restarts = True
+    """Whether a stay restarts the run's stepped solver rather than constructing one (the
+    same solver to the bit: :meth:`~hybrid.simulation.stepper.SteppedRK45.restart`; off
+    only to compare the two)."""
+
     def __init__(
         self,
         compiled: CompiledModel,
@@ -116,6 +121,8 @@ class StayIntegrator:
         self.stepped_class = stepped(self.solver_class)
         self.spacing = (settings.t_end - settings.t_start) / HORIZON_SAMPLES
         self.last_step: float | None = None
+        self.stepped_solver: Any = None
+        """The run's stepped solver, restarted at each stay (scipy's would be constructed)."""
 
     def stay(self, mode: CompiledMode, t0: float, x0: np.ndarray, j: int, watch: Watch) -> StayEnd:
         """Integrate from ``(t0, x0)`` in ``mode`` (whose point is already stored) to the stay's end."""
@@ -216,13 +223,21 @@ class StayIntegrator:
         settings = self.settings
         kwargs: dict[str, Any] = {}
         solver_class = self.solver_class
-        if self.stepped_class is not None and x0.dtype == np.float64:
+        fun = mode.rhs if mode.flow is None else mode.flow
+        stepped_class = self.stepped_class if x0.dtype == np.float64 else None
+        stepped = stepped_class is not None
+        if stepped_class is not None:
             # the same steps, bit for bit, without scipy's per-step wrapping (stepper)
-            solver_class = self.stepped_class
+            solver_class = stepped_class
             kwargs["keeps"] = mode.flow is not None
         try:
-            return solver_class(
-                mode.rhs if mode.flow is None else mode.flow,
+            last = self.stepped_solver
+            if stepped and last is not None and last.n == x0.size:
+                # the solver scipy would construct here, without constructing it (stepper)
+                last.restart(fun, t0, x0, self._first_step(t0), kwargs["keeps"])
+                return last
+            solver: OdeSolver = solver_class(
+                fun,
                 t0,
                 x0,
                 settings.t_end,
@@ -234,6 +249,9 @@ class StayIntegrator:
             )
         except _SOLVER_ERRORS as exc:
             return self._gave_up(mode, t0, x0, f"solver could not start: {exc}")
+        if stepped and self.restarts:
+            self.stepped_solver = solver
+        return solver
 
     def _first_step(self, t0: float) -> float | None:
         """Start a stay with the last full step of the previous one (None: let scipy choose).

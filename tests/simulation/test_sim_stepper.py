@@ -118,3 +118,106 @@ def test_runs_are_unchanged_by_the_stepper(method: str, monkeypatch: pytest.Monk
         assert np.array_equal(a.t, b.t) and np.array_equal(a.states, b.states)
         assert np.array_equal(a.signals, b.signals)
         assert [jump.t for jump in a.jumps] == [jump.t for jump in b.jumps]
+
+
+def _fields(solver: Any) -> dict[str, Any]:
+    """What a step reads of a solver (scipy's fields; K is scratch the step overwrites)."""
+    names = ("t", "t_old", "t_bound", "y", "y_old", "f", "h_abs", "h_previous", "direction",
+             "status", "n", "rtol", "atol", "max_step", "error_exponent")  # fmt: skip
+    return {name: getattr(solver, name) for name in names}
+
+
+def _same(ours: dict[str, Any], theirs: dict[str, Any], types: bool = False) -> None:
+    """The same values (and, with ``types``, types: the stepper's times are floats, scipy's
+    numpy scalars, after a step)."""
+    for name, value in theirs.items():
+        if isinstance(value, np.ndarray):
+            assert np.array_equal(ours[name], value), name
+        else:
+            assert ours[name] == value, name
+            assert not types or type(ours[name]) is type(value), name
+
+
+@pytest.mark.parametrize(("theirs_class", "ours_class"), PAIRS)
+@pytest.mark.parametrize("first_step", [None, 0.01])
+def test_a_restarted_solver_is_the_one_scipy_constructs(
+    theirs_class: Any, ours_class: Any, first_step: float | None
+) -> None:
+    # one stay of van der Pol, then a new stay of another flow from where it ended: the
+    # restarted solver against scipy's constructed there, field by field and step by step
+    kwargs: dict[str, Any] = {"rtol": 1e-8, "atol": 1e-10, "max_step": 0.5}
+    ours = ours_class(_van_der_pol, 0.0, np.array([2.0, 0.0]), 20.0, **kwargs)
+    for _ in range(30):
+        ours.step()
+    t1, y1 = float(ours.t), ours.y.copy()
+    ours.restart(_forced, t1, y1, first_step, False)
+    theirs = theirs_class(_forced, t1, y1, 20.0, first_step=first_step, **kwargs)
+    _same(_fields(ours), _fields(theirs), types=True)
+    assert ours.nfev == theirs.nfev  # the start's evaluations (the stepper counts none after)
+    for _ in range(40):
+        assert ours.step() == theirs.step()
+        _same(_fields(ours), _fields(theirs))
+        assert np.array_equal(ours.K, theirs.K)
+
+
+def test_a_restart_refuses_what_scipy_refuses() -> None:
+    ours = SteppedRK45(_van_der_pol, 0.0, np.array([2.0, 0.0]), 1.0)
+    for y0, first_step in (([math.nan, 0.0], None), ([1.0, 0.0], 5.0), ([1.0, 0.0], -0.1)):
+        with pytest.raises(ValueError) as theirs:
+            RK45(_forced, 0.5, np.array(y0), 1.0, first_step=first_step)
+        with pytest.raises(ValueError) as refused:
+            ours.restart(_forced, 0.5, np.array(y0), first_step, False)
+        assert str(refused.value) == str(theirs.value)
+
+
+def test_a_restart_takes_the_new_flow_and_its_time(monkeypatch: pytest.MonkeyPatch) -> None:
+    # a stay of a plain right-hand side after one of a stepped flow (keeps): numpy time again
+    seen: list[tuple[type, int]] = []
+
+    def kept(t: Any, y: np.ndarray, at_end: bool = True) -> list[float]:
+        seen.append((type(t), 3))
+        return [-y[0]]
+
+    def plain(t: Any, y: np.ndarray) -> list[float]:
+        seen.append((type(t), 2))
+        return [-y[0]]
+
+    solver = SteppedRK45(kept, 0.0, np.array([1.0]), 2.0, keeps=True)
+    solver.step()
+    solver.restart(plain, float(solver.t), solver.y, None, False)
+    seen.clear()
+    solver.step()
+    assert seen and set(seen) == {(np.float64, 2)}
+    solver.restart(kept, float(solver.t), solver.y, None, True)
+    seen.clear()
+    solver.step()
+    assert seen and set(seen) == {(float, 3)}
+
+
+def test_runs_with_stepped_flows_are_unchanged_by_restarts(monkeypatch: pytest.MonkeyPatch) -> None:
+    # UVMS mission 1: flows whose signals call library functions (the stepped flow keeps
+    # them), 10 stays; the truth is the engine constructing scipy's solver at every stay
+    from hybrid.simulation import stepper
+    from hybrid.simulation.stay import StayIntegrator
+    from uvms_model.missions import specs_dir
+
+    model = hybrid.load(specs_dir() / "uvms_mission_1.yaml")
+    restarts: list[int] = []
+    restart = stepper._Stepped.restart
+
+    def counted(self: Any, *args: Any) -> None:
+        restarts.append(1)
+        restart(self, *args)
+
+    monkeypatch.setattr(stepper._Stepped, "restart", counted)
+    ours = hybrid.simulate(model, t_end=30.0, rtol=1e-8, atol=1e-10, handle_sigint=False)
+    monkeypatch.setattr(StayIntegrator, "restarts", False)
+    count = len(restarts)
+    theirs = hybrid.simulate(model, t_end=30.0, rtol=1e-8, atol=1e-10, handle_sigint=False)
+    assert count >= 2 and len(restarts) == count  # restarted, then not at all
+    assert len(ours.jumps) >= 2
+    assert np.array_equal(ours.t, theirs.t) and np.array_equal(ours.j, theirs.j)
+    assert np.array_equal(ours.states, theirs.states)
+    assert np.array_equal(ours.signals, theirs.signals, equal_nan=True)
+    assert [(jump.t, jump.edge) for jump in ours.jumps] == [(jump.t, jump.edge) for jump in theirs.jumps]
+    assert ours.termination == theirs.termination
