@@ -4,6 +4,8 @@ The stay owns its solver (one of scipy's ``OdeSolver`` classes, stepped one
 accepted step at a time, as :func:`scipy.integrate.solve_ivp` does inside) so
 that every step can be searched for the first crossing of the watch
 (:mod:`~hybrid.simulation.crossing`) before it is accepted into the trajectory.
+For ``RK45`` and ``RK23`` the run's one stepped solver is restarted at each stay,
+as scipy would construct it there (:mod:`~hybrid.simulation.stepper`).
 A stay ends at the first event, at ``t_end``, at a Ctrl-C (after the step in
 progress has been searched, so the last point is on a valid trajectory), or
 when the flow cannot go on:
