@@ -15,6 +15,8 @@ Examples
 from __future__ import annotations
 
 import difflib
+import os
+import sys
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -31,6 +33,7 @@ __all__ = [
     "UsageError",
     "brief",
     "did_you_mean",
+    "users_stacklevel",
 ]
 
 
@@ -258,3 +261,23 @@ class Note(UserWarning):
     Raised as a warning (``warnings.warn``), so a program decides what to do with
     it; the command line prints each as one line, ``hybrid: note: message``.
     """
+
+
+def users_stacklevel() -> int:
+    """The ``stacklevel`` of the user's call, for a ``warnings.warn`` made by the caller.
+
+    Counted from the function that calls this (1) back to the first frame outside
+    the ``hybrid`` package, however many of ours lie between: a warning points at
+    the line of the user's program that led to it, wherever inside ``hybrid`` it is
+    raised.
+    """
+    frame = sys._getframe(1)
+    level = 1
+    while frame.f_back is not None and frame.f_code.co_filename.startswith(_PACKAGE):
+        frame = frame.f_back
+        level += 1
+    return level
+
+
+_PACKAGE = os.path.dirname(__file__) + os.sep
+"""The directory of the ``hybrid`` package (with its separator)."""

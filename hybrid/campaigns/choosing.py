@@ -33,7 +33,7 @@ from typing import Any
 from hybrid.campaigns.executors import Executor, InProcess, LocalPool
 from hybrid.campaigns.runs import RunPlan, load_engine, run_point
 from hybrid.campaigns.targets import split
-from hybrid.errors import Note, UsageError
+from hybrid.errors import Note, UsageError, users_stacklevel
 
 __all__ = ["BackendNote", "refuse_compiled", "resolve_backend", "settle"]
 
@@ -64,7 +64,8 @@ def resolve_backend(model: Any, points: Sequence[dict[str, float]], plan: RunPla
                     method=str(plan.solver.get("method", "RK45")), inputs=held,
                     run_s=run_s if points else None)  # fmt: skip
     if announce:
-        warnings.warn(BackendNote(f"backend auto: {choice.backend} ({choice.reason})"), stacklevel=2)
+        warnings.warn(BackendNote(f"backend auto: {choice.backend} ({choice.reason})"),
+                      stacklevel=users_stacklevel())
     return replace(plan, backend=choice.backend, requested="auto")
 
 

@@ -15,7 +15,9 @@ that variable's bounds and names the first of them, with its ``t`` and ``j``.
 Examples
 --------
 >>> import numpy as np
->>> from hybrid.model import StateVar
+>>> from hybrid.errors import users_stacklevel
+from hybrid.errors import users_stacklevel
+from hybrid.model import StateVar
 >>> h = StateVar("h", 1.0, lower=0.0, upper=3.0)
 >>> t, j = np.array([0.0, 1.0, 2.0]), np.array([0, 0, 0])
 >>> states = np.array([[1.0], [3.5], [4.0]])
@@ -27,7 +29,6 @@ Examples
 from __future__ import annotations
 
 import math
-import sys
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -36,6 +37,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from hybrid.errors import users_stacklevel
 from hybrid.model import StateVar
 
 __all__ = [
@@ -159,24 +161,9 @@ def bound_excursions(
 def warn_excursions(found: Sequence[BoundExcursion], stacklevel: int | None = None) -> None:
     """One :class:`BoundsWarning` per excursion (one per variable), at the user's call
     (``stacklevel``: else the first caller outside hybrid)."""
-    level = stacklevel or _users_call()
+    level = stacklevel or users_stacklevel()
     for excursion in found:
         warnings.warn(excursion.message, BoundsWarning, stacklevel=level)
-
-
-def _users_call() -> int:
-    """The ``stacklevel`` (for the function that calls this) of the first frame outside the
-    ``hybrid`` package: the user's call, however many of our frames lie between."""
-    frame = sys._getframe(1)
-    level = 1
-    while frame.f_back is not None and frame.f_code.co_filename.startswith(_PACKAGE):
-        frame = frame.f_back
-        level += 1
-    return level
-
-
-_PACKAGE = __file__.rsplit("simulation", 1)[0]
-"""The directory of the ``hybrid`` package (with its separator)."""
 
 
 def warn_ensemble(
@@ -202,7 +189,7 @@ def warn_ensemble(
         for excursion in found[run]:
             counts[excursion.variable] = counts.get(excursion.variable, 0) + 1
             first.setdefault(excursion.variable, (run, excursion))
-    level = stacklevel or _users_call()
+    level = stacklevel or users_stacklevel()
     for variable, (run, e) in first.items():
         warnings.warn(
             f"{variable} left its declared bounds [{e.lower:g}, {e.upper:g}] in "

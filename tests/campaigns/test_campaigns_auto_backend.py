@@ -149,8 +149,9 @@ def test_a_short_sweep_with_an_empty_cache_runs_on_scipy_and_says_so(tmp_path: P
             m.setattr(cache, "_LOADED", {})  # as in a process that has loaded nothing compiled
             auto = hybrid.sweep(THERMO, 50.0, grid={"T_high": [21.0, 22.0]}, workers=0,
                                 summaries=("jump_t:1",), backend="auto", handle_sigint=False)  # fmt: skip
-    said = [str(n.message) for n in notes if issubclass(n.category, BackendNote)]
-    assert len(said) == 1 and said[0].startswith("backend auto: scipy (2 runs would save")
+    said = [n for n in notes if issubclass(n.category, BackendNote)]
+    assert len(said) == 1 and str(said[0].message).startswith("backend auto: scipy (2 runs would save")
+    assert said[0].filename == __file__  # the user's call, not a line inside hybrid
     # named: the default (auto) runs compiled in a process with the compiled code loaded
     scipy = hybrid.sweep(THERMO, 50.0, grid={"T_high": [21.0, 22.0]}, workers=0,
                          summaries=("jump_t:1",), handle_sigint=False, backend="scipy")  # fmt: skip

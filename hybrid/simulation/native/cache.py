@@ -51,7 +51,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import ModuleType
 
-from hybrid.errors import Note, UsageError
+from hybrid.errors import Note, UsageError, users_stacklevel
 from hybrid.files import atomic_write
 from hybrid.frames import with_frame_room
 from hybrid.held import HeldCache
@@ -199,7 +199,7 @@ def _discard(directory: Path, why: str) -> None:
     warnings.warn(
         f"the compiled-model cache in {directory} was damaged ({why}); discarded, compiling again",
         CompiledCacheNote,
-        stacklevel=3,
+        stacklevel=users_stacklevel(),
     )
     shutil.rmtree(directory / "__pycache__", ignore_errors=True)
     for name in (MANIFEST, *(p.name for p in directory.glob("*.py"))):

@@ -140,3 +140,13 @@ def test_the_ensemble_loop_is_sealed_and_stays_so(tmp_path: Path) -> None:
     assert done.returncode == 0 and done.stdout.split() == ["2"], done.stderr
     assert "damaged" not in done.stderr, done.stderr
     assert json.loads((folder / MANIFEST).read_text()) == sealed == _digests(folder)
+
+
+def test_the_note_points_at_the_users_call(tmp_path: Path) -> None:
+    from hybrid.simulation.native.cache import CompiledCacheNote, _discard
+
+    (tmp_path / "model.py").write_text("")
+    with pytest.warns(CompiledCacheNote, match="was damaged [(]a test[)]") as notes:
+        _discard(tmp_path, "a test")
+    assert [note.filename for note in notes] == [__file__]
+    assert not (tmp_path / "model.py").exists()  # discarded: compiled again on the next load
