@@ -15,9 +15,7 @@ that variable's bounds and names the first of them, with its ``t`` and ``j``.
 Examples
 --------
 >>> import numpy as np
->>> from hybrid.errors import users_stacklevel
-from hybrid.errors import users_stacklevel
-from hybrid.model import StateVar
+>>> from hybrid.model import StateVar
 >>> h = StateVar("h", 1.0, lower=0.0, upper=3.0)
 >>> t, j = np.array([0.0, 1.0, 2.0]), np.array([0, 0, 0])
 >>> states = np.array([[1.0], [3.5], [4.0]])
