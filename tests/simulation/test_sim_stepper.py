@@ -154,6 +154,12 @@ def test_a_restarted_solver_is_the_one_scipy_constructs(
     theirs = theirs_class(_forced, t1, y1, 20.0, first_step=first_step, **kwargs)
     _same(_fields(ours), _fields(theirs), types=True)
     assert ours.nfev == theirs.nfev  # the start's evaluations (the stepper counts none after)
+    # every field scipy's constructor sets, so that a new one in a later scipy is noticed
+    wrappers = {"fun", "fun_single", "fun_vectorized", "_fun"}
+    assert set(theirs.__dict__) <= set(ours.__dict__)
+    _same({k: ours.__dict__[k] for k in theirs.__dict__ if k not in wrappers | {"K"}},
+          {k: v for k, v in theirs.__dict__.items() if k not in wrappers | {"K"}}, types=True)  # fmt: skip
+    assert ours.K.shape == theirs.K.shape and ours.K.dtype == theirs.K.dtype
     for _ in range(40):
         assert ours.step() == theirs.step()
         _same(_fields(ours), _fields(theirs))
