@@ -13,7 +13,7 @@ step written again: the same stages (the same dot products of the same arrays:
 ``a.dot(b)`` is the C function ``np.dot`` wraps, without its dispatch),
 the same step-size control, the same arithmetic in the same order on the same
 doubles, so every accepted step, every rejected one and every interpolant is
-**bit-identical** to scipy's (tests/simulation/test_stepper.py compares them
+**bit-identical** to scipy's (tests/simulation/test_sim_stepper.py compares them
 step by step). What differs is only how the numbers travel: the right-hand side
 is called directly, its list written into the stage row (the same conversion
 ``np.asarray`` makes), the times are Python floats. The right-hand side still
