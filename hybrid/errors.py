@@ -17,7 +17,7 @@ from __future__ import annotations
 import difflib
 import os
 import sys
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 __all__ = [
@@ -238,19 +238,29 @@ def brief(value: object, width: int = 60) -> str:
     return text if len(text) <= width else text[: width - 3] + "..."
 
 
-def did_you_mean(name: str, candidates: Iterable[str], cutoff: float = 0.6) -> str:
+def did_you_mean(
+    name: str,
+    candidates: Iterable[str],
+    cutoff: float = 0.6,
+    aliases: Mapping[str, str] | None = None,
+) -> str:
     """``"; did you mean 'x'?"`` for the closest candidate, or ``""`` if none is close.
 
-    The same name in another case comes first (difflib finds ``x`` no closer to
-    ``X`` than to ``y``).
+    First another tool's spelling of a candidate (``aliases``: lowercased spelling to
+    ours, where that is a candidate), then the same name in another case (difflib
+    finds ``x`` no closer to ``X`` than to ``y``), then the closest by difflib.
 
     Examples
     --------
     >>> did_you_mean("flwo", ["flow", "signals"]), did_you_mean("X", ["y", "x"])
     ("; did you mean 'flow'?", "; did you mean 'x'?")
+    >>> did_you_mean("RelTol", ["rtol", "atol"], aliases={"reltol": "rtol"})
+    "; did you mean 'rtol'?"
     """
     names = list(candidates)
-    match = [c for c in names if c != name and c.lower() == name.lower()][:1]
+    meant = aliases.get(name.lower()) if aliases else None
+    match = [meant] if meant in names else []
+    match = match or [c for c in names if c != name and c.lower() == name.lower()][:1]
     match = match or difflib.get_close_matches(name, names, n=1, cutoff=cutoff)
     return f"; did you mean '{match[0]}'?" if match else ""
 

@@ -79,9 +79,7 @@ def refused_argument(name: str, keyword: str, taken: Sequence[str]) -> Exception
     from hybrid.errors import UnknownArgument, did_you_mean
 
     said = f"{name}() got an unexpected keyword argument '{keyword}'"
-    meant = _HABITS.get(keyword.lower())
-    if meant in taken:
-        return UnknownArgument(f"{said}; did you mean '{meant}'?{_WHY.get(keyword, '')}")
-    if keyword in _WHY:
+    if keyword in _WHY and _HABITS.get(keyword.lower()) not in taken:  # nothing to name
         return UnknownArgument(said + _WHY[keyword])
-    return UnknownArgument(said + did_you_mean(keyword, [t for t in taken if t != "self"]))
+    meant = did_you_mean(keyword, [t for t in taken if t != "self"], aliases=_HABITS)
+    return UnknownArgument(said + meant + _WHY.get(keyword, ""))

@@ -68,10 +68,7 @@ class _Parser(argparse.ArgumentParser):
 
             given, _, listed = message.split(": invalid choice: '", 1)[1].partition("'")
             choices = re.findall(r"'([^']*)'", listed)
-            meant = _CHOICE_HABITS.get(given.lower())
-            message += f"; did you mean '{meant}'?" if meant in choices else did_you_mean(
-                given, choices
-            )
+            message += did_you_mean(given, choices, aliases=_CHOICE_HABITS)
         sys.stderr.write(f"hybrid: error: {message}\n")
         raise SystemExit(EXIT_INVALID)
 
@@ -111,12 +108,13 @@ def _flag_hint(word: str, flags: Sequence[str]) -> str:
     ("; did you mean '--t-end'?", "; did you mean '--out'?")
     """
     name = word.split("=", 1)[0]
-    for meant in (_FLAG_HABITS.get(name.lower()), name.replace("_", "-").lower()):
-        if meant in flags:
-            return f"; did you mean '{meant}'?"
+    spelled = name.replace("_", "-").lower()  # `--t_end`, `--RTOL` (no other tool's spelling
+    # in _FLAG_HABITS turns into one of our flags so: the order of the two does not matter)
+    if spelled in flags:
+        return f"; did you mean '{spelled}'?"
     from hybrid.errors import did_you_mean
 
-    return did_you_mean(name, [f for f in flags if f.startswith("--")])
+    return did_you_mean(name, [f for f in flags if f.startswith("--")], aliases=_FLAG_HABITS)
 
 
 def _param(text: str) -> tuple[str, float]:

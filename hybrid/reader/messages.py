@@ -20,10 +20,11 @@ from hybrid.reader.yamlpos import PositionMap
 __all__ = ["closest", "derivative_hint", "derivative_of", "describe_path", "validation_problems"]
 
 
-def closest(name: str, candidates: list[str]) -> str:
+def closest(name: str, candidates: list[str], aliases: dict[str, str] | None = None) -> str:
     """``"; did you mean 'x'?"`` for the closest candidate, or ``""`` (a looser match
-    than for names in expressions: keys and locations are few)."""
-    return did_you_mean(name, candidates, cutoff=0.5)
+    than for names in expressions: keys and locations are few; ``aliases`` as for
+    :func:`~hybrid.errors.did_you_mean`)."""
+    return did_you_mean(name, candidates, cutoff=0.5, aliases=aliases)
 
 
 _DERIVATIVE = re.compile(
@@ -120,8 +121,7 @@ def validation_problems(
             parent, key = loc[:-1], str(loc[-1])
             model = _model_at(root, parent)
             valid = _field_names(model) if model else []
-            meant = _KEY_SYNONYMS.get(key.lower())
-            hint = f"; did you mean '{meant}'?" if meant in valid else closest(key, valid)
+            hint = closest(key, valid, aliases=_KEY_SYNONYMS)
             if not parent and key in _OTHER_KIND and key not in valid:
                 hint = _OTHER_KIND[key]
             if not hint and valid:
