@@ -223,22 +223,17 @@ class StayIntegrator:
                 f"the flow of {mode.name} gives {bad}' = {value} (at t={t0:.9g})",
             )
         settings = self.settings
-        kwargs: dict[str, Any] = {}
-        solver_class = self.solver_class
         fun = mode.rhs if mode.flow is None else mode.flow
-        stepped_class = self.stepped_class if x0.dtype == np.float64 else None
-        stepped = stepped_class is not None
-        if stepped_class is not None:
-            # the same steps, bit for bit, without scipy's per-step wrapping (stepper)
-            solver_class = stepped_class
-            kwargs["keeps"] = mode.flow is not None
+        keeps = mode.flow is not None
+        # RK45 and RK23 stepped: the same steps, bit for bit, without scipy's per-step wrapping
+        stepped = self.stepped_class if x0.dtype == np.float64 else None
+        last = self.stepped_solver
         try:
-            last = self.stepped_solver
-            if stepped and last is not None and last.n == x0.size:
+            if stepped is not None and last is not None and last.n == x0.size:
                 # the solver scipy would construct here, without constructing it (stepper)
-                last.restart(fun, t0, x0, self._first_step(t0), kwargs["keeps"])
+                last.restart(fun, t0, x0, self._first_step(t0), keeps)
                 return last
-            solver: OdeSolver = solver_class(
+            solver: OdeSolver = (stepped or self.solver_class)(
                 fun,
                 t0,
                 x0,
@@ -247,11 +242,11 @@ class StayIntegrator:
                 atol=settings.atol,
                 max_step=settings.max_step,
                 first_step=self._first_step(t0),
-                **kwargs,
+                **({"keeps": keeps} if stepped is not None else {}),
             )
         except _SOLVER_ERRORS as exc:
             return self._gave_up(mode, t0, x0, f"solver could not start: {exc}")
-        if stepped and self.restarts:
+        if stepped is not None and self.restarts:
             self.stepped_solver = solver
         return solver
 
