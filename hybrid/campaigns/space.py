@@ -339,20 +339,18 @@ def parse_grid(text: str) -> Axis | tuple[str, int]:
     listed = rest.strip()
     if listed.startswith("[") and listed.endswith("]"):
         listed = listed[1:-1]
-    if sep and name.strip() and ":" not in rest and "," in listed:
+    if not (sep and name.strip() and ":" not in rest):
+        return Axis.parse(text, grid=True)
+    if "," in listed:
         try:
             values = [float(v) for v in listed.split(",")]
         except ValueError:
             raise UsageError(f"'{text}': the listed values must be numbers") from None
         return Axis.listed(name.strip(), values)
-    if sep and name.strip() and ":" not in rest:
-        try:
-            return name.strip(), int(rest)
-        except ValueError:
-            raise UsageError(
-                f"expected NAME=LO:HI:N, NAME=N or NAME=V1,V2,..., got '{text}'"
-            ) from None
-    return Axis.parse(text, grid=True)
+    try:
+        return name.strip(), int(rest)
+    except ValueError:
+        raise UsageError(f"expected NAME=LO:HI:N, NAME=N or NAME=V1,V2,..., got '{text}'") from None
 
 
 def ranges_axes(
