@@ -3,8 +3,9 @@ interpreter with ``jax`` and ``diffrax`` (CPU).
 
 Needs none of hybrid. Each run is 20 switches of the thermostat (``specs/
 thermostat.yaml``: ``T' = -a (T - T_out)`` off, ``a (T_heat - T)`` on,
-switching at ``T_low`` and ``T_high``) from its initial temperature: a
-``lax.scan`` of 20 ``diffeqsolve`` calls (Dopri5, the PID step controller at
+switching at ``T_low`` and ``T_high``) from its initial temperature, ended as
+hybrid's ``max_jumps=20`` ends it, at the 21st switch located: a
+``lax.scan`` of 21 ``diffeqsolve`` calls (Dopri5, the PID step controller at
 the given ``rtol``/``atol``), each ended by a ``diffrax.Event`` on the guard's
 level with Newton's root finder (``optimistix``) to ``1e-12``, the next started
 from the event's state in the other mode: the same hybrid run as hybrid's, by
@@ -29,6 +30,8 @@ import numpy as np
 
 A, T_OUT, T_HEAT, T_LOW, T_HIGH = 0.1, 10.0, 30.0, 18.0, 22.0
 SWITCHES = 20
+STAYS = SWITCHES + 1
+"""A run of ``max_jumps=SWITCHES`` flows on to the next switch and ends there."""
 RTOL, ATOL = 1e-10, 1e-12
 
 
@@ -79,7 +82,7 @@ def main(n: int, repeats: int) -> None:
             return (t1, y1, jnp.logical_not(on)), t1
 
         _, times = jax.lax.scan(
-            segment, (jnp.float64(0.0), jnp.array([start]), jnp.bool_(False)), None, SWITCHES
+            segment, (jnp.float64(0.0), jnp.array([start]), jnp.bool_(False)), None, STAYS
         )
         return times
 
@@ -93,7 +96,7 @@ def main(n: int, repeats: int) -> None:
         begun = time.process_time()
         ensemble(starts).block_until_ready()
         seconds.append((time.process_time() - begun) / n)
-    truth = np.array([closed_form(float(s)) for s in np.asarray(starts)])
+    truth = np.array([closed_form(float(s), STAYS) for s in np.asarray(starts)])
     print(
         json.dumps(
             {

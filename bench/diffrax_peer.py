@@ -3,7 +3,8 @@
 diffrax runs in the interpreter ``HYBRID_BENCH_DIFFRAX`` names (one with ``jax``
 and ``diffrax``: ``pip install jax diffrax``), or in this one if it imports
 diffrax; without either the row is left out. ``bench/diffrax_driver.py`` builds
-the same runs by hand (20 switches each, Dopri5 at the same tolerances, the
+the same runs by hand (20 switches each and the 21st located, where
+``max_jumps=20`` ends hybrid's run; Dopri5 at the same tolerances, each
 switch located by an event; see its docstring), compiles them once, and times
 them; here ``simulate_many`` of the same initial temperatures is timed after
 each of its calls, so the two alternate. Both are CPU seconds per run (diffrax
@@ -27,7 +28,7 @@ from typing import Any
 import numpy as np
 
 import hybrid
-from bench.diffrax_driver import ATOL, RTOL, SWITCHES, closed_form
+from bench.diffrax_driver import ATOL, RTOL, STAYS, SWITCHES, closed_form
 from bench.harness import Comparison, paired
 
 __all__ = ["interpreter", "run"]
@@ -75,9 +76,10 @@ def run(n: int = 10_000, rounds: int = 3, python: str | None = None) -> Comparis
         ours()
         mine.append((time.process_time() - begun) / n)
         theirs.append(float(reported["per_run_s"]))
-    truth = np.array([closed_form(float(s)) for s in starts])
-    ours_error = max(
-        float(np.max(np.abs(r.jump_times - t))) for r, t in zip(runs, truth, strict=True)
+    truth = np.array([closed_form(float(s), STAYS) for s in starts])
+    ours_error = max(  # the switches taken and the one located where max_jumps ends the run
+        float(np.max(np.abs(np.append(r.jump_times, r.termination.t) - t)))
+        for r, t in zip(runs, truth, strict=True)
     )
     return paired(
         f"simulate_many / diffrax vmap ensemble: {n:,} thermostat runs, per run, rtol 1e-10",

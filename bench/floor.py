@@ -8,7 +8,9 @@ rule (each accepted step sampled on its interpolant at
 sample at or below zero located by Brent's method, ``4 eps`` absolute and
 relative, an exact 0 counting as below; a watch that starts at or below zero
 armed once a sample is above it); a warm start after a jump (the last full
-step's size). The right-hand side, watch and reset of the bouncing ball and
+step's size); the end at ``max_jumps`` as hybrid's (the run flows on after
+its last jump to the next event, locates and records it, and ends there
+without taking it: ``max_jumps`` jumps, ``max_jumps + 1`` stays). The right-hand side, watch and reset of the bouncing ball and
 of the thermostat are written by hand, so the loop calls no function pointer
 and nothing is generated: what a model written once in numba costs, points and
 jumps recorded in preallocated arrays.
@@ -176,6 +178,7 @@ def _simulate(kind: int, p: Any, x0: Any, m0: int, t_start: float, t_end: float,
     """One run: points ``(t, x...)`` into ``pts``, jumps ``(t, before..., after...)`` into ``jps``.
 
     Returns the numbers of points and jumps recorded (a full ``pts`` ends the run).
+    After ``max_jumps`` jumps the run ends at the next event, its point the last.
     """
     d = x0.size
     y = x0.copy()
@@ -274,6 +277,8 @@ def _simulate(kind: int, p: Any, x0: Any, m0: int, t_start: float, t_end: float,
                 pts[n_pts, 0] = event
                 pts[n_pts, 1 : 1 + d] = y_new
                 n_pts += 1
+                if n_jps >= max_jumps:  # hybrid's max_jumps: located, not taken
+                    return n_pts, n_jps
                 jps[n_jps, 0] = event
                 jps[n_jps, 1 : 1 + d] = y_new
                 m = _reset(kind, m, y_new, p)
@@ -282,8 +287,6 @@ def _simulate(kind: int, p: Any, x0: Any, m0: int, t_start: float, t_end: float,
                 for i in range(d):
                     y[i] = y_new[i]
                 t = event
-                if n_jps >= max_jumps:
-                    return n_pts, n_jps
                 break
             if n_pts == pts.shape[0]:
                 return n_pts, n_jps

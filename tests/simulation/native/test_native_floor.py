@@ -22,12 +22,14 @@ _CODE = """
 import json
 import numpy as np
 from bench import floor
-_, ball = floor.single(floor.BALL, np.array([9.81, 0.95]), np.array([10.0, 0.0]), 1e3, 40)
+ball_points, ball = floor.single(floor.BALL, np.array([9.81, 0.95]), np.array([10.0, 0.0]),
+                                1e3, 40)
 p = np.array([0.1, 10.0, 30.0, 18.0, 22.0])
-_, thermo = floor.single(floor.THERMOSTAT, p, np.array([20.0]), 1e4, 20)
+thermo_points, thermo = floor.single(floor.THERMOSTAT, p, np.array([20.0]), 1e4, 20)
 times, counts = floor.ensemble(p, np.array([20.0, 21.0]), 1e4, 3)
 print(json.dumps({"ball": ball.tolist(), "thermo": thermo.tolist(), "many": times.tolist(),
-                  "counts": counts.tolist()}))
+                  "counts": counts.tolist(), "ball_end": ball_points[-1].tolist(),
+                  "thermo_end": thermo_points[-1].tolist()}))
 """
 
 
@@ -43,17 +45,22 @@ def test_floor_meets_the_closed_forms() -> None:
     got = _floor()
     # the ball: first impact at t1 = sqrt(2 h0 / g), then flights of 2 e^k t1; v := -e v
     t1, e = math.sqrt(2 * 10.0 / 9.81), 0.95
-    impacts = [t1 * (1 + 2 * sum(e**i for i in range(1, k))) for k in range(1, 41)]
+    impacts = [t1 * (1 + 2 * sum(e**i for i in range(1, k))) for k in range(1, 42)]
     ball = got["ball"]
     assert len(ball) == 40
-    for (t, h, v, h_after, v_after), exact in zip(ball, impacts, strict=True):
+    # as hybrid's max_jumps: the run ends at the 41st impact, located but not taken
+    t_end, h_end, v_end = got["ball_end"]
+    assert abs(t_end - impacts[40]) < 1e-9 and abs(h_end) < 1e-9 and v_end < 0
+    for (t, h, v, h_after, v_after), exact in zip(ball, impacts[:40], strict=True):
         assert abs(t - exact) < 1e-9
         assert abs(h) < 1e-9 and h_after == 0.0 and v < 0 and v_after == -e * v
     # the thermostat: 20 -> 18 cooling, then 18 <-> 22 each in 10 ln(12/8)
-    switches = [10 * math.log(10 / 8) + k * 10 * math.log(12 / 8) for k in range(20)]
+    switches = [10 * math.log(10 / 8) + k * 10 * math.log(12 / 8) for k in range(21)]
     thermo = got["thermo"]
     assert len(thermo) == 20
-    for k, ((t, before, _), exact) in enumerate(zip(thermo, switches, strict=True)):
+    t_end, temperature = got["thermo_end"]  # the 21st switch, where the run ends
+    assert abs(t_end - switches[20]) < 1e-6 and abs(temperature - 18.0) < 1e-8
+    for k, ((t, before, _), exact) in enumerate(zip(thermo, switches[:20], strict=True)):
         assert abs(t - exact) < 1e-6
         assert abs(before - (18.0 if k % 2 == 0 else 22.0)) < 1e-8
     # the ensemble: each run as alone; from 21 the first switch is at 10 ln(11/8)
