@@ -42,6 +42,7 @@ __all__ = [
     "BoundExcursion",
     "BoundsWarning",
     "bound_excursions",
+    "run_excursions",
     "warn_ensemble",
     "warn_excursions",
 ]
@@ -83,6 +84,8 @@ class BoundExcursion:
 
 _FMIN, _FMAX = np.fmin.reduce, np.fmax.reduce
 
+Extremes = tuple[Sequence[float], Sequence[float]]
+"""Each state's smallest values over a run's points, then its largest (NaN left out)."""
 _Check = tuple[int, StateVar, float, float]
 """A bounded variable's column, the variable, and the values beyond which a point is out."""
 _PLAN: list[tuple[Any, ...] | None] = [None]
@@ -123,7 +126,7 @@ def bound_excursions(
     *,
     rtol: float,
     atol: float,
-    extremes: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+    extremes: Extremes | None = None,
 ) -> tuple[BoundExcursion, ...]:
     """Per bounded state variable, the first stored point beyond its bounds (tolerance above).
 
@@ -132,8 +135,42 @@ def bound_excursions(
     left out), where the run kept them (``run.stored_extremes()``); else
     they are worked out here, a column at a time.
     """
+    return _excursions(_checks(declared, names, rtol, atol), t, j, states, extremes)
+
+
+def run_excursions(declared: Sequence[StateVar], run: Any, *, rtol: float,
+                   atol: float) -> tuple[BoundExcursion, ...]:  # fmt: skip
+    """:func:`bound_excursions` of a :class:`~hybrid.simulation.result.Run`'s stored points.
+
+    Its columns are read only when a bound is to be checked and, where the run
+    kept each state's extremes (a compiled run), only when one lies beyond it: a
+    short run within its bounds costs no column.
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+    >>> run = hybrid.simulate(ball, t_end=1.0)
+    >>> run_excursions(ball.states, run, rtol=1e-6, atol=1e-9)
+    ()
+    """
+    checks = _checks(declared, run.state_names, rtol, atol)
+    if not checks:
+        return ()
+    extremes = run.stored_extremes()
+    if extremes is not None:
+        lows, highs = extremes
+        if not any(lows[k] < low or highs[k] > high for k, _, low, high in checks):
+            return ()
+    t, j, states = run.checked_columns()
+    return _excursions(checks, t, j, states, extremes)
+
+
+def _excursions(checks: list[_Check], t: NDArray[np.float64], j: NDArray[np.int64],
+                states: NDArray[np.float64], extremes: Extremes | None) -> tuple[BoundExcursion, ...]:  # fmt: skip
+    """The first point beyond each of ``checks`` (see :func:`bound_excursions`)."""
     found: list[BoundExcursion] = []
-    for k, var, low, high in _checks(declared, names, rtol, atol):
+    for k, var, low, high in checks:
         column = states[:, k]
         # its extremes (NaN left out) within: no point beyond (half the cost); an infinite
         # side cannot be passed, so its extreme is not looked for

@@ -21,7 +21,7 @@ from hybrid.errors import UsageError
 from hybrid.keywords import named_keywords
 from hybrid.model import Automaton
 from hybrid.progress import Reporter, Tracker
-from hybrid.simulation.bounds import bound_excursions, warn_excursions
+from hybrid.simulation.bounds import run_excursions, warn_excursions
 from hybrid.simulation.result import Run
 from hybrid.simulation.settings import Settings, finite_number, merged_values
 from hybrid.simulation.start import describe_start
@@ -174,10 +174,7 @@ def simulate(
 
         run = simulate_reference(model, settings, initial, inputs, handle_sigint, progressed)
     run.settings["start"] = start
-    run.out_of_bounds = bound_excursions(
-        model.states, run.state_names, *run.checked_columns(), rtol=settings.rtol,
-        atol=settings.atol, extremes=run.stored_extremes(),
-    )  # fmt: skip
+    run.out_of_bounds = run_excursions(model.states, run, rtol=settings.rtol, atol=settings.atol)
     if run.out_of_bounds:
         warn_excursions(run.out_of_bounds)
     if tracker is not None:

@@ -16,12 +16,15 @@ import importlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from hybrid.errors import UnknownName, UsageError
+
+if TYPE_CHECKING:
+    from hybrid.simulation.bounds import Extremes
 
 __all__ = ["CAUSES", "PLOT_BACKEND", "Jump", "RequirementResult", "Run", "Termination"]
 
@@ -197,7 +200,7 @@ class Run:
         making its columns): rows in order, ``j`` as numbers."""
         return self.t, self.j, self.states
 
-    def stored_extremes(self) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+    def stored_extremes(self) -> Extremes | None:
         """The smallest and largest value of each state over the points, NaNs left out, where
         the run kept them as it went (a compiled run); else None (not worked out here)."""
         return None

@@ -49,6 +49,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hybrid.compose import System
+from hybrid.simulation.bounds import Extremes
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.structure import NativeModel
 from hybrid.simulation.result import Jump, Run, Termination
@@ -560,13 +561,14 @@ def run_from(
     return run
 
 
-def _extremes(buf: b.RunArrays, d: int) -> NDArray[np.float64] | None:
-    """The states' smallest, then largest values the loop kept in the run's scratch (None
-    where the scratch is not kept: an ensemble's rows)."""
+def _extremes(buf: b.RunArrays, d: int) -> Extremes | None:
+    """The states' smallest and largest values the loop kept in the run's scratch, as
+    lists (None where the scratch is not kept: an ensemble's rows)."""
     if buf.wi.shape[0] <= b.W_EXTREMES:
         return None
     at = int(buf.wi[b.W_EXTREMES])
-    return buf.wf[at : at + 2 * d].copy()
+    values = buf.wf[at : at + 2 * d].tolist()
+    return values[:d], values[d:]
 
 
 _COLUMNS = frozenset(("t", "j", "location", "states", "signals"))
@@ -609,12 +611,9 @@ class RecordedRun(Run):
         fields = {k: v for k, v in self.__dict__.items() if k != "_extremes"}
         return (_plain_run, (fields,))
 
-    def stored_extremes(self) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
-        extremes = self.__dict__.get("_extremes")
-        if extremes is None:
-            return None
-        d = len(self.state_names)
-        return extremes[:d], extremes[d:]
+    def stored_extremes(self) -> Extremes | None:
+        extremes: Extremes | None = self.__dict__.get("_extremes")
+        return extremes
 
     def checked_columns(self) -> tuple[NDArray[np.float64], Any, NDArray[np.float64]]:
         rows = self.__dict__.get("_rows")
