@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hybrid.errors import UnknownName, UsageError
+from hybrid.errors import UnknownName, UsageError, did_you_mean
 
 if TYPE_CHECKING:
     from hybrid.simulation.bounds import Extremes
@@ -178,10 +178,7 @@ class Run:
             return self.states[:, self.state_names.index(name)]
         if name in self.signal_names:
             return self.signals[:, self.signal_names.index(name)]
-        from difflib import get_close_matches
-
-        close = get_close_matches(name, [*self.state_names, *self.signal_names], n=1)
-        hint = f"; did you mean '{close[0]}'?" if close else ""
+        hint = did_you_mean(name, [*self.state_names, *self.signal_names])
         raise UnknownName(f"no state variable or signal '{name}'{hint}")
 
     def __getattr__(self, name: str) -> Any:
@@ -296,7 +293,6 @@ class Run:
         try:
             import pandas as pd
         except ImportError:
-            from hybrid.errors import UsageError
             from hybrid.version import install_hint
 
             raise UsageError(f"to_pandas needs pandas: {install_hint('pandas')}") from None
@@ -340,7 +336,5 @@ def _no_attribute(found: Mapping[str, Any], name: str) -> str:
     names = (*found.get("state_names", ()), *found.get("signal_names", ()))
     if name in names:
         return f"{said}: a state variable's or signal's column is run[{name!r}]"
-    from hybrid.errors import did_you_mean
-
     public = [a for a in (*dir(Run), *found) if not a.startswith("_")]
     return said + did_you_mean(name, public)

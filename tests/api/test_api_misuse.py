@@ -143,6 +143,8 @@ def test_a_run_is_indexed_by_names_and_says_how_to_get_a_point() -> None:
     with pytest.raises(hybrid.UsageError, match="did you mean 'energy'") as caught:
         run["enrgy"]
     assert isinstance(caught.value, KeyError)  # code that looks names up as in a dict
+    with pytest.raises(hybrid.UsageError, match="'H'; did you mean 'h'"):
+        run["H"]  # MATLAB's capitals
     with pytest.raises(hybrid.UsageError, match=r"run\.t\[k\], run\.states\[k\]"):
         run[0]  # type: ignore[index]
 

@@ -151,6 +151,10 @@ PYTHON = [
         'run = hybrid.simulate(model, t_end=1.0)\nrun["h3"]',
         "hybrid.errors.UnknownName: no state variable or signal 'h3'; did you mean 'h'?",
     ),
+    (  # another case: difflib alone finds 'H' no closer to 'h' than to 'v'
+        'run = hybrid.simulate(model, t_end=1.0)\nrun["H"]',
+        "hybrid.errors.UnknownName: no state variable or signal 'H'; did you mean 'h'?",
+    ),
     (
         'hybrid.simulate(model, t_end="10")',
         "t_end must be a finite time after t_start=0.0, got the string '10': "
@@ -163,7 +167,7 @@ PYTHON = [
 ]
 
 
-@pytest.mark.parametrize(("code", "said"), PYTHON, ids=["did-you-mean", "t_end", "rtol"])
+@pytest.mark.parametrize(("code", "said"), PYTHON, ids=["did-you-mean", "another-case", "t_end", "rtol"])
 def test_a_python_mistake_is_named(code: str, said: str) -> None:
     import subprocess
 
