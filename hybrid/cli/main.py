@@ -332,19 +332,54 @@ def _quiet_after_interrupt(unraisable: Any) -> None:
     as the process ends ("Exception ignored in ..."), which says nothing to the user.
     A Ctrl-C whose ``KeyboardInterrupt`` is raised inside such code (an import's
     module lock is released by a callback) is reported there and dropped by Python:
-    the command would print a traceback and go on. It is raised again as a signal,
-    which the command's handler (or the default one, at its next line) receives.
+    the command would print a traceback and go on. It is delivered again
+    (:func:`_deliver_again`), to the command's handler or, under Python's default
+    one, as a ``KeyboardInterrupt`` in the command's own code.
     """
     if issubclass(unraisable.exc_type, KeyboardInterrupt):
         if not _STOPPED[0]:
-            import signal
-
-            signal.raise_signal(signal.SIGINT)  # ignored once the command is done (entry)
+            _deliver_again()
         return
     interrupts = sys.modules.get("hybrid.simulation.interrupts")  # loaded if Ctrl-C was handled
     seen = interrupts is not None and interrupts.interrupted()
     if not (_STOPPED[0] or seen):
         sys.__unraisablehook__(unraisable)
+
+
+REDELIVERY_DELAY = 0.01
+"""Seconds after which a Ctrl-C dropped under Python's default handler is raised again."""
+
+
+def _deliver_again() -> None:
+    """SIGINT again, for a Ctrl-C Python reported as unraisable and dropped.
+
+    A handler of the command's own (one that counts presses) receives it at once.
+    Python's default handler would raise ``KeyboardInterrupt`` here, inside the
+    hook, where Python reports it as "Exception ignored in sys.unraisablehook" with
+    a traceback and drops it again; so the ``KeyboardInterrupt`` is caught and the
+    signal sent once more by a thread of its own a moment later
+    (:data:`REDELIVERY_DELAY`), when the hook has returned and the command's code
+    runs. Once the command is done, SIGINT is ignored (:func:`entry`), and neither
+    does anything.
+    """
+    import signal
+    import threading
+
+    try:
+        signal.raise_signal(signal.SIGINT)
+    except KeyboardInterrupt:
+        later = threading.Thread(target=_interrupt_main_later, name="hybrid-sigint-again",
+                                 daemon=True)  # fmt: skip
+        with contextlib.suppress(RuntimeError):  # no new thread as the interpreter ends
+            later.start()
+
+
+def _interrupt_main_later() -> None:
+    import _thread
+    import time
+
+    time.sleep(REDELIVERY_DELAY)
+    _thread.interrupt_main()  # nothing if SIGINT is ignored by then
 
 
 @contextlib.contextmanager
