@@ -241,6 +241,8 @@ class EventLoop:
             if self._failed() is not None:
                 return self._eval_failure(t, j, mode)
             chosen = boundary.choose(enabled)
+        if chosen is None and t >= self.settings.t_end:  # at t_end: nothing left to flow
+            return Termination("t_end", t, j, "reached t_end", location=mode.name)
         if chosen is None:
             far = watch.far_edge_left(t, x) if end.kind == "crossing" else None
             if far is not None:  # a disarmed invariant reached the far edge of its band: left

@@ -193,6 +193,37 @@ def test_blocked_at_start_when_the_initial_state_violates_the_invariant(simulate
     assert len(run) == 1
 
 
+# A sawtooth bounded by a clock, as the field's models bound their horizon (HyST's
+# toy_unsafe: `tglobal <= tmax`): x rises at 1 from 5 to 9 (t = 4), falls at 2 to 3
+# (t = 7), rises to 9 (t = 13), falls to 3 (t = 16) and rises again; c = t reaches
+# the invariant's bound 20 exactly at t = 20, where no edge is enabled.
+HORIZON = """
+automaton: sawtooth
+state: {x: {initial: 5.0}, c: {initial: 0.0}}
+locations:
+  up: {flow: {x: 1, c: 1}, invariant: x <= 10 and c <= 20}
+  down: {flow: {x: -2, c: 1}, invariant: x >= 2 and c <= 20}
+edges:
+  - {from: up, to: down, guard: x >= 9}
+  - {from: down, to: up, guard: x <= 3}
+"""
+
+
+def test_an_invariant_bound_reached_at_t_end_ends_the_run_at_t_end(simulate: Simulate) -> None:
+    """At t_end nothing is left to flow: a boundary reached there is not left within the
+    run, so it ends as ``t_end`` (exit 0), as with ``t_end`` a hair earlier; with time
+    left after it, the same boundary blocks."""
+    model = hybrid.load_text(HORIZON)
+    for t_end in (20.0, 19.999):
+        run = simulate(model, t_end=t_end, **TOL)
+        assert (run.termination.cause, run.termination.t) == ("t_end", t_end)
+        np.testing.assert_allclose(run.jump_times, [4.0, 7.0, 13.0, 16.0], atol=1e-9)
+        assert run["c"][-1] == pytest.approx(t_end, abs=1e-9)
+    run = simulate(model, t_end=20.5, **TOL)
+    assert run.termination.cause == "blocked"
+    assert run.termination.t == pytest.approx(20.0, abs=1e-9)
+
+
 def test_a_jump_exactly_at_t_end_gives_its_two_rows_and_ends_there() -> None:
     text = """
 automaton: timed

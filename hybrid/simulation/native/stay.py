@@ -298,6 +298,9 @@ def flow_stay(fns: Fns, step: StepFn, search: SearchFn, decide: DecideFn, tab: I
                         wf[wi[W_FAILX] + i] = wf[wi[W_FLOWX] + i]
                 end_run(oi, of, C_NONFINITE, t_event, j, m, D_EVAL, 0, math.nan, wf, wi)
                 return STAY_DONE, t_event, -1
+            if chosen < 0 and t_event >= t_end:  # at t_end: nothing left to flow
+                end_run(oi, of, C_T_END, t_event, j, m, D_NONE, 0, math.nan, wf, wi)
+                return STAY_DONE, t_event, -1
             if chosen < 0:
                 left = far_edge_left(fns, tab, m, t_event, x, wf, wi) if kind == EV_CROSSING else -1
                 if left < 0:
