@@ -237,8 +237,9 @@ def _system_files(
         rename = {k: v for k, v in rename.items() if k != v}
         if rename:
             block["rename"] = rename
-        if leaf.constants:
-            block["parameters"] = {t.names[k]: v for k, v in leaf.constants.items()}
+        kept_constants = {t.names[k]: v for k, v in leaf.constants.items() if k in t.constants}
+        if kept_constants:
+            block["parameters"] = kept_constants
         start = start_of(leaf, t, init, config)
         notes.extend(start["notes"])
         block["initial"] = {"location": start["location"], "state": start["state"]}

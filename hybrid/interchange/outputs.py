@@ -37,7 +37,15 @@ from hybrid.interchange.translate import Rename, condition_text, number_text
 if TYPE_CHECKING:
     from hybrid.interchange.template import EdgeInfo, LocationInfo
 
-__all__ = ["definition", "identifiers", "output_equations", "outputs", "reads", "unused"]
+__all__ = [
+    "definition",
+    "identifiers",
+    "output_equations",
+    "outputs",
+    "read_names",
+    "reads",
+    "unused",
+]
 
 _TOKEN = re.compile(r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|([A-Za-z_][A-Za-z0-9_]*)")
 
@@ -152,6 +160,25 @@ def outputs(
     return signals
 
 
+def read_names(
+    locations: list[LocationInfo],
+    edges: list[EdgeInfo],
+    signals: dict[str, dict[str, str]],
+    names: dict[str, str],
+) -> set[str]:
+    """Our names the component's flows, invariants, guards, resets and outputs read."""
+    texts: list[str] = []
+    for loc in locations:
+        texts.extend(loc.flow.values())
+        texts.extend(condition_text(c, names.__getitem__) for c in loc.invariant)
+    for edge in edges:
+        texts.append(edge.guard)
+        texts.extend(edge.reset.values())
+    for per_location in signals.values():
+        texts.extend(per_location.values())
+    return identifiers(texts)
+
+
 def unused(
     comp: Component,
     inputs: list[str],
@@ -162,16 +189,7 @@ def unused(
     notes: list[str],
 ) -> list[str]:
     """The inputs nothing of the component reads (once their bounds became ranges)."""
-    texts: list[str] = []
-    for loc in locations:
-        texts.extend(loc.flow.values())
-        texts.extend(condition_text(c, names.__getitem__) for c in loc.invariant)
-    for edge in edges:
-        texts.append(edge.guard)
-        texts.extend(edge.reset.values())
-    for per_location in signals.values():
-        texts.extend(per_location.values())
-    used = identifiers(texts)
+    used = read_names(locations, edges, signals, names)
     dropped = [i for i in inputs if names[i] not in used]
     for var in dropped:
         notes.append(

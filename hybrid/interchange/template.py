@@ -30,7 +30,7 @@ from hybrid.expr.printer import expression_text
 from hybrid.interchange import sxexpr as sx
 from hybrid.interchange.inputs import input_ranges
 from hybrid.interchange.naming import component_name, location_names, ours
-from hybrid.interchange.outputs import outputs, reads, unused
+from hybrid.interchange.outputs import outputs, read_names, reads, unused
 from hybrid.interchange.rectangular import flow_parts, rate_inputs
 from hybrid.interchange.safexml import SourceText
 from hybrid.interchange.sxmodel import Component
@@ -221,6 +221,13 @@ def analyse(
     ]
     dropped = unused(comp, inputs, locations, edges, signals, names, notes)
     inputs = [i for i in inputs if i not in dropped]
+    read = read_names(locations, edges, signals, names)
+    for c in [c for c in constants if names[c] not in read]:
+        notes.append(
+            f"component '{comp.id}': constant '{c}' is read by nothing kept here (no flow, "
+            "invariant, guard, assignment or output): not a parameter here"
+        )
+    constants = [c for c in constants if names[c] in read]
     if component_name(comp.id) != comp.id:
         notes.append(
             f"component id '{comp.id}' is not one of our names: it is "

@@ -189,6 +189,13 @@ def test_bounds_written_with_constants_use_their_values(tmp_path: Path) -> None:
     assert "w: {range: [-0.5, 0.5]}" in result.files["clock.yaml"]
     assert any("written with the constants c" in n and "[-0.5, 0.5]" in n for n in result.notes)
     np.testing.assert_allclose(run.jump_times, [2, 4, 6, 8], atol=1e-9)  # w held at 0
+    # c is read by nothing left once its bounds are the range: no parameter, so `hybrid
+    # check` of the imported files does not warn about a declaration of the importer's
+    assert "parameters" not in result.files["clock.yaml"]
+    assert "parameters" not in result.files[result.top]
+    assert any("constant 'c' is read by nothing kept here" in n for n in result.notes)
+    report = hybrid.check(load(result, tmp_path / "checked"))
+    assert [f.message for f in report.findings if f.rule == "unused-declaration"] == []
 
 
 RAMP = (
