@@ -54,6 +54,12 @@ def run_import(args: argparse.Namespace) -> int:
             "import reads a SpaceEx model (.xml); to write this spec as one, "
             f"use hybrid export spaceex {xml} --out MODEL.xml"
         )
+    if xml.suffix.lower() == ".cfg":  # the configuration given in the model's place
+        model = f"{xml.with_suffix('.xml')}" if xml.with_suffix(".xml").is_file() else "MODEL.xml"
+        raise UsageError(
+            f"this is a SpaceEx configuration (.cfg); give the model (.xml) first: hybrid "
+            f"import spaceex {model} --cfg {xml}"
+        )
     writable_directory(args.out, "--out")
     cfg = Path(args.cfg) if args.cfg else None
     if cfg is None and xml.with_suffix(".cfg").is_file():

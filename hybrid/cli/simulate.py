@@ -51,6 +51,11 @@ def run_simulate(args: argparse.Namespace) -> int:
     interrupts = Interrupts(notify=_notifier(line))
     with interrupts.installed():
         model = load(args.file)
+        if args.initial_location is not None and isinstance(model, System):
+            raise UsageError(
+                "--initial-location applies to an automaton; in a system each component's "
+                "initial location is set in the system file (initial: {location: ...})"
+            )
         parameters = dict(args.param)
         if parameters:
             model = model.with_parameters(parameters)

@@ -256,3 +256,25 @@ def test_import_and_export_given_the_other_direction_say_which_to_use(tmp_path: 
         f"{model}: export writes a spec as SpaceEx; to read this SpaceEx model, use "
         f"hybrid import spaceex {model} --out DIR"
     )
+    # the configuration in the model's place: before, a note that it would use the .cfg
+    # as its own configuration, then "malformed XML" at 1:2
+    cfg = model.with_suffix(".cfg")
+    done = run_cli("import", "spaceex", cfg, "--out", tmp_path / "imported")
+    assert done.returncode == 2 and not (tmp_path / "imported").exists()
+    assert done.stderr.strip() == (
+        f"{cfg}: this is a SpaceEx configuration (.cfg); give the model (.xml) first: "
+        f"hybrid import spaceex {model} --cfg {cfg}"
+    )
+
+
+def test_initial_location_on_a_system_names_the_flag_and_where_to_set_it() -> None:
+    """Before: the API's words, "initial_location applies to an automaton"."""
+    system = REPO / "specs" / "uvms_mission_2.yaml"
+    done = run_cli("simulate", system, "--t-end", "1", "--initial-location", "q1")
+    assert done.returncode == 2
+    assert_no_traceback(done.stderr)
+    assert done.stderr.strip() == (
+        f"{system}: --initial-location applies to an automaton; in a system each "
+        "component's initial location is set in the system file (initial: {location: ...})"
+    )
+

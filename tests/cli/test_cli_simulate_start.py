@@ -67,7 +67,7 @@ def test_initial_location_and_init_start_the_thermostat_heating(tmp_path: Path) 
         (MISSION, ["--init", "phii=1"],
          "initial value for unknown state variable 'phii'; did you mean 'phi'?"),
         (MISSION, ["--initial-location", "q0"],
-         "initial_location applies to an automaton; set it per component"),
+         "--initial-location applies to an automaton; in a system each component"),
     ],
 )  # fmt: skip
 def test_a_bad_start_exits_2_with_one_line(
