@@ -20,6 +20,7 @@ from hybrid.analysis.findings import Finding, Report
 from hybrid.analysis.formats import FORMATS, write
 from hybrid.cli.exits import EXIT_FINDINGS, EXIT_OK
 from hybrid.errors import UsageError
+from hybrid.progress import terminal_reporter
 
 if TYPE_CHECKING:  # the reach modules (scipy) load only when the command runs
     from hybrid.reach.result import PropertyResult, ReachResult
@@ -55,6 +56,9 @@ def add_reach_command(sub: Any, types: Mapping[str, Callable[[str], object]]) ->
         "--plot", metavar="X,Y", help="draw the sets projected on two variables (with --out)"
     )
     p.add_argument("--out", metavar="FIG.svg|png", help="figure file for --plot")
+    p.add_argument(
+        "--quiet", action="store_true", help="no progress line (drawn only on a terminal)"
+    )
 
 
 def _check_args(args: argparse.Namespace) -> None:
@@ -108,7 +112,13 @@ def run_reach(args: argparse.Namespace) -> int:
     if max_jumps is None:
         max_jumps = model.properties.reach_max_jumps
     step = args.step if args.step is not None else model.properties.reach_step
-    result = reach(model, t_end, max_jumps=10 if max_jumps is None else max_jumps, step=step)
+    line = terminal_reporter(args.quiet)
+    try:
+        result = reach(model, t_end, max_jumps=10 if max_jumps is None else max_jumps, step=step,
+                       progress=line)  # fmt: skip
+    finally:
+        if line is not None:
+            line.clear()
     if args.sets is not None:
         from hybrid.files import atomic_write
 

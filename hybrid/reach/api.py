@@ -35,6 +35,7 @@ from hybrid.expr import ir
 from hybrid.frames import in_frame_room
 from hybrid.keywords import named_keywords
 from hybrid.model import Automaton, Forbidden
+from hybrid.progress import Reporter, Tracker
 from hybrid.reach.affine import TIME, Condition, Forms, Rows
 from hybrid.reach.boxes import meets_many
 from hybrid.reach.engine import ReachSet, explore, forms_of, initial_boxes, mode_of
@@ -74,6 +75,7 @@ def reach(
     step: float | None = None,
     witness: bool = True,
     refute_first: bool = False,
+    progress: Reporter | None = None,
 ) -> ReachResult:
     """Over-approximate every state ``model`` reaches within ``t_end`` and ``max_jumps`` jumps.
 
@@ -104,6 +106,10 @@ def reach(
         ``.sets`` is empty, ``.complete`` false and ``first_contact`` ``None``
         (a gate's answer, as a falsifier stops at the first concrete error).
         A proof still needs the whole flowpipe.
+    progress : callable, optional
+        Called with a :class:`hybrid.progress.Status` (``flowpipes`` begun, with
+        the ``sets`` computed and the entry boxes ``waiting``) at most five times
+        a second while the flowpipes are computed, and once when they are done.
 
     Returns
     -------
@@ -142,6 +148,8 @@ def reach(
         raise UsageError(f"step must be a finite number > 0, got {step!r}")
     if isinstance(max_jumps, bool) or not isinstance(max_jumps, int):
         raise UsageError(f"max_jumps must be an integer >= 0, got {max_jumps!r}")
+    if progress is not None and not callable(progress):
+        raise UsageError(f"progress must be a function of a status, got {progress!r}")
     started = time.process_time()
     system = as_system(model)  # the flowpipes' model; the witnesses run the user's
     forms = forms_of(system)
@@ -154,7 +162,11 @@ def reach(
     sets: list[ReachSet] = []
     complete = False
     if not (early and all(e is not None for e in early)):
-        sets, complete = explore(system, t_end=t_end, max_jumps=max_jumps, step=step, forms=forms)
+        pipes = None if progress is None else _Flowpipes(progress)
+        sets, complete = explore(system, t_end=t_end, max_jumps=max_jumps, step=step, forms=forms,
+                                 progress=pipes)  # fmt: skip
+        if pipes is not None:
+            pipes.finish(len(sets), complete)
     grouped: dict[tuple[str, ...], list[ReachSet]] = {}
     for s in sets:  # once: each entry then looks at the modes, not at every set
         grouped.setdefault(s.mode, []).append(s)
@@ -178,6 +190,22 @@ def reach(
         file=model.file,
         source=model,
     )
+
+
+class _Flowpipes:
+    """The flowpipes' progress: :func:`explore`'s callback, feeding a :class:`Tracker`."""
+
+    def __init__(self, report: Reporter) -> None:
+        self.tracker = Tracker("reach", unit="flowpipes", report=report)
+        self.counts = (0, 0, 0)
+
+    def __call__(self, pipes: int, sets: int, waiting: int) -> None:
+        self.counts = (pipes, sets, waiting)
+        self.tracker.update(pipes, sets=sets, waiting=waiting)
+
+    def finish(self, sets: int, complete: bool) -> None:
+        pipes, _, waiting = self.counts
+        self.tracker.finish(pipes, sets=sets, waiting=0 if complete else waiting)
 
 
 def _condition(

@@ -37,7 +37,7 @@ from __future__ import annotations
 import itertools
 import math
 import weakref
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -256,8 +256,12 @@ def explore(
     max_jumps: int,
     step: float,
     forms: Forms | None = None,
+    progress: Callable[[int, int, int], None] | None = None,
 ) -> tuple[list[ReachSet], bool]:
     """Every set reached within ``[0, t_end]`` and ``max_jumps`` jumps, and whether the search finished.
+
+    ``progress(flowpipes, sets, waiting)`` is called as each flowpipe begins: the
+    flowpipes begun, the sets computed, and the entry boxes still waiting.
 
     Raises
     ------
@@ -286,6 +290,8 @@ def explore(
     while waiting:
         mode, lo, hi, jumps = waiting.pop(0)
         pipes += 1
+        if progress is not None:
+            progress(pipes, len(sets), len(waiting))
         if pipes > MAX_FLOWPIPES:
             return sets, False
         if lo[t_index] > t_end:

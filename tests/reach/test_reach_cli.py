@@ -9,16 +9,21 @@ so ``x > 4.3`` is proved and ``x > 4`` refuted (from t = 2.97).
 
 from __future__ import annotations
 
+import importlib
+import io
 import json
 import re
+import sys
 from pathlib import Path
+from typing import Any
 
 import jsonschema
 import numpy as np
 import pytest
-from support import REPO, assert_no_traceback, read_csv, run_cli
+from support import REPO, assert_no_traceback, main_in_process, read_csv, run_cli
 
 import hybrid
+from hybrid.progress import Status, Tracker
 
 HEATER = """automaton: heater
 state: {x: {initial: [1, 2]}}
@@ -221,3 +226,52 @@ def test_a_step_the_bounds_overflow_at_is_refused_at_the_fastest_flow(tmp_path: 
     assert (caught.value.at.line, caught.value.at.column) == (9, 10)  # "      y: -1e6 * y"
     done = run_cli("reach", spec, "--t-end", "1", "--step", "0.1")
     assert done.returncode == 2 and done.stderr.startswith(f"{spec}:9:10: the bounds of location")
+
+
+class _FakeTerminal(io.StringIO):
+    """A stream that says it is a terminal."""
+
+    def isatty(self) -> bool:
+        return True
+
+
+def test_reach_reports_its_flowpipes_as_it_goes() -> None:
+    """The ball from 10 m bounces once before t = 2 (at sqrt(20 / 9.81) = 1.43 s; the next
+    is 2.28 s later): two flowpipes, the first bounce's the second. The last status counts
+    them, the sets of the result, and nothing left waiting."""
+    ball = hybrid.load(REPO / "specs" / "bouncing_ball.yaml")
+    seen: list[Status] = []
+    result = hybrid.reach(ball, t_end=2.0, max_jumps=3, step=0.001, progress=seen.append)
+    last = seen[-1]
+    assert last.final and last.task == "reach" and last.unit == "flowpipes"
+    assert last.done == 2 and dict(last.counters) == {"sets": len(result.sets), "waiting": 0}
+    assert {s.jumps for s in result.sets} == {0, 1}
+    with pytest.raises(hybrid.UsageError, match="progress must be a function of a status"):
+        hybrid.reach(ball, t_end=2.0, progress="yes")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_the_command_draws_its_progress_on_a_terminal_unless_quiet(
+    monkeypatch: pytest.MonkeyPatch, quiet: bool
+) -> None:
+    """Drawn at every flowpipe here (a tracker without its 0.2 s spacing, so that the
+    test does not depend on the machine's speed), and erased before the report."""
+
+    class Eager(Tracker):
+        def __init__(self, *args: Any, **kwargs: Any) -> None:
+            super().__init__(*args, **{**kwargs, "interval": 0.0})
+
+    api = importlib.import_module("hybrid.reach.api")  # hybrid.reach is also the function
+    monkeypatch.setattr(api, "Tracker", Eager)
+    terminal = _FakeTerminal()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    spec = REPO / "specs" / "bouncing_ball.yaml"
+    code = main_in_process("reach", spec, "--t-end", "2", "--step", "0.001",
+                           *(["--quiet"] if quiet else []))  # fmt: skip
+    assert code == 0  # the ball declares no forbidden state: nothing to refute
+    drawn = [part for part in terminal.getvalue().split("\r") if part.startswith("reach: ")]
+    if quiet:
+        assert drawn == [] and "\r" not in terminal.getvalue()
+    else:
+        assert [d.split(",")[0] for d in drawn] == ["reach: 1 flowpipes", "reach: 2 flowpipes"]
+        assert terminal.getvalue().endswith("\r")  # erased
