@@ -182,18 +182,23 @@ def read_names(
 def unused(
     comp: Component,
     inputs: list[str],
-    locations: list[LocationInfo],
-    edges: list[EdgeInfo],
-    signals: dict[str, dict[str, str]],
+    constants: list[str],
+    read: set[str],
     names: dict[str, str],
     notes: list[str],
-) -> list[str]:
-    """The inputs nothing of the component reads (once their bounds became ranges)."""
-    used = read_names(locations, edges, signals, names)
-    dropped = [i for i in inputs if names[i] not in used]
+) -> tuple[list[str], list[str]]:
+    """The inputs and the constants nothing of the component reads (``read``: our names its
+    flows, invariants, guards, resets and outputs read, once input bounds became ranges)."""
+    dropped = [i for i in inputs if names[i] not in read]
     for var in dropped:
         notes.append(
             f"component '{comp.id}': variable '{var}' is declared but nothing reads it (no flow, "
             "invariant, guard, assignment or output): left out"
         )
-    return dropped
+    idle = [c for c in constants if names[c] not in read]
+    for c in idle:
+        notes.append(
+            f"component '{comp.id}': constant '{c}' is read by nothing kept here (no flow, "
+            "invariant, guard, assignment or output): not a parameter here"
+        )
+    return dropped, idle

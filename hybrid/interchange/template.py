@@ -219,15 +219,10 @@ def analyse(
     edges = [
         _edge(comp, i, locations, rename, parsed_resets[i]) for i in range(len(comp.transitions))
     ]
-    dropped = unused(comp, inputs, locations, edges, signals, names, notes)
-    inputs = [i for i in inputs if i not in dropped]
     read = read_names(locations, edges, signals, names)
-    for c in [c for c in constants if names[c] not in read]:
-        notes.append(
-            f"component '{comp.id}': constant '{c}' is read by nothing kept here (no flow, "
-            "invariant, guard, assignment or output): not a parameter here"
-        )
-    constants = [c for c in constants if names[c] in read]
+    dropped, idle = unused(comp, inputs, constants, read, names, notes)
+    inputs = [i for i in inputs if i not in dropped]
+    constants = [c for c in constants if c not in idle]
     if component_name(comp.id) != comp.id:
         notes.append(
             f"component id '{comp.id}' is not one of our names: it is "
