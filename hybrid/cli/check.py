@@ -29,6 +29,7 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import replace
+from pathlib import Path
 from typing import TextIO
 
 from hybrid.analysis import system_graph
@@ -45,7 +46,14 @@ from hybrid.reach.check import check
 from hybrid.reader.loader import load
 from hybrid.reader.project import CheckConfig, read_check_config
 
-__all__ = ["exploration_progress", "once", "run_check", "run_graph"]
+__all__ = [
+    "GRAPH_SUFFIXES",
+    "exploration_progress",
+    "graph_format",
+    "once",
+    "run_check",
+    "run_graph",
+]
 
 
 def run_check(
@@ -181,16 +189,43 @@ def once(reports: Sequence[Report]) -> list[Report]:
     return result
 
 
+GRAPH_SUFFIXES = {".dot": "dot", ".gv": "dot", ".mmd": "mermaid", ".mermaid": "mermaid",
+                  ".svg": "svg", ".png": "png"}  # fmt: skip
+"""The format a file name says, for ``hybrid graph --out``."""
+
+
+def graph_format(fmt: str | None, path: str | None) -> str:
+    """``--format``, else the format ``--out``'s name says, else ``dot``; a UsageError when
+    the two disagree (a ``.svg`` file of DOT text, say).
+
+    Examples
+    --------
+    >>> graph_format(None, "g.svg"), graph_format(None, None), graph_format("mermaid", "g.md")
+    ('svg', 'dot', 'mermaid')
+    """
+    said = GRAPH_SUFFIXES.get(Path(path).suffix.lower()) if path is not None else None
+    if fmt is None:
+        return said or "dot"
+    if said is not None and said != fmt:
+        raise UsageError(
+            f"--out {path}: the name says {said}, --format says {fmt}; leave out --format "
+            f"(the name decides), or name the file .{fmt}"
+        )
+    return fmt
+
+
 def run_graph(
-    file: str, *, fmt: str = "dot", out: TextIO | None = None, path: str | None = None
+    file: str, *, fmt: str | None = None, out: TextIO | None = None, path: str | None = None
 ) -> int:
     """Print the location graph of ``file`` (the reachable product of a system).
 
     ``svg`` and ``png`` are drawn by Graphviz (:mod:`hybrid.export.pictures`);
-    ``path`` writes the output to that file (atomically) instead of ``out``.
-    Raises :class:`hybrid.SpecError` for an invalid spec (the CLI exits 2) and
-    :class:`hybrid.UsageError` when Graphviz is missing.
+    ``path`` writes the output to that file (atomically) instead of ``out``; the
+    format is ``fmt``, else the one ``path``'s name says, else ``dot``
+    (:func:`graph_format`). Raises :class:`hybrid.SpecError` for an invalid spec
+    (the CLI exits 2) and :class:`hybrid.UsageError` when Graphviz is missing.
     """
+    fmt = graph_format(fmt, path)
     writers = DIAGRAM_FORMATS
     if fmt not in writers and fmt not in RENDERED_FORMATS:
         choices = (*writers, *RENDERED_FORMATS)

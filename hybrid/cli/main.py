@@ -257,8 +257,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--format",
         choices=(*DIAGRAM_FORMATS, *RENDERED_FORMATS),
-        default="dot",
-        help="dot and mermaid are text; svg and png are drawn by Graphviz (the 'graph' extra)",
+        default=None,
+        help="dot and mermaid are text; svg and png are drawn by Graphviz (the 'graph' extra);"
+        " default: the one --out's name says (.dot .gv .mmd .svg .png), else dot",
     )
     p.add_argument("--out", metavar="FILE", help="write to FILE instead of stdout")
 

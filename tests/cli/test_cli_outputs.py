@@ -196,3 +196,23 @@ def test_a_run_out_of_memory_ends_in_one_line(
     assert lines[-1].startswith(f"{THERMOSTAT}: out of memory"), done.stderr
     assert "a larger --dt" in lines[-1]
     assert not out.exists()
+
+
+def test_graph_takes_its_format_from_the_out_name_and_refuses_a_contradiction(
+    tmp_path: Path,
+) -> None:
+    """Before: `hybrid graph --out g.svg` wrote DOT text into g.svg, and `--format png --out
+    g.svg` PNG data, both with exit 0 (simulate, sweep and export refuse such names)."""
+    thermostat = SPECS / "thermostat.yaml"
+    for name, starts in (("g.mmd", "stateDiagram-v2"), ("g.gv", "digraph"), ("g.txt", "digraph")):
+        done = run_cli("graph", thermostat, "--out", tmp_path / name)
+        assert done.returncode == 0, done.stderr
+        assert (tmp_path / name).read_text().lstrip().startswith(starts)
+    out = tmp_path / "g.svg"
+    done = run_cli("graph", thermostat, "--format", "png", "--out", out)
+    assert done.returncode == 2 and not out.exists()
+    assert_no_traceback(done.stderr)
+    assert done.stderr.strip() == (
+        f"{thermostat}: --out {out}: the name says svg, --format says png; leave out "
+        "--format (the name decides), or name the file .png"
+    )
