@@ -101,7 +101,7 @@ class Axis:
             try:
                 count = int(parts[2])
             except ValueError:
-                raise UsageError(f"'{text}': N must be a whole number") from None
+                raise UsageError(f"'{text}': N must be a whole number{_colon_hint(name, parts)}") from None
         return cls.of(name, low, high, count)
 
     @classmethod
@@ -322,6 +322,29 @@ def _count(name: str, count: int) -> int:
     if isinstance(count, bool) or not isinstance(count, int) or count < 1:
         raise UsageError(f"{name}: N must be a whole number >= 1, got {count!r}")
     return count
+
+
+def _colon_hint(name: str, parts: Sequence[str]) -> str:
+    """For ``LO:HI:N`` written as MATLAB's ``start:step:stop``, the grid it meant.
+
+    Examples
+    --------
+    >>> _colon_hint("e", ["0.5", "0.1", "0.9"])
+    " (LO:HI:N: N values from LO to HI; MATLAB's start:step:stop 0.5:0.1:0.9 is e=0.5:0.9:5)"
+    >>> _colon_hint("e", ["0", "1", "x"])
+    ' (LO:HI:N: N values from LO to HI)'
+    """
+    said = " (LO:HI:N: N values from LO to HI"
+    try:
+        start, step, stop = (float(p) for p in parts)
+    except ValueError:
+        return said + ")"
+    if not (math.isfinite(start) and math.isfinite(stop) and step > 0 and stop >= start):
+        return said + ")"
+    count = math.floor((stop - start) / step * (1 + 1e-12)) + 1
+    last = start + (count - 1) * step
+    return (f"{said}; MATLAB's start:step:stop {':'.join(p.strip() for p in parts)} is "
+            f"{name}={start:g}:{last:.12g}:{count})")  # fmt: skip
 
 
 def parse_grid(text: str) -> Axis | tuple[str, int]:

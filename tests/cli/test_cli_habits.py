@@ -278,3 +278,16 @@ def test_initial_location_on_a_system_names_the_flag_and_where_to_set_it() -> No
         "component's initial location is set in the system file (initial: {location: ...})"
     )
 
+
+def test_a_grid_written_start_step_stop_names_the_grid_meant(tmp_path: Path) -> None:
+    """MATLAB's 0.5:0.1:0.9 (start:step:stop) is five values: LO:HI:N 0.5:0.9:5 here."""
+    out = tmp_path / "runs.csv"
+    spec = REPO / "specs" / "bouncing_ball.yaml"
+    done = run_cli("sweep", spec, "--grid", "e=0.5:0.1:0.9", "--t-end", "5", "--out", out)
+    assert done.returncode == 2 and not out.exists()
+    assert_no_traceback(done.stderr)
+    assert done.stderr.strip() == (
+        f"{spec}: 'e=0.5:0.1:0.9': N must be a whole number (LO:HI:N: N values from LO to "
+        "HI; MATLAB's start:step:stop 0.5:0.1:0.9 is e=0.5:0.9:5)"
+    )
+
