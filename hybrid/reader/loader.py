@@ -11,6 +11,7 @@ Examples
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -67,11 +68,15 @@ def load(path: str | Path, parameters: Mapping[str, float] | None = None) -> Aut
         return load_document(doc, Path(path).parent, parameters)
 
 
+_SPEC_START = re.compile(r"\s*(\{|(automaton|system)\s*:)")
+"""How the text of a spec on one line starts (``{automaton: x, ...}``, ``automaton: x``)."""
+
+
 def _path_given(path: object) -> str | Path:
     """``path`` if it names a file (bytes decoded); a :class:`UsageError` saying what to pass if not."""
     if isinstance(path, bytes):
         path = os.fsdecode(path)
-    if isinstance(path, str) and "\n" in path:
+    if isinstance(path, str) and ("\n" in path or (_SPEC_START.match(path) and not os.path.exists(path))):
         raise UsageError(
             "load() takes the path of a spec file; this is the text of one: "
             "use hybrid.load_text(text)"

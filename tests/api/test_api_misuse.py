@@ -127,6 +127,9 @@ def test_load_and_load_text_say_which_one_takes_what() -> None:
     text = "automaton: a\nlocations: {only: {}}\n"
     with pytest.raises(hybrid.UsageError, match=r"this is the text of one: use hybrid.load_text\(text\)"):
         hybrid.load(text)
+    for one_line in ("automaton: a", "{automaton: a, locations: {only: {}}}", "  system: s"):
+        with pytest.raises(hybrid.UsageError, match=r"this is the text of one"):
+            hybrid.load(one_line)  # before: "cannot read file: not found"
     with pytest.raises(hybrid.UsageError, match="got NoneType: None"):
         hybrid.load(None)  # type: ignore[arg-type]
     with pytest.raises(hybrid.UsageError, match="load_text\\(\\) takes the YAML text as a str, got NoneType"):
