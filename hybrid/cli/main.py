@@ -94,6 +94,7 @@ _FLAG_HABITS = {
     "--initial": "--init", "--tf": "--t-end", "--tfinal": "--t-end", "--tspan": "--t-end",
     "--tend": "--t-end", "--tmax": "--t-end", "--duration": "--t-end", "--reltol": "--rtol",
     "--abstol": "--atol", "--maxstep": "--max-step", "--solver": "--method",
+    "--grid": "--vary",  # falsify searches ranges: it has no grid
 }  # fmt: skip
 """Flags of other tools (MATLAB's odeset names, C habits) and ours."""
 

@@ -223,6 +223,16 @@ def test_a_flag_from_another_tool_is_named_with_ours(
     assert (captured.out, captured.err) == ("", f"hybrid: error: {said}\n")
 
 
+def test_a_falsify_given_a_grid_is_pointed_at_vary(capsys: pytest.CaptureFixture[str]) -> None:
+    """Before: "did you mean '--dt'?" (difflib's closest flag of falsify)."""
+    from support import SPECS, main_in_process
+
+    words = ["--grid", "e=0:1:5", "--t-end", "5"]
+    assert main_in_process("falsify", SPECS / "bouncing_ball.yaml", *words) == 2
+    captured = capsys.readouterr()
+    assert captured.err == "hybrid: error: unrecognized argument --grid; did you mean '--vary'?\n"
+
+
 def test_a_mistyped_command_is_named_in_a_real_process() -> None:
     result = run_cli("simulat", "specs/bouncing_ball.yaml", "--t-end", "1")
     assert result.returncode == 2
