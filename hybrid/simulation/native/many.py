@@ -178,6 +178,21 @@ class Ensemble(Sequence[Run]):
     def __len__(self) -> int:
         return self._n
 
+    def __repr__(self) -> str:
+        """How many runs of which model, how they ended, and how many left their bounds.
+
+        Examples
+        --------
+        >>> import hybrid
+        >>> ball = hybrid.load("specs/bouncing_ball.yaml")
+        >>> hybrid.simulate_many(ball, parameters={"e": [0.5, 0.8]}, t_end=2.0)
+        <Ensemble: 2 runs of bouncing_ball to t_end=2; causes: t_end 2; out of bounds: 0>
+        """
+        causes, counts = np.unique(self.causes, return_counts=True)
+        ended = ", ".join(f"{c} {n}" for c, n in zip(causes.tolist(), counts.tolist(), strict=True))
+        return (f"<Ensemble: {self._n} runs of {self.model.name} to t_end={self.settings.t_end:g}; "
+                f"causes: {ended or 'none'}; out of bounds: {len(self.out_of_bounds)}>")  # fmt: skip
+
     @overload
     def __getitem__(self, i: int) -> Run: ...
     @overload
