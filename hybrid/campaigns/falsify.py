@@ -216,7 +216,7 @@ def falsify(
             "input range)"
         )
     names = [a.name for a in axes]
-    check_names(system, names)
+    check_names(system, names, parameters or ())
     if f"{requirement}.holds" not in requirement_columns(system):
         known = [c[: -len(".holds")] for c in requirement_columns(system)[::3]]
         raise UsageError(

@@ -233,7 +233,7 @@ def sweep(
         if grid or vary or samples is not None:
             raise UsageError("give points, or a grid and/or samples, not both")
         names, listed = _listed(points)
-        check_names(system, names)
+        check_names(system, names, parameters or ())
         return _finish(system, pack(model), t_end, listed, names, solver, summaries, inputs, run_timeout,
                        backend, executor_for(workers, scheduler, batch), out, resume, progress,
                        handle_sigint, announce)  # fmt: skip
@@ -247,7 +247,7 @@ def sweep(
             raise UsageError("ranges to vary need a number of samples (--sample N)")
         vary_axes, sampled = [], None
     names = [a.name for a in on_grid] + [a.name for a in vary_axes]
-    check_names(system, names)
+    check_names(system, names, parameters or ())
     if not names:
         raise UsageError("nothing to vary: give a grid (--grid NAME=LO:HI:N) or samples")
     made = combine(grid_points(on_grid), sampled)

@@ -62,14 +62,20 @@ def split(point: Mapping[str, float]) -> Overrides:
     return found
 
 
-def check_names(model: System, names: Iterable[str]) -> None:
-    """Raise a :class:`UsageError` naming the first varied name ``model`` does not have."""
+def check_names(model: System, names: Iterable[str], held: Iterable[str] = ()) -> None:
+    """Raise a :class:`UsageError` naming the first varied name ``model`` does not have, or
+    that is varied twice, or that ``held`` (the parameters held in every run) also sets."""
     seen: set[str] = set()
+    fixed = set(held)
     states = list(model.state_names)
     inputs = list(model.free_inputs)
     for name in names:
         if name in seen:
             raise UsageError(f"{name} is varied twice")
+        if name in fixed:
+            raise UsageError(
+                f"{name} is varied and also held by parameters (--param): give it once"
+            )
         seen.add(name)
         if name.startswith(INITIAL):
             var = name[len(INITIAL) :]

@@ -185,5 +185,13 @@ def test_bad_names_and_options_are_refused_before_anything_runs() -> None:
         hybrid.sweep(ball, t_end=1.0, grid={"e": [0.5]}, rtol=2.0, workers=0)
     with pytest.raises(UsageError, match="nothing to vary"):
         hybrid.sweep(ball, t_end=1.0, workers=0)
+    # before: the held value was dropped without a word (the grid's values ran)
+    with pytest.raises(UsageError, match="e is varied and also held by parameters"):
+        hybrid.sweep(ball, t_end=1.0, grid={"e": [0.5, 0.9]}, parameters={"e": 0.3}, workers=0)
+    with pytest.raises(UsageError, match="e is varied and also held by parameters"):
+        hybrid.sweep(ball, t_end=1.0, points=[{"e": 0.5}], parameters={"e": 0.3}, workers=0)
+    with pytest.raises(UsageError, match="e is varied and also held by parameters"):
+        hybrid.falsify(ball, t_end=1.0, vary={"e": (0.5, 0.9)}, parameters={"e": 0.3},
+                       requirement="any", workers=0)  # fmt: skip
     with pytest.raises(UsageError, match="not both"):
         hybrid.sweep(ball, t_end=1.0, grid={"e": [0.5]}, workers=2, scheduler="tcp://x:1")
