@@ -94,5 +94,5 @@ def check_names(model: System, names: Iterable[str], held: Iterable[str] = ()) -
         else:
             try:
                 model.with_parameters({name: 0.0})
-            except SpecError as exc:
-                raise UsageError(f"{name}: {exc.message}") from None
+            except SpecError as exc:  # where the parameters are declared, as simulate says it
+                raise UsageError(exc.message, at=exc.position) from None

@@ -301,3 +301,17 @@ def test_a_grid_written_start_step_stop_names_the_grid_meant(tmp_path: Path) -> 
         "HI; MATLAB's start:step:stop 0.5:0.1:0.9 is e=0.5:0.9:5)"
     )
 
+
+
+def test_an_unknown_name_in_a_campaign_is_placed_as_simulate_places_it(tmp_path: Path) -> None:
+    """Before: sweep and falsify said "FILE: f: unknown parameter 'f' ..." without the place
+    that simulate gives for the same name."""
+    spec = REPO / "specs" / "bouncing_ball.yaml"
+    alone = run_cli("simulate", spec, "--t-end", "1", "--param", "f=0.5")
+    swept = run_cli("sweep", spec, "--t-end", "1", "--grid", "f=0.5:0.9:3", "--out",
+                    tmp_path / "r.csv")  # fmt: skip
+    searched = run_cli("falsify", spec, "--t-end", "1", "--vary", "f=0:1", "--requirement", "x")
+    assert alone.stderr.startswith(f"{spec}:2:1: unknown parameter 'f'")
+    for done in (alone, swept, searched):
+        assert done.returncode == 2
+        assert done.stderr == alone.stderr
