@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -40,8 +40,10 @@ from hybrid.model import StateVar
 
 __all__ = [
     "BoundExcursion",
+    "BoundLimit",
     "BoundsWarning",
     "bound_excursions",
+    "bound_limits",
     "run_excursions",
     "warn_ensemble",
     "warn_excursions",
@@ -86,15 +88,16 @@ _FMIN, _FMAX = np.fmin.reduce, np.fmax.reduce
 
 Extremes = tuple[Sequence[float], Sequence[float]]
 """Each state's smallest values over a run's points, then its largest (NaN left out)."""
-_Check = tuple[int, StateVar, float, float]
+BoundLimit = tuple[int, StateVar, float, float]
 """A bounded variable's column, the variable, and the values beyond which a point is out."""
 _PLAN: list[tuple[Any, ...] | None] = [None]
-"""``(declared, names, rtol, atol, checks)`` of the last :func:`_checks` kept (tuples only)."""
+"""``(declared, names, rtol, atol, limits)`` of the last :func:`bound_limits` kept (tuples only)."""
 
 
-def _checks(declared: Sequence[StateVar], names: Sequence[str], rtol: float,
-            atol: float) -> list[_Check]:  # fmt: skip
-    """The bounded variables of ``declared`` among ``names``: column, variable, limits.
+def bound_limits(declared: Sequence[StateVar], names: Sequence[str], rtol: float,
+                 atol: float) -> list[BoundLimit]:  # fmt: skip
+    """The bounded variables of ``declared`` among ``names``: column, variable, limits
+    (each bound widened by the solver's tolerance, ``atol + rtol * |bound|``).
 
     The answer for the same tuples (the very objects: a model's are frozen) and
     tolerances as the last call's is that call's (a loop of runs asks again
@@ -103,7 +106,7 @@ def _checks(declared: Sequence[StateVar], names: Sequence[str], rtol: float,
     last = _PLAN[0]
     if last is not None and last[0] is declared and last[1] is names and last[2] == rtol \
             and last[3] == atol:  # fmt: skip
-        checks: list[_Check] = last[4]
+        checks: list[BoundLimit] = last[4]
         return checks
     checks = []
     for var in declared:
@@ -135,7 +138,8 @@ def bound_excursions(
     left out), where the run kept them (``run.stored_extremes()``); else
     they are worked out here, a column at a time.
     """
-    return _excursions(_checks(declared, names, rtol, atol), t, j, states, extremes)
+    limits = bound_limits(declared, names, rtol, atol)
+    return _excursions(limits, lambda: (t, j, states), extremes)
 
 
 def run_excursions(declared: Sequence[StateVar], run: Any, *, rtol: float,
@@ -154,31 +158,31 @@ def run_excursions(declared: Sequence[StateVar], run: Any, *, rtol: float,
     >>> run_excursions(ball.states, run, rtol=1e-6, atol=1e-9)
     ()
     """
-    checks = _checks(declared, run.state_names, rtol, atol)
-    if not checks:
-        return ()
-    extremes = run.stored_extremes()
-    if extremes is not None:
-        lows, highs = extremes
-        if not any(lows[k] < low or highs[k] > high for k, _, low, high in checks):
-            return ()
-    t, j, states = run.checked_columns()
-    return _excursions(checks, t, j, states, extremes)
+    limits = bound_limits(declared, run.state_names, rtol, atol)
+    return _excursions(limits, run.checked_columns, run.stored_extremes()) if limits else ()
 
 
-def _excursions(checks: list[_Check], t: NDArray[np.float64], j: NDArray[np.int64],
-                states: NDArray[np.float64], extremes: Extremes | None) -> tuple[BoundExcursion, ...]:  # fmt: skip
-    """The first point beyond each of ``checks`` (see :func:`bound_excursions`)."""
+def _excursions(
+    limits: list[BoundLimit],
+    columns: Callable[[], tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]],
+    extremes: Extremes | None,
+) -> tuple[BoundExcursion, ...]:
+    """The first point beyond each of ``limits`` (see :func:`bound_excursions`); ``columns()``
+    gives ``(t, j, states)``, asked for only when a variable's extremes do not settle it."""
     found: list[BoundExcursion] = []
-    for k, var, low, high in checks:
-        column = states[:, k]
-        # its extremes (NaN left out) within: no point beyond (half the cost); an infinite
+    read = None
+    for k, var, low, high in limits:
+        # its extremes (NaN left out) within: no point beyond (no column read); an infinite
         # side cannot be passed, so its extreme is not looked for
-        if extremes is not None:
-            if not (extremes[0][k] < low or extremes[1][k] > high):
-                continue
-        elif column.size == 0 or not ((low != -math.inf and _FMIN(column) < low)
-                                      or (high != math.inf and _FMAX(column) > high)):  # fmt: skip
+        if extremes is not None and not (extremes[0][k] < low or extremes[1][k] > high):
+            continue
+        if read is None:
+            read = columns()
+        t, j, states = read
+        column = states[:, k]
+        if extremes is None and (column.size == 0 or not (
+                (low != -math.inf and _FMIN(column) < low)
+                or (high != math.inf and _FMAX(column) > high))):  # fmt: skip
             continue
         below = column < low
         above = column > high

@@ -16,7 +16,6 @@ variable counts them and names the first (:func:`~hybrid.simulation.bounds.warn_
 from __future__ import annotations
 
 import bisect
-import math
 import numbers
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import replace
@@ -29,7 +28,12 @@ from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import OutOfRange, UsageError
 from hybrid.keywords import named_keywords
 from hybrid.model import Automaton
-from hybrid.simulation.bounds import BoundExcursion, bound_excursions, warn_ensemble
+from hybrid.simulation.bounds import (
+    BoundExcursion,
+    bound_excursions,
+    bound_limits,
+    warn_ensemble,
+)
 from hybrid.simulation.interrupts import immediate
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import run_from
@@ -417,17 +421,13 @@ def _chunk_excursions(ensemble: Ensemble, arrays: b.RunArrays, lo: int) -> None:
     only the runs whose extremes pass a bound are read, point by point.
     """
     settings, names = ensemble.settings, ensemble.compiled.layout.state_names
-    bounded = [var for var in ensemble.model.states
-               if not (math.isinf(var.lower) and math.isinf(var.upper)) and var.name in names]  # fmt: skip
-    if not bounded:
+    limits = bound_limits(ensemble.model.states, names, settings.rtol, settings.atol)
+    if not limits:
         return
     d = len(names)
     at = int(arrays.wi[0, b.W_EXTREMES])  # the same layout in every row
     beyond = np.zeros(arrays.oi.shape[0], dtype=bool)
-    for var in bounded:
-        k = names.index(var.name)
-        low = var.lower - (settings.atol + settings.rtol * abs(var.lower))
-        high = var.upper + (settings.atol + settings.rtol * abs(var.upper))
+    for k, _, low, high in limits:
         beyond |= (arrays.wf[:, at + k] < low) | (arrays.wf[:, at + d + k] > high)
     beyond &= arrays.oi[:, b.I_OVERFLOW] == 0  # overflowed: run alone, checked there
     for r in np.flatnonzero(beyond).tolist():
