@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import importlib.util
+import io
 import json
 import math
 import os
@@ -78,6 +79,13 @@ def run_cli(
         timeout=timeout,
         check=False,
     )
+
+
+class FakeTerminal(io.StringIO):
+    """A stream that says it is a terminal (progress lines are drawn on it)."""
+
+    def isatty(self) -> bool:
+        return True
 
 
 def run_on_a_terminal(*args: str | Path, cwd: Path | None = None) -> tuple[int, str, str]:

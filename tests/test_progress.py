@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 
 import pytest
+from support import FakeTerminal
 
 from hybrid.progress import Status, TerminalLine, Tracker, terminal_reporter
 
@@ -15,11 +16,6 @@ class FakeClock:
 
     def __call__(self) -> float:
         return self.now
-
-
-class FakeTerminal(io.StringIO):
-    def isatty(self) -> bool:
-        return True
 
 
 def test_the_tracker_reports_at_most_once_per_interval() -> None:

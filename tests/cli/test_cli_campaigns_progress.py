@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from support import main_in_process
+from support import FakeTerminal, main_in_process
 
 WAVE = """automaton: wave
 parameters: {w: 1.0}
@@ -28,13 +28,6 @@ requirements:
 """
 # x = sin(w t) / w: above 0.2 for w < 5 (4 of the 20 runs of w = 1..20 violate `small`)
 RUN = ["--t-end", "5", "--max-step", "0.01", "--workers", "0", "--backend", "scipy"]  # slow enough to draw
-
-
-class FakeTerminal(io.StringIO):
-    """A stream that says it is a terminal."""
-
-    def isatty(self) -> bool:
-        return True
 
 
 @pytest.fixture

@@ -10,7 +10,6 @@ so ``x > 4.3`` is proved and ``x > 4`` refuted (from t = 2.97).
 from __future__ import annotations
 
 import importlib
-import io
 import json
 import re
 import sys
@@ -20,7 +19,7 @@ from typing import Any
 import jsonschema
 import numpy as np
 import pytest
-from support import REPO, assert_no_traceback, main_in_process, read_csv, run_cli
+from support import REPO, FakeTerminal, assert_no_traceback, main_in_process, read_csv, run_cli
 
 import hybrid
 from hybrid.progress import Status, Tracker
@@ -228,13 +227,6 @@ def test_a_step_the_bounds_overflow_at_is_refused_at_the_fastest_flow(tmp_path: 
     assert done.returncode == 2 and done.stderr.startswith(f"{spec}:9:10: the bounds of location")
 
 
-class _FakeTerminal(io.StringIO):
-    """A stream that says it is a terminal."""
-
-    def isatty(self) -> bool:
-        return True
-
-
 def test_reach_reports_its_flowpipes_as_it_goes() -> None:
     """The ball from 10 m bounces once before t = 2 (at sqrt(20 / 9.81) = 1.43 s; the next
     is 2.28 s later): two flowpipes, the first bounce's the second. The last status counts
@@ -263,7 +255,7 @@ def test_the_command_draws_its_progress_on_a_terminal_unless_quiet(
 
     api = importlib.import_module("hybrid.reach.api")  # hybrid.reach is also the function
     monkeypatch.setattr(api, "Tracker", Eager)
-    terminal = _FakeTerminal()
+    terminal = FakeTerminal()
     monkeypatch.setattr(sys, "stderr", terminal)
     spec = REPO / "specs" / "bouncing_ball.yaml"
     code = main_in_process("reach", spec, "--t-end", "2", "--step", "0.001",
