@@ -10,8 +10,9 @@ relative, an exact 0 counting as below; a watch that starts at or below zero
 armed once a sample is above it); a warm start after a jump (the last full
 step's size); the end at ``max_jumps`` as hybrid's (the run flows on after
 its last jump to the next event, locates and records it, and ends there
-without taking it: ``max_jumps`` jumps, ``max_jumps + 1`` stays). The right-hand side, watch and reset of the bouncing ball and
-of the thermostat are written by hand, so the loop calls no function pointer
+without taking it: ``max_jumps`` jumps, ``max_jumps + 1`` stays). The
+right-hand side, watch and reset of the bouncing ball and of the thermostat
+are written by hand, so the loop calls no function pointer
 and nothing is generated: what a model written once in numba costs, points and
 jumps recorded in preallocated arrays.
 
