@@ -46,6 +46,7 @@ def run_simulate(args: argparse.Namespace) -> int:
 
     if args.out is not None and Path(args.out).suffix.lower() not in TRAJECTORY_SUFFIXES:
         raise UsageError(f"--out: use a .csv, .npz or .mat file name, got '{args.out}'")
+    _refuse_other_formats(args)
     warnings.simplefilter("ignore", BoundsWarning)  # the command says them, below
     line = terminal_reporter(args.quiet)
     interrupts = Interrupts(notify=_notifier(line))
@@ -122,6 +123,31 @@ def run_simulate(args: argparse.Namespace) -> int:
     for r in violated:
         print(f"{args.file}: {violation_text(r)}", file=sys.stderr)
     return EXIT_FINDINGS
+
+
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg", ".eps", ".ps", ".tif", ".tiff")
+
+
+def _refuse_other_formats(args: argparse.Namespace) -> None:
+    """Refuse, before the run, an events file named as another format and a figure
+    format matplotlib cannot write.
+
+    ``--events traj.csv`` used to write JSON into ``traj.csv`` (exit 0), and
+    ``--plot fig.csv`` ran the whole simulation before it was refused.
+    """
+    from hybrid.export.trajectory import TRAJECTORY_SUFFIXES
+
+    if args.events is not None:
+        events = Path(args.events)
+        if events.suffix.lower() in (*TRAJECTORY_SUFFIXES, *FIGURE_SUFFIXES):
+            raise UsageError(
+                f"--events writes JSON, not {events.suffix}: name it "
+                f"'{events.with_suffix('.json')}' (the trajectory goes to --out, figures to --plot)"
+            )
+    if args.plot is not None:
+        from hybrid.export.plot import figure_format
+
+        figure_format(args.plot)
 
 
 def violation_text(result: RequirementResult) -> str:

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hybrid.errors import SimulationError, UsageError
+from hybrid.errors import UsageError
 from hybrid.export.hybrid_time import Stay, View, jump_rows, stays, views
 from hybrid.files import atomic_write
 from hybrid.simulation.result import Run
@@ -146,14 +146,33 @@ def plot_run(run: Run, path: str | Path, *names: str, against: str = "t") -> Non
     save_figure(figure_of(run, *names, against=against), path)
 
 
-def save_figure(fig: Any, path: str | Path) -> None:
-    """Write ``fig`` to ``path`` in the format its suffix names, whole or not at all."""
+def figure_format(path: str | Path) -> str:
+    """The format of a figure written to ``path`` (its suffix, ``png`` without one).
+
+    A :class:`~hybrid.errors.UsageError` when matplotlib cannot write it, or is
+    not installed: the command line asks before it runs anything.
+
+    Examples
+    --------
+    >>> figure_format("run.SVG"), figure_format("run")
+    ('svg', 'png')
+    """
     suffix = Path(path).suffix.lstrip(".").lower() or "png"
-    supported = fig.canvas.get_supported_filetypes()
+    try:
+        from matplotlib.backend_bases import FigureCanvasBase
+    except ImportError:
+        raise UsageError(f"plots need matplotlib: {install_hint('plot')}") from None
+    supported = FigureCanvasBase.get_supported_filetypes()
     if suffix not in supported:
-        raise SimulationError(
+        raise UsageError(
             f"--plot: cannot write '.{suffix}' figures; use one of {', '.join(sorted(supported))}"
         )
+    return suffix
+
+
+def save_figure(fig: Any, path: str | Path) -> None:
+    """Write ``fig`` to ``path`` in the format its suffix names, whole or not at all."""
+    suffix = figure_format(path)
     with atomic_write(path) as handle:
         fig.savefig(handle, format=suffix, dpi=110)
 

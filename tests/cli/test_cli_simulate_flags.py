@@ -57,6 +57,9 @@ def test_bad_flags_exit_2_with_one_line(
     [
         (["--t-end", "1", "--param", "gg=1"], "unknown parameter 'gg'"),
         (["--t-end", "1", "--out", "traj.txt"], "--out: use a .csv, .npz or .mat file name"),
+        # used to write JSON into ev.csv, exit 0
+        (["--t-end", "1", "--events", "ev.csv"], "--events writes JSON, not .csv: name it 'ev.json'"),
+        (["--t-end", "1", "--events", "ev.PNG"], "--events writes JSON, not .PNG: name it 'ev.json'"),
         (["--t-end", "10", "--max-step", "1e-300"], "max_step=1e-300 is below the resolution"),
         (["--t-end", "1e6", "--max-step", "1e-7"], "needs at least 1e+13 steps"),
         (["--t-end", "10", "--dt", "1e-12"], "dt=1e-12 gives 1e+13 points"),
@@ -72,6 +75,19 @@ def test_bad_values_found_later_exit_2_with_one_line(
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and message in err
     assert_no_traceback(err)
+
+
+def test_a_figure_format_matplotlib_cannot_write_is_refused_before_the_run(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "traj.csv"
+    code = main_in_process("simulate", BALL, "--t-end", "1", "--out", out, "--plot", "fig.csv")
+    assert code == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""  # no run: it used to simulate, write traj.csv, then refuse
+    assert "--plot: cannot write '.csv' figures; use one of" in captured.err
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_missing_file_exits_2(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
