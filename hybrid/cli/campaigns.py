@@ -26,7 +26,7 @@ from typing import Any
 
 from hybrid.cli.compile import compile_notes
 from hybrid.cli.exits import EXIT_FINDINGS, EXIT_OK
-from hybrid.cli.settings import settings_from
+from hybrid.cli.settings import given_once, settings_from
 from hybrid.errors import UsageError
 from hybrid.progress import TerminalLine, terminal_reporter
 from hybrid.simulation.interrupts import Interrupts
@@ -127,6 +127,7 @@ def run_sweep(args: argparse.Namespace) -> int:
         raise UsageError("--vary gives ranges to sample: add --sample N")
     grid = [parse_grid(text) for text in args.grid]
     vary = [parse_range(text) for text in args.vary]
+    held, inputs = given_once(args.param, "--param"), given_once(args.input, "--input")
     from hybrid.export.outputs import writable_file
 
     writable_file(args.out, "--out")
@@ -143,8 +144,8 @@ def run_sweep(args: argparse.Namespace) -> int:
                 samples=args.sample,
                 seed=args.seed,
                 sampler=args.sampler,
-                parameters=dict(args.param) or None,
-                inputs=dict(args.input) or None,
+                parameters=held or None,
+                inputs=inputs or None,
                 summaries=args.summary,
                 workers=args.workers,
                 scheduler=args.scheduler,
@@ -204,6 +205,7 @@ def run_falsify(args: argparse.Namespace) -> int:
     from hybrid.export.outputs import writable_directory
 
     vary = [parse_range(text) for text in args.vary]
+    held, inputs = given_once(args.param, "--param"), given_once(args.input, "--input")
     # refused before the imports below (scipy.optimize among them: a second or two)
     out = writable_directory(args.out, "--out") if args.out else None
     from hybrid.campaigns.falsify import falsify
@@ -223,8 +225,8 @@ def run_falsify(args: argparse.Namespace) -> int:
                 budget=args.budget,
                 seed=args.seed,
                 sampler=args.sampler,
-                parameters=dict(args.param) or None,
-                inputs=dict(args.input) or None,
+                parameters=held or None,
+                inputs=inputs or None,
                 workers=args.workers,
                 scheduler=args.scheduler,
                 run_timeout=args.run_timeout,

@@ -22,11 +22,15 @@ Examples
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from typing import TypeVar
 
+from hybrid.errors import UsageError
 from hybrid.simulation.settings import BACKENDS, DEFAULTS, METHODS, Settings, merged
 
-__all__ = ["add_settings_flags", "settings_from"]
+V = TypeVar("V")
+
+__all__ = ["add_settings_flags", "given_once", "settings_from"]
 
 
 def add_settings_flags(
@@ -72,3 +76,25 @@ def settings_from(args: argparse.Namespace) -> Settings:
         dt=args.dt,
         backend=backend if backend in BACKENDS else None,
     )
+
+
+def given_once(pairs: Iterable[tuple[str, V]], flag: str) -> dict[str, V]:
+    """The ``NAME=VALUE`` pairs of a repeated flag as a mapping; a name given twice is refused.
+
+    Without the check the last value won silently (``--param e=0.5 --param e=0.7``).
+
+    Examples
+    --------
+    >>> given_once([("e", 0.5), ("g", 9.81)], "--param")
+    {'e': 0.5, 'g': 9.81}
+    >>> given_once([("e", 0.5), ("e", 0.7)], "--param")
+    Traceback (most recent call last):
+    ...
+    hybrid.errors.UsageError: --param e is given twice (0.5 and 0.7): give it once
+    """
+    found: dict[str, V] = {}
+    for name, value in pairs:
+        if name in found:
+            raise UsageError(f"{flag} {name} is given twice ({found[name]} and {value}): give it once")
+        found[name] = value
+    return found

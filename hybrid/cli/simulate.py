@@ -18,7 +18,7 @@ from pathlib import Path
 
 from hybrid.cli.compile import compile_notes
 from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_OK
-from hybrid.cli.settings import settings_from
+from hybrid.cli.settings import given_once, settings_from
 from hybrid.compose import System, as_system
 from hybrid.errors import UsageError, did_you_mean
 from hybrid.model import Automaton
@@ -47,6 +47,8 @@ def run_simulate(args: argparse.Namespace) -> int:
     if args.out is not None and Path(args.out).suffix.lower() not in TRAJECTORY_SUFFIXES:
         raise UsageError(f"--out: use a .csv, .npz or .mat file name, got '{args.out}'")
     _refuse_other_formats(args)
+    parameters = given_once(args.param, "--param")
+    initial = given_once(args.init, "--init")
     warnings.simplefilter("ignore", BoundsWarning)  # the command says them, below
     line = terminal_reporter(args.quiet)
     interrupts = Interrupts(notify=_notifier(line))
@@ -57,7 +59,6 @@ def run_simulate(args: argparse.Namespace) -> int:
                 "--initial-location applies to an automaton; in a system each component's "
                 "initial location is set in the system file (initial: {location: ...})"
             )
-        parameters = dict(args.param)
         if parameters:
             model = model.with_parameters(parameters)
         inputs = _inputs(args, model)
@@ -75,7 +76,7 @@ def run_simulate(args: argparse.Namespace) -> int:
                 settings=settings_from(args),
                 dense=args.plot is not None,
                 inputs=inputs or None,
-                initial=dict(args.init) or None,
+                initial=initial or None,
                 initial_location=args.initial_location,
                 progress=line,
                 backend=backend,

@@ -56,6 +56,11 @@ def test_bad_flags_exit_2_with_one_line(
     ("args", "message"),
     [
         (["--t-end", "1", "--param", "gg=1"], "unknown parameter 'gg'"),
+        # the last value used to win silently
+        (["--t-end", "1", "--param", "e=0.5", "--param", "e=0.7"],
+         "--param e is given twice (0.5 and 0.7): give it once"),
+        (["--t-end", "1", "--init", "h=1", "--init", "h=2"],
+         "--init h is given twice (1.0 and 2.0): give it once"),
         (["--t-end", "1", "--out", "traj.txt"], "--out: use a .csv, .npz or .mat file name"),
         # used to write JSON into ev.csv, exit 0
         (["--t-end", "1", "--events", "ev.csv"], "--events writes JSON, not .csv: name it 'ev.json'"),

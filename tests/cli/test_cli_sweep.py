@@ -99,6 +99,9 @@ def test_invalid_usage_is_exit_2_with_one_line(
         (("--grid", "k=0:1:2", "--out", "r.csv", "--summary", "top:x"), "KIND:NAME"),
         (("--vary", "k=0:1", "--sample", "3", "--seed", "-1", "--out", "r.csv"),
          "the seed must be a whole number >= 0, got -1"),
+        # the last value used to win silently
+        (("--grid", "k=0:1:2", "--param", "k=1", "--param", "k=2", "--out", "r.csv"),
+         "--param k is given twice (1.0 and 2.0): give it once"),
     ]
     for args, message in cases:
         assert _sweep(spec, *args) == 2, args
@@ -106,6 +109,11 @@ def test_invalid_usage_is_exit_2_with_one_line(
         assert message in err, (args, err)
         assert_no_traceback(err)
         assert len(err.strip().splitlines()) == 1
+    falsify = ("falsify", spec, "--requirement", "warm", "--vary", "k=0:1", "--t-end", "5", "--quiet")
+    assert main_in_process(*falsify, "--input", "u=t", "--input", "u=2*t") == 2
+    err = capsys.readouterr().err
+    assert "--input u is given twice (t and 2*t): give it once" in err, err
+    assert len(err.strip().splitlines()) == 1
 
 
 def test_a_grid_of_listed_values_runs_them_in_their_order(
