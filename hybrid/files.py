@@ -1,5 +1,10 @@
 """Whole-or-nothing file writes: write a temporary file beside the target, then rename.
 
+What is renamed over is always a regular file: a symbolic link is written
+through (its target replaced, the link kept), and a device, a pipe or a socket
+(``/dev/null``, ``/dev/stdout``, a FIFO) is written into directly, since it
+cannot be replaced whole and must not be replaced by a file.
+
 The temporary file is created with mode ``0o666`` filtered by the process umask,
 as the operating system does for any new file (``mkstemp`` would make it
 ``0o600``), so the result has the permissions a user expects: ``0o644`` under
@@ -29,7 +34,7 @@ from typing import BinaryIO
 
 from hybrid.errors import CannotWrite, UsageError
 
-__all__ = ["atomic_write", "temporary_name", "writable_target"]
+__all__ = ["atomic_write", "temporary_name", "writable_target", "write_through"]
 
 _ATTEMPTS = 100
 
@@ -67,7 +72,12 @@ def atomic_write(path: str | Path) -> Iterator[BinaryIO]:
     cannot be written (a directory, a missing folder, no permission, a full
     disk) is a :class:`~hybrid.errors.CannotWrite`, an ``OSError`` too.
     """
-    target = writable_target(path)
+    given = writable_target(path)
+    target = write_through(given)
+    if target is None:  # a device, a pipe: written into, in place
+        with _in_place(given) as handle:
+            yield handle
+        return
     try:
         fd, tmp = _create(target)
     except OSError as exc:
@@ -87,6 +97,47 @@ def atomic_write(path: str | Path) -> Iterator[BinaryIO]:
         if isinstance(exc, OSError) and not isinstance(exc, CannotWrite):
             raise CannotWrite.of(target, exc) from exc  # a full disk, a folder gone
         raise
+
+
+def write_through(target: Path) -> Path | None:
+    """The regular file a write to ``target`` replaces, or None for a device, pipe or socket.
+
+    A symbolic link gives the file it names (made absolute), so that the link
+    stays a link; anything else gives ``target`` itself.
+
+    Examples
+    --------
+    >>> write_through(Path("/dev/null")) is None
+    True
+    >>> write_through(Path("results.csv"))
+    PosixPath('results.csv')
+    """
+    try:
+        kind = os.stat(target).st_mode  # follows links
+    except OSError:
+        kind = None  # not there yet (or a link to a file not there yet)
+    if kind is not None and not stat.S_ISREG(kind):
+        return None
+    if target.is_symlink():
+        return Path(os.path.realpath(target))
+    return target
+
+
+@contextlib.contextmanager
+def _in_place(target: Path) -> Iterator[BinaryIO]:
+    """Write into a device or pipe as it is (no temporary, no rename, no ``fsync``)."""
+    opened = False
+    try:
+        with open(target, "wb") as handle:
+            opened = True
+            yield handle
+            handle.flush()
+    except OSError as exc:
+        if not opened:
+            raise CannotWrite.of(target, exc) from None
+        if isinstance(exc, CannotWrite):
+            raise
+        raise CannotWrite.of(target, exc) from exc  # /dev/full: no space left
 
 
 def writable_target(path: object) -> Path:

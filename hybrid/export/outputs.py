@@ -89,9 +89,16 @@ def make_directory(folder: Path, flag: str) -> Path:
 
 
 def _probe(target: Path, flag: str, shown: str | Path) -> None:
-    from hybrid.files import temporary_name
+    from hybrid.files import temporary_name, write_through
 
-    probe = temporary_name(target)
+    replaced = write_through(target)
+    if replaced is None:  # a device or a pipe, written into in place
+        if not os.access(target, os.W_OK):
+            raise UsageError(f"{flag}: cannot write '{shown}': Permission denied")
+        return
+    if not replaced.parent.is_dir():  # a link to a file in a folder that is not there
+        raise UsageError(f"{flag}: the link '{shown}' points into a folder that does not exist")
+    probe = temporary_name(replaced)
     try:
         fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     except OSError as exc:
