@@ -11,10 +11,13 @@ reported through :mod:`hybrid.progress`; the bounds are checked on the result.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import replace
 from types import ModuleType
 from typing import Any
+
+import numpy as np
 
 from hybrid.compose import System, as_system, expect_model
 from hybrid.errors import UsageError
@@ -146,12 +149,12 @@ def simulate(
          max_jumps_per_instant, backend),
     )  # fmt: skip
     t_start, t_end = settings.t_start, settings.t_end
-    parameters = _numbers("parameter", parameters) if parameters else None
+    parameters = _numbers("parameters", "parameter", parameters, model)
     if settings.backend != "compiled" and settings.backend != "scipy":  # not given, or auto
         settings = replace(settings, backend=_one_run_backend(model, settings, inputs))
-    initial = _numbers("initial value of", initial) if initial else None
+    initial = _numbers("initial", "initial value of", initial, model)
     if inputs is not None:
-        _check_inputs(inputs)
+        _check_inputs(inputs, t_start)
     model = model.with_parameters(parameters) if parameters else model
     if isinstance(model, System) and initial_location:
         raise UsageError("initial_location applies to an automaton; set it per component")
@@ -269,16 +272,39 @@ def _updater(tracker: Tracker | None) -> Callable[[float, int, int], None] | Non
     return progress
 
 
-def _numbers(what: str, values: Mapping[str, float] | None) -> dict[str, float] | None:
-    """``values`` with each checked to be a finite number (a :class:`UsageError` if not)."""
-    if not values:
+def _numbers(keyword: str, item: str, values: Any, model: Automaton | System) -> dict[str, float] | None:
+    """``values`` with each checked to be a finite number (a :class:`UsageError` if not).
+
+    A pandas Series (one row of a table) is read as the mapping its index gives;
+    a vector (MATLAB's ``x0``) is refused with the way to name its values.
+    """
+    if values is None:
         return None
+    if not isinstance(values, Mapping) and callable(getattr(values, "to_dict", None)):
+        values = values.to_dict()  # a pandas Series: its index names the values
     if not isinstance(values, Mapping):
-        raise UsageError(f"{what} overrides must be a mapping of names to numbers, got {values!r}")
-    return {str(k): finite_number(f"{what} '{k}'", v) for k, v in values.items()}
+        names: Any = ["comp.name"] if isinstance(model, System) else model.parameters
+        if keyword == "initial":
+            names = model.state_names
+        example = ", ".join(f"{n!r}: ..." for n in list(names)[:3])
+        vector = ""
+        if keyword == "initial" and isinstance(values, (list, tuple, np.ndarray)):
+            vector = "; values in state order: dict(zip(model.state_names, x0))"
+        raise UsageError(
+            f"{keyword}= takes a mapping of names to numbers, e.g. {{{example}}}, got "
+            f"{type(values).__name__} {values!r}{vector}"
+        )
+    return {str(k): finite_number(f"{item} '{k}'", v) for k, v in values.items()} or None
 
 
-def _check_inputs(inputs: Mapping[str, Callable[[float], float]] | None) -> None:
+def _check_inputs(inputs: Mapping[str, Callable[[float], float]] | None, t_start: float) -> None:
+    """Each input a function of ``t`` that gives a number at ``t_start``, else a :class:`UsageError`.
+
+    A function that cannot be called as ``f(t)``, or gives something other than a
+    number (a list, an array of one value), used to end the run at once as
+    ``nonfinite``, with a message about the flow. One that cannot be computed at
+    some ``t`` (``log(t)`` at ``t = 0``, a division by zero) still ends the run so.
+    """
     if inputs is None:
         return
     if not isinstance(inputs, Mapping):
@@ -289,4 +315,20 @@ def _check_inputs(inputs: Mapping[str, Callable[[float], float]] | None) -> None
         if not callable(fn):
             raise UsageError(
                 f"input '{name}' must be a function of t (e.g. lambda t: 0.5), got {fn!r}"
+            )
+        try:
+            value = fn(t_start)
+        except TypeError as exc:  # called wrongly (f(t, x)); a failing value is the run's
+            raise UsageError(
+                f"input '{name}' cannot be called as f(t): {exc} (at t={t_start:g})"
+            ) from None
+        except Exception:
+            continue  # cannot be computed at t_start (log(t) at 0): the run ends nonfinite
+        if not isinstance(value, numbers.Real) and not (
+            isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "biuf"
+        ):
+            shape = f" of shape {value.shape}" if isinstance(value, np.ndarray) else ""
+            raise UsageError(
+                f"input '{name}' must give a number at each t, got {type(value).__name__}"
+                f"{shape} at t={t_start:g}"
             )

@@ -120,10 +120,31 @@ class TimeSeries:
     def __init__(
         self, name: str, times: Sequence[float], values: Sequence[float], file: str = "<series>"
     ) -> None:
+        """Check the samples as :func:`read_series` checks a file's (a :class:`UsageError`).
+
+        Examples
+        --------
+        >>> TimeSeries("u", times=[0.0, 2.0, 1.0], values=[0, 1, 2])
+        Traceback (most recent call last):
+        ...
+        hybrid.errors.UsageError: TimeSeries 'u': times must increase: t=1 after t=2 (sample 3)
+        """
         self.name = name
-        self.times = [float(t) for t in times]
-        self.values = [float(v) for v in values]
+        self.times = _samples(name, "times", times)
+        self.values = _samples(name, "values", values)
         self.file = file
+        if len(self.times) != len(self.values):
+            raise UsageError(
+                f"TimeSeries '{name}': {len(self.times)} times but {len(self.values)} values"
+            )
+        if len(self.times) < 2:
+            raise UsageError(f"TimeSeries '{name}': at least two samples are needed")
+        for k in range(1, len(self.times)):
+            if not self.times[k] > self.times[k - 1]:
+                raise UsageError(
+                    f"TimeSeries '{name}': times must increase: t={self.times[k]:g} after "
+                    f"t={self.times[k - 1]:g} (sample {k + 1})"
+                )
 
     def __call__(self, t: float) -> float:
         times, values = self.times, self.values
@@ -147,6 +168,26 @@ class TimeSeries:
 
     def __repr__(self) -> str:
         return f"TimeSeries({self.name!r}, {len(self.times)} samples from {self.file})"
+
+
+def _samples(name: str, what: str, given: Sequence[float]) -> list[float]:
+    """``given`` as finite floats, or a :class:`UsageError` naming the sample."""
+    try:
+        items = list(given)
+    except TypeError:
+        raise UsageError(f"TimeSeries '{name}': {what} must be a sequence of numbers") from None
+    found = []
+    for k, item in enumerate(items, start=1):
+        try:
+            value = float(item)
+        except (TypeError, ValueError):
+            raise UsageError(
+                f"TimeSeries '{name}': {what} sample {k} is not a number: {item!r}"
+            ) from None
+        if not math.isfinite(value):
+            raise UsageError(f"TimeSeries '{name}': {what} sample {k} is not finite: {value}")
+        found.append(value)
+    return found
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,7 @@ Each case here once escaped as an AttributeError, TypeError or ValueError.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -336,11 +337,89 @@ def test_simulate_many_refuses_a_table_it_cannot_run(kwargs: dict[str, Any], mes
 )
 def test_an_input_that_gives_no_number_ends_the_run_where_it_is_read(value: Any, said: str) -> None:
     relay = hybrid.load_text(RELAY)
-    run = hybrid.simulate(relay, t_end=1.0, inputs={"u": lambda t: value})
-    assert run.termination.cause == "nonfinite" and run.termination.t == 0.0
+    late = {"u": lambda t: 0.0 if t < 0.25 else value}  # a number at the start, not later
+    run = hybrid.simulate(relay, t_end=1.0, inputs=late)
+    assert run.termination.cause == "nonfinite" and 0.25 <= run.termination.t < 0.5
     assert said in run.termination.message and "the guard of up failed" in run.termination.message
+    assert run.t[-1] < 0.25  # what was computed before it is kept
     good = hybrid.simulate(relay, t_end=1.0, inputs={"u": lambda t: math.sin(2 * t)}, rtol=1e-10, atol=1e-12)
     assert good.jumps[0].t == pytest.approx(math.pi / 12, abs=1e-8)  # sin(2t) = 0.5
+
+
+@pytest.mark.parametrize(
+    ("function", "message"),
+    [
+        (lambda t: "a", "input 'u' must give a number at each t, got str at t=0"),
+        (lambda t: None, "input 'u' must give a number at each t, got NoneType at t=0"),
+        (lambda t: np.array([t]), "got ndarray of shape (1,) at t=0"),
+        (lambda t: [t], "got list at t=0"),
+        (lambda t, x: t, "input 'u' cannot be called as f(t): "),
+    ],
+)
+def test_an_input_that_is_not_a_number_at_the_start_is_refused_before_the_run(
+    function: Any, message: str
+) -> None:
+    # these used to end the run at once as nonfinite, all its arrays flat
+    relay = hybrid.load_text(RELAY)
+    with pytest.raises(hybrid.UsageError, match=re.escape(message)):
+        hybrid.simulate(relay, t_end=1.0, inputs={"u": function})
+    for number in (lambda t: np.float64(0.5), lambda t: np.array(0.5), lambda t: 1):
+        assert hybrid.simulate(relay, t_end=1.0, inputs={"u": number}).termination.cause == "t_end"
+    failing = hybrid.simulate(relay, t_end=1.0, inputs={"u": lambda t: 1 / 0})  # a value, not a kind
+    assert failing.termination.cause == "nonfinite" and "division by zero" in failing.termination.message
+
+
+@pytest.mark.parametrize(
+    ("keyword", "value", "message"),
+    [
+        ("initial", np.array([5.0, 0.0]),
+         "initial= takes a mapping of names to numbers, e.g. {'h': ..., 'v': ...}, got ndarray "
+         "array([5., 0.]); values in state order: dict(zip(model.state_names, x0))"),
+        ("initial", [5.0, 0.0], "got list [5.0, 0.0]; values in state order"),
+        ("parameters", np.array([1.62]), "parameters= takes a mapping of names to numbers, e.g. "
+         "{'g': ..., 'e': ...}, got ndarray array([1.62])"),
+    ],
+)  # fmt: skip
+def test_a_vector_for_initial_or_parameters_says_how_to_name_its_values(
+    keyword: str, value: Any, message: str
+) -> None:
+    # an array used to raise numpy's "truth value of an array ... is ambiguous"
+    ball = hybrid.load(SPECS / "bouncing_ball.yaml")
+    with pytest.raises(hybrid.UsageError) as caught:
+        hybrid.simulate(ball, t_end=2.0, **{keyword: value})
+    assert message in str(caught.value)
+
+
+def test_a_pandas_row_gives_parameters_and_initial_values_by_its_index() -> None:
+    pd = pytest.importorskip("pandas")
+    ball = hybrid.load(SPECS / "bouncing_ball.yaml")
+    row = pd.DataFrame({"g": [9.81, 1.62], "e": [0.8, 0.5]}).iloc[1]
+    run = hybrid.simulate(ball, t_end=4.0, parameters=row, initial=pd.Series({"h": 5.0}))
+    assert run.jumps[0].t == pytest.approx(math.sqrt(2 * 5.0 / 1.62), rel=1e-6)
+    assert run.jumps[0].after["v"] == pytest.approx(0.5 * math.sqrt(2 * 1.62 * 5.0), rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("times", "values", "message"),
+    [
+        ([0, 1], [0, 1, 2], "TimeSeries 'u': 2 times but 3 values"),
+        ([0, 1, 2], [0, 1], "TimeSeries 'u': 3 times but 2 values"),
+        ([0, 2, 1], [0, 1, 2], "TimeSeries 'u': times must increase: t=1 after t=2 (sample 3)"),
+        ([0, 1, 1], [0, 1, 2], "TimeSeries 'u': times must increase: t=1 after t=1 (sample 3)"),
+        ([0, 1], [0, float("nan")], "TimeSeries 'u': values sample 2 is not finite: nan"),
+        ([0, "x"], [0, 1], "TimeSeries 'u': times sample 2 is not a number: 'x'"),
+        ([0], [1], "TimeSeries 'u': at least two samples are needed"),
+    ],
+)
+def test_a_time_series_is_checked_as_a_file_of_samples_is(
+    times: Any, values: Any, message: str
+) -> None:
+    # each used to be accepted, and gave a wrong run or a nonfinite end
+    from hybrid.simulation.inputs import TimeSeries
+
+    with pytest.raises(hybrid.UsageError) as caught:
+        TimeSeries("u", times=times, values=values)
+    assert str(caught.value) == message
 
 
 @pytest.mark.parametrize(
