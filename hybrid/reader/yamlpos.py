@@ -108,7 +108,12 @@ class _Checks(yaml.composer.Composer):
         if anchor is not None:
             raise _Refused("YAML anchors (&name) are not allowed in specs", event.start_mark)
         tag = getattr(event, "tag", None)
-        if tag is not None and tag != "!":
+        if tag == "!":  # YAML's non-specific tag: '! x > 3' would read as 'x > 3'
+            raise _Refused(
+                "'!' is not negation here (YAML reads '! ' as a tag and drops it): write 'not'",
+                event.start_mark,
+            )
+        if tag is not None:
             raise _Refused(
                 f"YAML tags ({tag}) are not allowed in specs"
                 + ("; if '!' meant negation, write 'not'" if tag.startswith("!") else ""),

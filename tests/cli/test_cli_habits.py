@@ -41,6 +41,8 @@ GUARDS = [
     ("h <= 0 and !(v > 0)", 23, "'!' is not negation here: write 'not'"),
     ("~(h > 0)", 12, "'~' is not negation here: write 'not'"),
     ("!v", 12, "YAML tags (!v) are not allowed in specs; if '!' meant negation, write 'not'"),
+    # YAML's non-specific tag: read as 'v > 0' without a word until this was refused
+    ("! v > 0", 12, "'!' is not negation here (YAML reads '! ' as a tag and drops it): write 'not'"),
 ]
 
 
