@@ -401,14 +401,14 @@ def _no_further_interrupts() -> Iterator[None]:
 
 
 def _show_note(message: Warning | str, category: type[Warning], *rest: Any, **kw: Any) -> None:
-    """hybrid's notes as one line each; any other warning as Python shows it."""
+    """Every warning as one line: hybrid's notes and warnings by their message, another
+    library's with its category (Python's form shows a line of the interpreter's code)."""
     if issubclass(category, Note):
         print(f"hybrid: note: {message}", file=sys.stderr)
+    elif category.__module__.split(".")[0] == "hybrid":
+        print(f"hybrid: warning: {message}", file=sys.stderr)
     else:
-        _SHOW_WARNING(message, category, *rest, **kw)
-
-
-_SHOW_WARNING = warnings.showwarning
+        print(f"hybrid: warning: {category.__name__}: {message}", file=sys.stderr)
 
 
 def _main(argv: Sequence[str] | None) -> int:

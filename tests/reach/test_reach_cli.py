@@ -267,3 +267,29 @@ def test_the_command_draws_its_progress_on_a_terminal_unless_quiet(
     else:
         assert [d.split(",")[0] for d in drawn] == ["reach: 1 flowpipes", "reach: 2 flowpipes"]
         assert terminal.getvalue().endswith("\r")  # erased
+
+
+DOWN = """automaton: down
+state:
+  h: {initial: 5, bounds: [0, 12]}
+locations:
+  a: {flow: {h: -1}}
+properties:
+  forbidden:
+    - {when: "h < -5"}
+"""
+
+
+@pytest.mark.parametrize("command", [("reach", "--t-end", "20"), ("check", "--reach-t-end", "20")])
+def test_a_witness_leaving_its_bounds_is_one_warning_line(tmp_path: Path, command: tuple[str, ...]) -> None:
+    # Python's own form of the BoundsWarning printed a line of the interpreter's code
+    spec = tmp_path / "down.yaml"
+    spec.write_text(DOWN)
+    done = run_cli(command[0], spec, *command[1:])
+    assert done.returncode == 1  # h < -5 is reached at t = 10 (h = 5 - t)
+    warning = "hybrid: warning: h left its declared bounds [0, 12] at t="
+    lines = done.stderr.splitlines()
+    assert [line for line in lines if warning in line] == [line for line in lines if "warning" in line]
+    assert any(line.startswith(warning) for line in lines), done.stderr
+    assert "sys.exit" not in done.stderr and "BoundsWarning" not in done.stderr
+    assert_no_traceback(done.stderr)
