@@ -29,6 +29,7 @@ from typing import Any
 
 from hybrid.errors import Position, SpecError
 from hybrid.frames import in_frame_room
+from hybrid.interchange import sxexpr as sx
 from hybrid.interchange.cfg import SpaceExConfig, parse_cfg, read_cfg
 from hybrid.interchange.emit import SEMANTICS, automaton_text
 from hybrid.interchange.flatten import Flat, Leaf, flatten
@@ -39,6 +40,7 @@ from hybrid.interchange.selfcheck import check_loads
 from hybrid.interchange.starts import exact_comment, location_name, start_of
 from hybrid.interchange.sxmodel import SpaceExModel, read_model
 from hybrid.interchange.template import Template, analyse
+from hybrid.interchange.translate import reset_nodes
 from hybrid.interchange.yamltext import dump
 
 __all__ = ["SEMANTICS", "ImportResult", "import_spaceex", "import_spaceex_text"]
@@ -134,6 +136,7 @@ def _translate(
     owners = _owners(flat, templates)
     free = {v for v in flat.variable_ids if v not in owners}
     templates = _templates(flat, free)
+    _refuse_partner_assignments(flat, templates)
     for t in templates.values():
         notes.extend(t.notes)
     names = system_names(flat.variable_ids)
@@ -311,6 +314,51 @@ def _templates(flat: Flat, free: set[str] | None = None) -> dict[str, Template]:
             t.name += "_"  # two ids made the same name (a>b, a_b)
         found[comp.id] = t
     return found
+
+
+def _refuse_partner_assignments(flat: Flat, templates: dict[str, Template]) -> None:
+    """Refuse a synchronised transition whose target's invariant reads a variable that a
+    partner's transition on the same label assigns.
+
+    SpaceEx checks the target's invariant after every assignment of the joint jump;
+    our guard reads the value before it (its own assignments are substituted, a
+    partner's cannot be). The HyST buck converter does this: its converter's
+    ``charging -> discharging`` needs ``mode_out == 1`` of the discharging
+    invariant, which the controller's transition on ``hop`` sets. Read before the
+    jump, the guard never held and every run ended blocked where SpaceEx switches
+    (and ``check`` would prove the discharging location unreachable).
+    """
+    assigned: dict[str, dict[str, tuple[Leaf, Position]]] = {}  # label -> variable -> by whom
+    for leaf in flat.leaves:
+        for tr in leaf.component.transitions:
+            if tr.label is None:
+                continue
+            label = leaf.labels.get(tr.label, tr.label)
+            for var, value in reset_nodes(sx.parse(tr.assignment)).items():
+                if not (isinstance(value, sx.Name) and value.name == var and not value.primed):
+                    outer = leaf.variables.get(var, var)
+                    assigned.setdefault(label, {}).setdefault(outer, (leaf, tr.position))
+    for leaf in flat.leaves:
+        t = templates[leaf.component.id]
+        for tr, edge in zip(leaf.component.transitions, t.edges, strict=True):
+            if tr.label is None or not edge.checked_after:
+                continue
+            label = leaf.labels.get(tr.label, tr.label)
+            for var in sorted(edge.checked_after):
+                setter = assigned.get(label, {}).get(leaf.variables.get(var, var))
+                if setter is None or setter[0] is leaf:
+                    continue
+                raise SpecError(
+                    f"the transition {edge.source} -> {edge.target} of '{leaf.name}' needs "
+                    f"{edge.target}'s invariant after the jump, which reads '{var}', and the "
+                    f"transition of '{setter[0].name}' at line {setter[1].line} on the same "
+                    f"label '{tr.label}' assigns it: SpaceEx checks the invariant after both "
+                    "assignments, a guard here reads the value before the jump, so the "
+                    "translation would miss jumps SpaceEx takes. Write the condition on the "
+                    "values before the jump (in the guard, without it in the target's "
+                    "invariant); nothing was written",
+                    tr.position,
+                )
 
 
 def _owners(flat: Flat, templates: dict[str, Template]) -> dict[str, Leaf]:

@@ -67,6 +67,9 @@ class EdgeInfo:
     guard: str
     reset: dict[str, str]
     comment: str
+    checked_after: frozenset[str] = frozenset()
+    """SpaceEx variables the guard reads for the target's invariant after the jump (their
+    values before it: the jump of this component leaves them alone)."""
 
 
 @dataclass
@@ -338,7 +341,8 @@ def _edge(
         comment += f"; {' and '.join(implied_by_reset)} (of {target.name}'s invariant after the jump) holds"
     if repeated:
         comment += f"; {' and '.join(repeated)} (of {target.name}'s invariant) is in the guard"
-    return EdgeInfo(source.name, target.name, tr.label, guard, reset, comment)
+    checked_after = frozenset(v for a in added for v in reads(a))
+    return EdgeInfo(source.name, target.name, tr.label, guard, reset, comment, checked_after)
 
 
 def _constant_truth(node: sx.Cmp) -> bool | None:

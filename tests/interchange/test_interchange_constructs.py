@@ -214,3 +214,21 @@ def test_names_reserved_here_and_odd_location_names() -> None:
     assert list(spec["locations"]) == ["l_2_fast", "l_2_fast_2"]
     assert spec["edges"][0]["guard"] == "t_ >= 1"
     assert math.isclose(spec["state"]["lambda_"]["initial"], 1.0)
+
+
+def test_a_target_invariant_on_what_a_partner_assigns_in_the_same_jump_is_refused() -> None:
+    # draining needs q <= 0, and the pump's transition on the same label sets q := 0: SpaceEx
+    # checks the invariant after both assignments, a guard here reads q before the jump. The
+    # HyST buck converter did this (its mode_out); the import ran and blocked at the switch
+    waits = TANK.replace("<invariant>h &gt;= 1</invariant>", "<invariant>h &gt;= 1 &amp; q &lt;= 0</invariant>")
+    cfg = 'system = plant\ninitially = "h == 0 & q == 1 & loc(p) == on"'
+    with pytest.raises(SpecError) as info:
+        import_spaceex_text(_model(waits, PUMP, PLANT), cfg, xml_file="m.xml", cfg_file="m.cfg")
+    assert str(info.value).startswith("m.xml:2:"), str(info.value)  # the tank's transition
+    assert ("the transition filling -> draining of 't1' needs draining's invariant after the "
+            "jump, which reads 'q', and the transition of 'p' at line 3 on the same label 'open' "
+            "assigns it") in info.value.message  # fmt: skip
+    # a partner that leaves q alone: the condition on q before the jump is SpaceEx's after it
+    keeps = PUMP.replace("<assignment>q := 0</assignment>", "")
+    _, data = _files(_model(waits, keeps, PLANT), cfg)
+    assert data["tank.yaml"]["edges"][0]["guard"] == "h >= 2 and h >= 1 and q <= 0"

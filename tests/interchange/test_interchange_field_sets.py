@@ -33,6 +33,10 @@ REFUSED = {
     # SpaceEx's flattened form of a nondeterministic input
     "bball_nondet_flattened.xml": "with offset",
     "bball_nondet_revised_flattened_problem.xml": "with offset",
+    # the converter's target invariants read mode_out, which the controller's transition on
+    # the same label assigns: SpaceEx checks them after that assignment (imported before,
+    # every run blocked at the first switch)
+    "buck_dcm_vs1.cfg": "SpaceEx checks the invariant after both assignments",
 }
 SLOW_TO_COMPILE = {
     # five components synchronised on 20 labels: 752 product modes, 56,000 generated lines,
