@@ -257,7 +257,11 @@ class _Converter:
             try:
                 number = float(value)
             except OverflowError:
-                raise ExprError("number literal is too large", col) from None
+                number = math.inf
+            if not math.isfinite(number):  # 1e400 reads as inf
+                raise ExprError(
+                    "number literal is too large for a 64-bit float (at most about 1.8e308)", col
+                )
             return ir.Num(number, col), _NUM
         raise ExprError(f"{type(value).__name__} literals are not allowed in expressions", col)
 

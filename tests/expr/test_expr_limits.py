@@ -61,3 +61,16 @@ def test_python_parser_limits_are_refused_too() -> None:
 def test_parentheses_are_not_levels() -> None:
     node = parse_expression("(" * 150 + "x" + ")" * 150, SCOPE)
     assert (node.name, node.kind) == ("x", "state")  # type: ignore[union-attr]
+
+
+@pytest.mark.parametrize("source", ["1e400", "x + 1e309", "x <= 2e308", str(10**400)])
+def test_a_number_too_large_for_a_float_is_refused_where_it_is_written(source: str) -> None:
+    # 1e400 read as inf: validate said ok and the run ended nonfinite at t = 0
+    with pytest.raises(ExprError) as info:
+        parse_expression(source, Scope({"x": "state"}), want="bool" if "<=" in source else "number")
+    assert info.value.message == "number literal is too large for a 64-bit float (at most about 1.8e308)"
+    assert info.value.col == source.index(source.split()[-1])
+
+
+def test_the_largest_float_is_still_a_number() -> None:
+    parse_expression("x <= 1.7e308", Scope({"x": "state"}), want="bool")
