@@ -30,12 +30,13 @@ from hybrid.expr.functions import BUILTINS
 __all__ = ["RESERVED", "component_name", "location_names", "ours", "system_names"]
 
 RESERVED = frozenset(
-    {"t", "pi", "true", "false", "and", "or", "not", "inf", "nan"}
+    {"t", "j", "location", "pi", "true", "false", "and", "or", "not", "inf", "nan"}
     | set(keyword.kwlist)
     | set(keyword.softkwlist)
     | set(BUILTINS)
 )
-"""Names our expressions reserve: the time ``t``, constants, keywords, built-in functions."""
+"""Names our specs reserve: the time ``t``, a run's columns ``j`` and ``location``,
+constants, keywords, built-in functions."""
 
 
 def ours(name: str, taken: Iterable[str] = ()) -> str:

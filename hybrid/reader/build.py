@@ -44,7 +44,9 @@ from hybrid.reader.yamlpos import PositionMap
 
 __all__ = ["build_automaton", "build_properties"]  # build_properties: see sets.py
 
-RESERVED = {"t", "pi", "true", "false", *BUILTINS, *keyword.kwlist, *keyword.softkwlist}
+COLUMNS = {"j": "a run's column of hybrid time", "location": "a run's column of locations"}
+"""Names a run's table gives its own columns (with ``t``): a state called so made two."""
+RESERVED = {"t", "pi", "true", "false", *COLUMNS, *BUILTINS, *keyword.kwlist, *keyword.softkwlist}
 _KIND_TEXT = {"param": "parameter", "state": "state variable", "signal": "signal", "input": "input"}
 
 
@@ -198,7 +200,8 @@ def _declare_names(
     for kind, names in groups:
         for name, path in names:
             if name in RESERVED or name in functions:
-                problems.at_key(path, f"'{name}' is a reserved name; choose another")
+                why = f" ({COLUMNS[name]})" if name in COLUMNS else ""
+                problems.at_key(path, f"'{name}' is a reserved name{why}; choose another")
                 continue
             if name in kinds:
                 prev = first[name]

@@ -283,6 +283,13 @@ MISTAKES = [
         31,
         ("'sin' is a reserved name",),
     ),
+    Mistake(  # validated before, and a run's table then had two 'j' columns
+        "run-column-name",
+        ball("  velocity: {initial: 0.0}", "  velocity: {initial: 0.0}\n  j: {initial: 0.0}"),
+        6,
+        3,
+        ("'j' is a reserved name (a run's column of hybrid time); choose another",),
+    ),
     # --- wrong types ---
     Mistake(
         "number-expected",
