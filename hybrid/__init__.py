@@ -105,7 +105,17 @@ _lazy_getattr, _lazy_dir = lazy_attributes(__name__, _LAZY)
 
 
 def __getattr__(name: str) -> object:
-    value = _lazy_getattr(name)
+    """A lazily loaded name of ``__all__``, or a submodule the docs name (``hybrid.export``,
+    ``hybrid.progress``, ``hybrid.errors``): imported on first use, as the names are."""
+    try:
+        value = _lazy_getattr(name)
+    except AttributeError:
+        import importlib
+        import importlib.util
+
+        if name.startswith("_") or importlib.util.find_spec(f"{__name__}.{name}") is None:
+            raise
+        value = importlib.import_module(f"{__name__}.{name}")
     globals()[name] = value
     return value
 

@@ -7,6 +7,8 @@ docstring, and a misspelt one must fail loudly instead of being ignored.
 from __future__ import annotations
 
 import inspect
+import subprocess
+import sys
 
 import pytest
 
@@ -38,3 +40,22 @@ def test_all_names_resolve() -> None:
         assert getattr(hybrid, name) is not None
     with pytest.raises(AttributeError):
         hybrid.no_such_thing  # noqa: B018
+
+
+def test_the_submodules_the_docs_name_are_reached_from_the_package() -> None:
+    # hybrid.progress.TerminalLine (simulation-api.md) and hybrid.export.figures_of
+    # (plots.md) raised AttributeError unless something had imported them first
+    code = (
+        "import hybrid\n"
+        "print(hybrid.progress.TerminalLine.__name__, hybrid.export.figures_of.__name__,\n"
+        "      hybrid.errors.UnknownName.__name__, hybrid.analysis.__name__)\n"
+        "try:\n"
+        "    hybrid.nothing_of_that_name\n"
+        "except AttributeError as e:\n"
+        "    print(e)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.splitlines() == [
+        "TerminalLine figures_of UnknownName hybrid.analysis",
+        "module 'hybrid' has no attribute 'nothing_of_that_name'",
+    ]
