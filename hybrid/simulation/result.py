@@ -16,7 +16,7 @@ import importlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,6 +27,9 @@ if TYPE_CHECKING:
     from hybrid.simulation.bounds import Extremes
 
 __all__ = ["CAUSES", "PLOT_BACKEND", "Jump", "RequirementResult", "Run", "Termination"]
+
+_TABLE_COLUMNS = ("t", "j", "location")
+"""The columns of a run's table before its states and signals (the names are reserved)."""
 
 CAUSES = ("t_end", "max_jumps", "zeno", "blocked", "nonfinite", "solver_failure", "interrupted")
 """Every way a run can end; only ``t_end`` is a normal end."""
@@ -163,8 +166,8 @@ class Run:
     """Per state variable, where the run first left its declared ``bounds:``
     (:class:`hybrid.simulation.bounds.BoundExcursion`); empty when it stayed within."""
 
-    def __getitem__(self, name: str) -> NDArray[np.float64]:
-        """The column of the state variable or signal ``name``.
+    def __getitem__(self, name: str) -> NDArray[Any]:
+        """The column of the state variable or signal ``name`` (also ``t``, ``j``, ``location``).
 
         An unknown name (or something else than a name) is an
         :class:`~hybrid.errors.UnknownName`: a ``UsageError`` and a ``KeyError``.
@@ -178,8 +181,26 @@ class Run:
             return self.states[:, self.state_names.index(name)]
         if name in self.signal_names:
             return self.signals[:, self.signal_names.index(name)]
+        if name in _TABLE_COLUMNS:  # the first columns of the CSV and of to_pandas()
+            column: NDArray[Any] = getattr(self, name)
+            return column
         hint = did_you_mean(name, [*self.state_names, *self.signal_names])
         raise UnknownName(f"no state variable or signal '{name}'{hint}")
+
+    def __contains__(self, name: object) -> bool:
+        """Whether ``run[name]`` is a column (``"h" in run``): ``t``, ``j``, ``location``,
+        a state variable or a signal."""
+        return isinstance(name, str) and (
+            name in _TABLE_COLUMNS or name in self.state_names or name in self.signal_names
+        )
+
+    def __iter__(self) -> NoReturn:
+        """A run is not a sequence of points: say what to write instead of ``list(run)``."""
+        raise TypeError(
+            "a run is not iterated: its columns are run[name] (name in run.state_names, "
+            "run.signal_names, or t, j, location), point k is run.t[k], run.states[k]; "
+            "run.to_pandas() gives the table"
+        )
 
     def __getattr__(self, name: str) -> Any:
         """Called only for a name a run does not have: what to write instead.

@@ -153,6 +153,17 @@ def test_a_run_is_indexed_by_names_and_says_how_to_get_a_point() -> None:
         run[0]  # type: ignore[index]
 
 
+def test_a_run_answers_in_and_names_its_table_columns_and_says_it_is_not_iterated() -> None:
+    # 'h' in run and list(run) said "got 0" (Python's fallback indexing by 0, 1, ...)
+    run = hybrid.simulate(BALL, t_end=2.0)
+    assert ["h" in run, "energy" in run, "t" in run, "x" in run, 0 in run] == [True, True, True, False, False]
+    assert run["t"] is run.t and run["j"] is run.j and run["location"] is run.location
+    assert list(run.to_pandas().columns[:3]) == ["t", "j", "location"]  # the same names
+    for iterate in (list, iter, lambda r: [p for p in r]):
+        with pytest.raises(TypeError, match="a run is not iterated: its columns are run"):
+            iterate(run)
+
+
 @pytest.mark.parametrize("backend", ["scipy", "compiled"])
 @pytest.mark.parametrize("name", ["max_jumps", "max_jumps_per_instant"])
 def test_a_count_beyond_64_bits_is_refused_on_both_backends(backend: str, name: str) -> None:
