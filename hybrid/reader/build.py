@@ -54,6 +54,8 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
     """Check cross-references and expressions of ``spec``; raise one :class:`SpecError`."""
     problems = Problems(positions)
     functions = _libraries(spec, problems)
+    if problems.items:  # every expression reading the library would be one more error
+        raise SpecError.many(problems.items)
     kinds = _declare_names(spec, problems, functions)
     sizes = _vector_sizes(spec, functions)
     scope = Scope(variables=kinds, functions=functions, vectors=sizes)
@@ -166,6 +168,12 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
     )
 
 
+_LIBRARY_HINTS = {
+    "uvms_model": "in the hybrid repository, pip install ./uvms_model (the UVMS case study's library)"
+}
+"""What to install for the function libraries our own specs use."""
+
+
 def _libraries(spec: AutomatonSpec, problems: Problems) -> dict[str, Function]:
     functions: dict[str, Function] = {}
     for i, lib in enumerate(spec.uses):
@@ -176,7 +184,8 @@ def _libraries(spec: AutomatonSpec, problems: Problems) -> dict[str, Function]:
             problems.at_value(
                 ("uses", i),
                 f"no installed package registers the function library '{lib}' "
-                f"(entry-point group hybrid.functions; installed: {', '.join(installed) or 'none'})",
+                f"(entry-point group hybrid.functions; installed: {', '.join(installed) or 'none'})"
+                f": {_LIBRARY_HINTS.get(lib, 'install the package that provides it')}",
             )
             continue
         except Exception as exc:  # a broken third-party package must not crash loading

@@ -249,3 +249,5 @@ def _works_as_written(python: Path, work: Path, kind: str) -> None:
     assert "Traceback" not in refused.stderr, kind
     assert refused.stderr.startswith("uvms_singularity.yaml:"), kind
     assert "function library 'uvms_model'" in refused.stderr, kind
+    assert "pip install ./uvms_model" in refused.stderr, kind  # what to do, in one line
+    assert len(refused.stderr.strip().splitlines()) == 1, (kind, refused.stderr)

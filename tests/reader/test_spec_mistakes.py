@@ -455,3 +455,38 @@ def test_cli_prints_each_problem_on_its_own_line(
         f"{path}:14:9: edge to unknown location 'fallen'; did you mean 'falling'?",
         f"{path}:15:12: unknown name 'heigth'; did you mean 'height'?",
     ]
+
+
+@pytest.mark.parametrize(
+    ("library", "hint"),
+    [
+        ("uvms_model", "in the hybrid repository, pip install ./uvms_model (the UVMS case study's library)"),
+        ("their_lib", "install the package that provides it"),
+    ],
+)
+def test_a_missing_function_library_is_one_error_that_says_what_to_install(
+    monkeypatch: pytest.MonkeyPatch, library: str, hint: str
+) -> None:
+    # every expression reading the library's functions used to add its own error (a
+    # UVMS mission without the library: 64 lines, none of them saying what to install)
+    import hybrid.reader.build as build
+
+    def missing(name: str) -> None:
+        raise LookupError(name)
+
+    monkeypatch.setattr(build, "load_library", missing)
+    monkeypatch.setattr(build, "available_libraries", list)
+    spec = (
+        f"automaton: arm\nuses: [{library}]\nstate: {{x: {{initial: 0.0}}}}\n"
+        "signals: {q: 'quintic(t, 0, 0, 0, 1, 1, 0)'}\n"
+        "locations: {l: {flow: {x: 'quintic(t, 0, 0, 0, 1, 1, 0) + bias[1]'}}}\n"
+    )
+    with pytest.raises(hybrid.SpecError) as caught:
+        hybrid.load_text(spec)
+    lines = str(caught.value).splitlines()
+    assert len(lines) == 1, lines
+    assert lines[0].startswith(
+        f"<string>:2:8: no installed package registers the function library '{library}' "
+        "(entry-point group hybrid.functions; installed: none): "
+    )
+    assert lines[0].endswith(hint)
