@@ -263,6 +263,12 @@ def read_yaml_text(
         )
     if text.startswith("\ufeff"):
         text = text[1:]
+    if text.lstrip().startswith(("<?xml", "<sspaceex", "<!--")):
+        raise SpecError(
+            "this is XML, not a YAML spec; a SpaceEx model is imported first: "
+            f"hybrid import spaceex {file} --out DIR",
+            Position(file, 1, 1),
+        )
     bad = _NOT_PRINTABLE.search(text)
     if bad is not None:
         at = bad.start()

@@ -490,3 +490,18 @@ def test_a_missing_function_library_is_one_error_that_says_what_to_install(
         "(entry-point group hybrid.functions; installed: none): "
     )
     assert lines[0].endswith(hint)
+
+
+@pytest.mark.parametrize("start", ['<?xml version="1.0"?>\n<sspaceex>', "<sspaceex>", "\n  <!-- a model -->\n<sspaceex>"])
+def test_a_spaceex_file_given_as_a_spec_says_to_import_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], start: str
+) -> None:
+    # it said "invalid YAML: mapping values are not allowed" or "got a str value"
+    model = tmp_path / "bball.xml"
+    model.write_text(start + '<component id="c"/></sspaceex>\n')
+    for command in (("validate",), ("simulate", "--t-end", "1")):
+        assert cli_main([command[0], str(model), *command[1:]]) == 2
+        assert capsys.readouterr().err.strip() == (
+            f"{model}:1:1: this is XML, not a YAML spec; a SpaceEx model is imported first: "
+            f"hybrid import spaceex {model} --out DIR"
+        )
