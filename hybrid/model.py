@@ -9,7 +9,7 @@ overriding a parameter is cheap (:meth:`Automaton.with_parameters`).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
@@ -328,7 +328,7 @@ class Automaton:
             name = unknown[0]
             raise SpecError(
                 f"unknown parameter '{name}' for automaton '{self.name}'"
-                f"{did_you_mean(name, self.parameters, 0.5)}",
+                f"{did_you_mean(name, self.parameters, 0.5) or _known('parameters', self.parameters)}",
                 self.position,
             )
         merged = dict(self.parameters)
@@ -353,7 +353,7 @@ class Automaton:
                 if name not in self.locations:
                     raise SpecError(
                         f"unknown initial location '{name}'"
-                        f"{did_you_mean(name, self.locations, 0.5)}",
+                        f"{did_you_mean(name, self.locations, 0.5) or _known('locations', self.locations)}",
                         self.position,
                     )
             if not chosen:
@@ -405,3 +405,12 @@ def _as_float(name: str, value: object, position: Position) -> float:
     if not math.isfinite(number):
         raise SpecError(f"value of '{name}' must be a finite number, got {value!r}", position)
     return number
+
+
+def _known(what: str, names: Iterable[str]) -> str:
+    """`` (parameters: a, b)``, the names to choose from when none is close to the one given."""
+    listed = list(names)
+    if not listed:
+        return f" (it has no {what})"
+    shown = ", ".join(listed[:12]) + (f", ... ({len(listed)} in all)" if len(listed) > 12 else "")
+    return f" ({what}: {shown})"

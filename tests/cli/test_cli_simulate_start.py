@@ -64,6 +64,9 @@ def test_initial_location_and_init_start_the_thermostat_heating(tmp_path: Path) 
         (BALL, ["--init", "h=inf"], "value of 'h' must be a finite number"),
         (BALL, ["--initial-location", "flying"],
          "unknown initial location 'flying'; did you mean 'falling'?"),
+        # none close: the names to choose from (they used to be left out)
+        (BALL, ["--initial-location", "up"], "unknown initial location 'up' (locations: falling)"),
+        (BALL, ["--param", "k=1"], "unknown parameter 'k' for automaton 'bouncing_ball' (parameters: g, e)"),
         (MISSION, ["--init", "phii=1"],
          "initial value for unknown state variable 'phii'; did you mean 'phi'?"),
         (MISSION, ["--initial-location", "q0"],
