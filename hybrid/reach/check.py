@@ -117,6 +117,20 @@ def check(
         for f in report.findings
         if f.rule == "property-unproved" and f.where.startswith("forbidden: ")
     ]
+    if t_end is None and (reach_max_jumps is not None or reach_step is not None):
+        import warnings
+
+        from hybrid.errors import Note
+
+        given = ("reach_max_jumps (--reach-max-jumps)" if reach_max_jumps is not None
+                 else "reach_step")  # fmt: skip
+        warnings.warn(
+            Note(
+                f"{model.name}: {given} is not used: reach runs over a horizon, and none is "
+                "given (reach_t_end, --reach-t-end, or checks: {reach: {t_end: ...}} in the spec)"
+            ),
+            stacklevel=2,
+        )
     if t_end is None or not props.forbidden:
         return report
     max_jumps = reach_max_jumps if reach_max_jumps is not None else props.reach_max_jumps

@@ -362,7 +362,8 @@ def _segments(
         norm = float(rows.max()) * step
         raise UsageError(
             f"the bounds of location '{mode.name}' overflow at step {step:g} "
-            f"(|A| h = {norm:.3g} in the infinity norm): give a smaller step",
+            f"(|A| h = {norm:.3g} in the infinity norm): give a smaller step (--step of "
+            "hybrid reach; for check, checks: {reach: {step: ...}} in the spec)",
             at=_fastest_flow(forms, mode, int(np.argmax(rows))),
         ) from None
     return kept

@@ -293,3 +293,18 @@ def test_a_witness_leaving_its_bounds_is_one_warning_line(tmp_path: Path, comman
     assert any(line.startswith(warning) for line in lines), done.stderr
     assert "sys.exit" not in done.stderr and "BoundsWarning" not in done.stderr
     assert_no_traceback(done.stderr)
+
+
+def test_a_jump_bound_without_a_horizon_is_a_note_not_silence(tmp_path: Path) -> None:
+    # check --reach-max-jumps 3 on a spec with no reach horizon ran no reach and said nothing
+    spec = tmp_path / "heater.yaml"
+    spec.write_text(HEATER)
+    done = run_cli("check", spec, "--reach-max-jumps", "3")
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.strip() == (
+        "hybrid: note: heater: reach_max_jumps (--reach-max-jumps) is not used: reach runs over "
+        "a horizon, and none is given (reach_t_end, --reach-t-end, or checks: {reach: {t_end: "
+        "...}} in the spec)"
+    )
+    with_horizon = run_cli("check", spec, "--reach-max-jumps", "3", "--reach-t-end", "1")
+    assert "is not used" not in with_horizon.stderr
