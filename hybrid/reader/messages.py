@@ -143,7 +143,7 @@ def validation_problems(
         else:
             got = _value_at(data, loc)
             shown = f" (got {_short(got)})" if got is not _MISSING else ""
-            message = item["msg"]
+            message = item["msg"].removeprefix("Value error, ")  # pydantic's word, not ours
             plain = _plain_type_message(kind, loc, got)
             if plain is not None:
                 problems.append((positions.value(loc), f"{describe_path(loc)}: {plain}"))
@@ -211,6 +211,13 @@ def _plain_type_message(kind: str, loc: tuple[Any, ...], got: Any) -> str | None
     if kind in ("model_type", "dict_type"):
         return f"expected a mapping of names (got {_short(got)})"
     if kind in ("float_type", "float_parsing") and isinstance(got, str):
+        spelled = got.strip().lstrip("+-").lower()
+        if spelled in ("inf", "infinity", "nan"):
+            sign = "-" if got.strip().startswith("-") else ""
+            yaml_word = ".nan" if spelled == "nan" else f"{sign}.inf"
+            return f"expected a number, got the text {got!r}: YAML writes it {yaml_word}"
+        if "_" in got and got.replace("_", "").replace(".", "", 1).lstrip("+-").isdigit():
+            return f"expected a number, got the text {got!r}: write {got.replace('_', '')} (no _)"
         return (
             f"expected a number, got the text {got!r} (a unit goes under a state "
             "variable's or signal's unit:, not in the value)"

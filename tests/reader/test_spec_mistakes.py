@@ -283,6 +283,35 @@ MISTAKES = [
         31,
         ("'sin' is a reserved name",),
     ),
+    # numbers written as other tools write them: said "Input should be a valid number"
+    Mistake(
+        "infinity-spelled-inf",
+        ball("height: {initial: 10.0}", "height: {initial: 10.0, bounds: [0, inf]}"),
+        4,
+        39,
+        ("expected a number, got the text 'inf': YAML writes it .inf",),
+    ),
+    Mistake(
+        "minus-infinity",
+        ball("height: {initial: 10.0}", "height: {initial: 10.0, bounds: [-Infinity, 20]}"),
+        4,
+        36,
+        ("got the text '-Infinity': YAML writes it -.inf",),
+    ),
+    Mistake(
+        "digit-separators",
+        ball("parameters: {g: 9.81, e: 0.8}", "parameters: {g: 9.81, e: 0.8, n: 1_000}"),
+        2,
+        34,
+        ("expected a number, got the text '1_000': write 1000 (no _)",),
+    ),
+    Mistake(  # pydantic's "Value error, " no longer starts it
+        "infinite-expression",
+        ball("    guard: height <= 0 and velocity < 0", "    guard: .inf"),
+        15,
+        12,
+        ("edges[0].guard: an expression must be finite; write a number or a formula",),
+    ),
     Mistake(  # validated before, and a run's table then had two 'j' columns
         "run-column-name",
         ball("  velocity: {initial: 0.0}", "  velocity: {initial: 0.0}\n  j: {initial: 0.0}"),
