@@ -30,6 +30,10 @@ __all__ = ["function_habit", "habit"]
 
 # Longer spellings first: at one column, `=>` wins over `=`, `~=` and `!=` over `~`, `!`.
 _HABITS: tuple[tuple[re.Pattern[str], str], ...] = (
+    # (not after a digit: 2.*x is Python's 2.0 * x)
+    (re.compile(r"(?<!\d)\.\*"), "'.*' is MATLAB's element-wise product: write '*'"),
+    (re.compile(r"(?<!\d)\./"), "'./' is MATLAB's element-wise division: write '/'"),
+    (re.compile(r"\.\^"), "'.^' is MATLAB's element-wise power: write '**'"),
     (re.compile(r"&&"), "'&&' is not an operator here: write 'and'"),
     (re.compile(r"\|\|"), "'||' is not an operator here: write 'or'"),
     (re.compile(r"=>"), "'=>' is not a comparison: write '>='"),
@@ -80,6 +84,9 @@ def habit(text: str) -> tuple[str, int] | None:
         juxtaposed = _JUXTAPOSED.match(text, col)
         if juxtaposed is not None:
             number, name = juxtaposed.groups()
+            if name in ("e", "E") and "e" not in number.lower():  # 3.0e: an exponent unfinished?
+                return (f"'{number}{name}' is not a number: an exponent needs its digits "
+                        f"({number}{name}3), a product its '*' ({number} * {name})", col)  # fmt: skip
             return f"'{number}{name}' is not a product here: write '{number} * {name}'", col
         for pattern, message in _HABITS:
             found = pattern.match(text, col)

@@ -46,7 +46,7 @@ _BIN = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.Pow: "**"}
 _CMP = {ast.Lt: "<", ast.LtE: "<=", ast.Gt: ">", ast.GtE: ">=", ast.Eq: "==", ast.NotEq: "!="}
 _HINTS = {
     ast.BitXor: "'^' is not a power here: write '**'",
-    ast.Mod: "'%' is not supported",
+    ast.Mod: "'%' is not supported: there is no modulo; write x - m * floor(x / m)",
     ast.FloorDiv: "'//' is not supported: write floor(a / b)",
     ast.BitAnd: "'&' is not supported: write 'and'",
     ast.BitOr: "'|' is not supported: write 'or'",
@@ -238,7 +238,11 @@ class _Converter:
     def number(self, node: ast.AST) -> ir.Expr:
         converted, kind = self.convert(node)
         if kind != _NUM:
-            raise ExprError("expected a number here, got a condition", self.col(node))
+            raise ExprError(
+                "expected a number here, got a condition (conditions join with 'and' and "
+                "'or'; a value that depends on a condition is a location's signal)",
+                self.col(node),
+            )
         return converted
 
     def boolean(self, node: ast.AST) -> ir.Expr:

@@ -41,6 +41,14 @@ GUARDS = [
     ("h <= 0 and !(v > 0)", 23, "'!' is not negation here: write 'not'"),
     ("~(h > 0)", 12, "'~' is not negation here: write 'not'"),
     ("!v", 12, "YAML tags (!v) are not allowed in specs; if '!' meant negation, write 'not'"),
+    # MATLAB's element-wise operators, modulo, an unfinished exponent, a product of conditions:
+    # each said only "syntax error", "'%' is not supported" or "not a product"
+    ("h .* v <= 0", 14, "'.*' is MATLAB's element-wise product: write '*'"),
+    ("h.^2 <= 0", 13, "'.^' is MATLAB's element-wise power: write '**'"),
+    ("h % 2 <= 0", 12, "'%' is not supported: there is no modulo; write x - m * floor(x / m)"),
+    ("h >= 3.0e", 17, "'3.0e' is not a number: an exponent needs its digits (3.0e3), a product its '*' (3.0 * e)"),
+    ("(h <= 0) * (v < 0) > 0", 13, "expected a number here, got a condition (conditions join "
+     "with 'and' and 'or'; a value that depends on a condition is a location's signal)"),
     # YAML's non-specific tag: read as 'v > 0' without a word until this was refused
     ("! v > 0", 12, "'!' is not negation here (YAML reads '! ' as a tag and drops it): write 'not'"),
 ]
