@@ -74,7 +74,11 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
                 problems.at_key(
                     (*base, "flow", var),
                     f"flow of '{var}': not a state variable"
-                    + (derivative_hint(var, state_names) or closest(var, state_names)),
+                    + (
+                        derivative_hint(var, state_names)
+                        or _other_kind(var, spec, "a flow gives the rates of state variables")
+                        or closest(var, state_names)
+                    ),
                 )
                 continue
             flow[var] = problems.expression((*base, "flow", var), source, scope, "number")
@@ -166,6 +170,16 @@ def build_automaton(spec: AutomatonSpec, positions: PositionMap) -> Automaton:
         label_positions={k: positions.value(("labels", i)) for i, k in enumerate(spec.labels)},
         requirements=requirements,
     )
+
+
+def _other_kind(name: str, spec: AutomatonSpec, rule: str) -> str:
+    """``: 'e' is a parameter (RULE)`` when ``name`` is declared as another kind, else ``""``."""
+    for kind, names in (("a parameter", spec.parameters), ("a signal", spec.signals)):
+        if name in names:
+            return f": '{name}' is {kind} ({rule})"
+    if name in {entry for entry, _, _ in input_entries(spec)}:
+        return f": '{name}' is an input ({rule})"
+    return ""
 
 
 _LIBRARY_HINTS = {
@@ -329,7 +343,11 @@ def _edges(
             if var not in spec.state:
                 problems.at_key(
                     (*base, "reset", var),
-                    f"reset of '{var}': not a state variable{closest(var, state_names)}",
+                    f"reset of '{var}': not a state variable"
+                    + (
+                        _other_kind(var, spec, "a reset sets state variables")
+                        or closest(var, state_names)
+                    ),
                 )
                 continue
             reset[var] = problems.expression((*base, "reset", var), source, scope, "number")

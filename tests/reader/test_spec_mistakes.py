@@ -305,6 +305,13 @@ MISTAKES = [
         34,
         ("expected a number, got the text '1_000': write 1000 (no _)",),
     ),
+    Mistake(  # said only "not a state variable"
+        "reset-of-a-parameter",
+        ball("reset: {velocity: -e*velocity}", "reset: {velocity: -e*velocity, e: 0.5}"),
+        16,
+        36,
+        ("reset of 'e': not a state variable: 'e' is a parameter (a reset sets state variables)",),
+    ),
     Mistake(  # pydantic's "Value error, " no longer starts it
         "infinite-expression",
         ball("    guard: height <= 0 and velocity < 0", "    guard: .inf"),
