@@ -170,6 +170,10 @@ def write_events(run: Run, path: str | Path, progress: Reporter | None = None) -
 
 
 def _finite(value: Any) -> Any:
+    """``value`` as JSON takes it: non-finite numbers null, numpy's numbers Python's
+    (``t_end=np.int64(3)`` is kept in ``run.settings`` as given)."""
+    if isinstance(value, np.generic):
+        value = value.item()
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):

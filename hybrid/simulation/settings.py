@@ -308,10 +308,6 @@ class Settings:
             if value.__class__.__module__ == "numpy" and value.__class__.__name__ in ("bool", "bool_"):
                 object.__setattr__(self, flag, bool(value))  # numpy's True: a Python one
             _flag(flag, getattr(self, flag))
-        for name in _NUMBERS:  # numpy's numbers as Python's: the events JSON writes them
-            value = getattr(self, name)
-            if value.__class__.__module__ == "numpy" and hasattr(value, "item"):
-                object.__setattr__(self, name, value.item())
 
     def as_dict(self) -> dict[str, Any]:
         """The settings as the events JSON records them (``max_step`` null when not limited)."""
@@ -320,8 +316,6 @@ class Settings:
             record["max_step"] = None
         return record
 
-
-_NUMBERS = ("t_end", "t_start", "max_jumps", "rtol", "atol", "max_step", "dt", "max_jumps_per_instant")
 
 OPTIONS = tuple(f.name for f in fields(Settings))
 """The fields of :class:`Settings`, in order: the options every entry point takes."""
