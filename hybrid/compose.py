@@ -466,12 +466,14 @@ def check_system(system: System) -> None:
     for c in system.components:
         if c.name in seen_comp:
             twice.add(c.name)
+            first = seen_comp[c.name]
+            also = f"line {first.line}" if first.file == c.position.file else str(first)
             problems.append(
                 (
                     c.position,
-                    f"component name '{c.name}' is used twice (also at line "
-                    f"{seen_comp[c.name].line}): give each an `as:` name (the automaton's "
-                    "name is the default)",
+                    f"component name '{c.name}' is used twice (also at {also}): give each "
+                    "its own name (as: in a system file, names= in compose(); the "
+                    "automaton's name is the default)",
                 )
             )
         seen_comp[c.name] = c.position

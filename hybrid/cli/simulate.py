@@ -148,7 +148,7 @@ def _refuse_other_formats(args: argparse.Namespace) -> None:
     if args.plot is not None:
         from hybrid.export.plot import figure_format
 
-        figure_format(args.plot)
+        figure_format(args.plot, "--plot")
 
 
 def violation_text(result: RequirementResult) -> str:

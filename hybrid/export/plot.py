@@ -146,11 +146,12 @@ def plot_run(run: Run, path: str | Path, *names: str, against: str = "t") -> Non
     save_figure(figure_of(run, *names, against=against), path)
 
 
-def figure_format(path: str | Path) -> str:
+def figure_format(path: str | Path, flag: str = "") -> str:
     """The format of a figure written to ``path`` (its suffix, ``png`` without one).
 
     A :class:`~hybrid.errors.UsageError` when matplotlib cannot write it, or is
-    not installed: the command line asks before it runs anything.
+    not installed: the command line asks before it runs anything (``flag``, its
+    option, starts the message).
 
     Examples
     --------
@@ -165,7 +166,8 @@ def figure_format(path: str | Path) -> str:
     supported = FigureCanvasBase.get_supported_filetypes()
     if suffix not in supported:
         raise UsageError(
-            f"--plot: cannot write '.{suffix}' figures; use one of {', '.join(sorted(supported))}"
+            f"{flag + ': ' if flag else ''}cannot write '.{suffix}' figures; use one of "
+            f"{', '.join(sorted(supported))}"
         )
     return suffix
 

@@ -258,6 +258,7 @@ class Settings:
         ):
             raise UsageError(
                 f"t_end must be a finite time after t_start={t0}, got {_shown(self.t_end)}"
+                + _time_hint(self.t_end)
             )
         span = float(self.t_end) - t0
         _whole("max_jumps", self.max_jumps, 0)
@@ -315,6 +316,16 @@ class Settings:
         if math.isinf(self.max_step):
             record["max_step"] = None
         return record
+
+
+def _time_hint(value: Any) -> str:
+    """What to write for a time given as MATLAB's ``tspan`` or as an array, else ``""``."""
+    size = getattr(value, "size", None)
+    if size == 1 and hasattr(value, "item"):
+        return ": an array of one value; give its number (float(t) or t.item())"
+    if isinstance(value, (list, tuple)) or (size is not None and size > 1):
+        return ": for MATLAB's tspan [t0, tf], give t_start=t0, t_end=tf"
+    return ""
 
 
 OPTIONS = tuple(f.name for f in fields(Settings))

@@ -306,7 +306,7 @@ def solver_advice(t: float, settings: Settings, peak: float) -> str:
     a step shorter than 10 spacings of the doubles there (16 apart), whatever the flow.
 
     >>> solver_advice(5.0, Settings(t_end=10.0), 3.0)
-    'largest |state| 3; the solution may blow up here, or try another --method or tighter tolerances'
+    'largest |state| 3; the solution may blow up here, or try another method (--method, method=) or tighter tolerances'
     >>> solver_advice(1e17, Settings(t_start=1e17, t_end=1e17 + 1e4), 20.0)  # doctest: +ELLIPSIS
     'largest |state| 20; at t=1e+17 consecutive floating-point times are 16 apart, ...'
     """
@@ -318,8 +318,8 @@ def solver_advice(t: float, settings: Settings, peak: float) -> str:
             "count time from nearer 0 (a smaller t_start)"
         )
     return (
-        f"largest |state| {peak:.3g}; the solution may blow up here, or try another --method "
-        "or tighter tolerances"
+        f"largest |state| {peak:.3g}; the solution may blow up here, or try another method "
+        "(--method, method=) or tighter tolerances"
     )
 
 

@@ -510,3 +510,30 @@ def test_a_table_asked_for_a_requirement_it_does_not_have_says_so() -> None:
     with pytest.raises(hybrid.UsageError, match="no requirement 'wram' in the table; did you mean 'warm'") as caught:
         table.violations("wram")
     assert isinstance(caught.value, KeyError)
+
+
+@pytest.mark.parametrize(
+    ("t_end", "hint"),
+    [
+        (np.array(3.0), "got array(3.): an array of one value; give its number (float(t) or t.item())"),
+        ([0, 10], "got [0, 10]: for MATLAB's tspan [t0, tf], give t_start=t0, t_end=tf"),
+        (np.array([0.0, 10.0]), "for MATLAB's tspan [t0, tf], give t_start=t0, t_end=tf"),
+    ],
+)
+def test_a_time_given_as_an_array_or_a_tspan_says_what_to_write(t_end: Any, hint: str) -> None:
+    # said only "t_end must be a finite time after t_start=0.0, got ..."
+    with pytest.raises(hybrid.UsageError) as caught:
+        hybrid.simulate(hybrid.load(SPECS / "bouncing_ball.yaml"), t_end=t_end)
+    assert str(caught.value).startswith("t_end must be a finite time after t_start=0.0, ")
+    assert str(caught.value).endswith(hint)
+
+
+def test_two_components_of_one_name_in_compose_say_where_and_how_to_rename() -> None:
+    # pointed at "line 1" of the other file and said to write `as:` (a system file's key)
+    tank, thermostat = hybrid.load(SPECS.parent / "docs/examples/tank.yaml"), THERMOSTAT
+    with pytest.raises(hybrid.SpecError) as caught:
+        hybrid.compose(tank, thermostat, names=["x", "x"])
+    assert caught.value.message == (
+        f"component name 'x' is used twice (also at {tank.position}): give each its own name "
+        "(as: in a system file, names= in compose(); the automaton's name is the default)"
+    )

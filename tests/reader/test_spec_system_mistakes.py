@@ -23,8 +23,8 @@ CASES = [
      "components[0]: a component is a mapping: write - spec: thermostat.yaml (with as:, "
      "parameters: and initial: if you like)"),
     ("system: s\ncomponents:\n  - {spec: thermostat.yaml}\n  - {spec: thermostat.yaml}\n", "4:5",
-     "component name 'thermostat' is used twice (also at line 3): give each an `as:` name "
-     "(the automaton's name is the default)"),
+     "component name 'thermostat' is used twice (also at line 3): give each its own name "
+     "(as: in a system file, names= in compose(); the automaton's name is the default)"),
     ("system: s\ncomponents:\n  - {file: thermostat.yaml}\n", "3:6",
      "unknown key 'file' in components[0]; did you mean 'spec'?"),
     ("system: s\ncomponents:\n  - spec: thermostatt.yaml\n", "3:11",
