@@ -8,6 +8,7 @@ overriding a parameter is cheap (:meth:`Automaton.with_parameters`).
 
 from __future__ import annotations
 
+import copyreg
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -37,6 +38,17 @@ contract fixes it; ``.`` and ``|`` join names into qualified and product ones.""
 
 def _frozen(mapping: Mapping[str, object] | None = None) -> Mapping[str, object]:
     return MappingProxyType(dict(mapping or {}))
+
+
+def _read_only(items: dict[str, object]) -> MappingProxyType[str, object]:
+    """A read-only view of ``items``: how a pickled ``MappingProxyType`` is rebuilt."""
+    return MappingProxyType(items)
+
+
+# Models keep their tables as read-only views, which pickle cannot take: a model could
+# not go to another process (multiprocessing, concurrent.futures) nor be deep-copied.
+# Pickle them as their contents (only pickling one, which failed before, is affected).
+copyreg.pickle(MappingProxyType, lambda proxy: (_read_only, (dict(proxy),)))
 
 
 @dataclass(frozen=True)

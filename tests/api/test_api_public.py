@@ -59,3 +59,20 @@ def test_the_submodules_the_docs_name_are_reached_from_the_package() -> None:
         "TerminalLine figures_of UnknownName hybrid.analysis",
         "module 'hybrid' has no attribute 'nothing_of_that_name'",
     ]
+
+
+@pytest.mark.parametrize(
+    "spec", ["specs/bouncing_ball.yaml", "docs/examples/tank_system.yaml", "specs/uvms_mission_2.yaml"]
+)
+def test_a_model_pickles_and_deep_copies_into_one_that_runs_alike(spec: str) -> None:
+    # "cannot pickle 'mappingproxy' object": no model could go to another process
+    import copy
+    import pickle
+    from pathlib import Path
+
+    model = hybrid.load(Path(__file__).resolve().parents[2] / spec)
+    run = hybrid.simulate(model, t_end=2.0)
+    for other in (pickle.loads(pickle.dumps(model)), copy.deepcopy(model)):
+        assert type(other) is type(model) and other.name == model.name
+        again = hybrid.simulate(other, t_end=2.0)
+        assert again.t.tolist() == run.t.tolist() and again.states.tolist() == run.states.tolist()
