@@ -329,9 +329,42 @@ def export_spaceex(model: Automaton | System) -> ExportResult:
             "nominal values have no SpaceEx counterpart: the .cfg gives the sets; an import "
             "starts simulations at their midpoints"
         )
+    notes.extend(_not_exported(system))
     clocks = [p.clock for p in parts if p.clock is not None]
     cfg = spaceex_cfg(system, network, clock, clocks, _forbidden(system))
     return ExportResult("\n".join(lines), cfg, notes)
+
+
+def _not_exported(system: System) -> list[str]:
+    """Notes on what the spec says that SpaceEx has no place for (left out, not silently)."""
+    props = system.properties
+    left = []
+    if props.reachable:
+        left.append(f"reachable: {', '.join(props.reachable)}")
+    for name in ("deadlock_free", "deterministic"):
+        if getattr(props, name) is not None:
+            left.append(name)
+    if props.reach_t_end is not None:
+        left.append("checks: reach")
+    notes = []
+    if left:
+        notes.append(
+            f"properties not exported ({'; '.join(left)}): a .cfg states forbidden sets only "
+            "(unreachable locations and forbidden states are exported as its forbidden set)"
+        )
+    if any(c.automaton.requirements for c in system.components):
+        notes.append("requirements: are not exported: SpaceEx has no trajectory requirements")
+    named = (  # an edge without a name is called source->target#k, as an import calls it
+        e.name != f"{e.source}->{e.target}#{k}"
+        for c in system.components
+        for k, e in enumerate(c.automaton.edges)
+    )
+    if any(named):
+        notes.append(
+            "edge names are not exported (SpaceEx transitions have labels only): an import "
+            "names each edge source->target#k"
+        )
+    return notes
 
 
 def _forbidden(system: System) -> list[str]:

@@ -212,3 +212,20 @@ def test_the_command_writes_xml_and_cfg(tmp_path: Path) -> None:
         str(REPO / "specs")
     )
     assert not (tmp_path / "u.xml").exists()
+
+
+def test_what_is_left_out_of_an_export_is_said_in_notes() -> None:
+    # the tank's reachable/deadlock_free/deterministic and its edge names went without a word
+    tank = hybrid.load(REPO / "docs" / "examples" / "tank.yaml")
+    notes = export_spaceex(tank).notes
+    assert (
+        "properties not exported (reachable: filling, draining; deadlock_free; deterministic): "
+        "a .cfg states forbidden sets only (unreachable locations and forbidden states are "
+        "exported as its forbidden set)"
+    ) in notes
+    assert any(n.startswith("edge names are not exported") for n in notes)
+    bare = hybrid.load_text(
+        "automaton: m\nstate: {x: {initial: 1}}\nlocations: {a: {flow: {x: 1}}}\n"
+        "edges: [{from: a, to: a, guard: x >= 2, reset: {x: 0}}]\n"
+    )
+    assert export_spaceex(bare).notes == []  # nothing named, nothing declared: nothing lost
