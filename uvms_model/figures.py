@@ -46,7 +46,10 @@ def write_figures(result: MissionResult, out_dir: Path, prefix: str) -> list[Pat
     ax.set_xlabel("t [s]")
     ax.set_ylabel("[u]")
     ax.set_title(f"{model}: performance index (cf. Figs. 7/10); red: q1, orange: q2")
-    ax.legend(loc="lower right", fontsize=8)
+    # beside the axes: inside, at the lower right, it covered mission 2's dip below gamma_tol
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
+    fig.set_size_inches(10.5, 4)
+    fig.tight_layout()
     paths.append(_save(fig, out_dir / f"{prefix}_gamma.png"))
 
     fig = _two_panels(
