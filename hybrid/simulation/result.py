@@ -13,6 +13,7 @@ Examples
 from __future__ import annotations
 
 import importlib
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -167,7 +168,8 @@ class Run:
     (:class:`hybrid.simulation.bounds.BoundExcursion`); empty when it stayed within."""
 
     def __getitem__(self, name: str) -> NDArray[Any]:
-        """The column of the state variable or signal ``name`` (also ``t``, ``j``, ``location``).
+        """The column of the state variable or signal ``name`` (also ``t``, ``j``, ``location``);
+        of a vector signal ``v``, one column per element ``v[0]``, ``v[1]``, ...
 
         An unknown name (or something else than a name) is an
         :class:`~hybrid.errors.UnknownName`: a ``UsageError`` and a ``KeyError``.
@@ -184,14 +186,34 @@ class Run:
         if name in _TABLE_COLUMNS:  # the first columns of the CSV and of to_pandas()
             column: NDArray[Any] = getattr(self, name)
             return column
+        elements = self._vector(name)
+        if elements:  # a vector signal: one column per element, as run.plot("ee") draws it
+            return self.signals[:, elements]
+        matlab = re.fullmatch(r"(\w+)\((\d+)\)", name)
+        if matlab and int(matlab[2]) >= 1 and f"{matlab[1]}[{int(matlab[2]) - 1}]" in self.signal_names:
+            k = int(matlab[2]) - 1
+            raise UnknownName(
+                f"no state variable or signal '{name}'; did you mean '{matlab[1]}[{k}]'? "
+                f"(elements count from 0: MATLAB's {name} is {matlab[1]}[{k}])"
+            )
         hint = did_you_mean(name, [*self.state_names, *self.signal_names])
         raise UnknownName(f"no state variable or signal '{name}'{hint}")
+
+    def _vector(self, name: str) -> list[int]:
+        """The columns of the elements ``name[0]``, ``name[1]``, ... of a vector signal."""
+        found: list[int] = []
+        while f"{name}[{len(found)}]" in self.signal_names:
+            found.append(self.signal_names.index(f"{name}[{len(found)}]"))
+        return found
 
     def __contains__(self, name: object) -> bool:
         """Whether ``run[name]`` is a column (``"h" in run``): ``t``, ``j``, ``location``,
         a state variable or a signal."""
         return isinstance(name, str) and (
-            name in _TABLE_COLUMNS or name in self.state_names or name in self.signal_names
+            name in _TABLE_COLUMNS
+            or name in self.state_names
+            or name in self.signal_names
+            or bool(self._vector(name))
         )
 
     def __iter__(self) -> NoReturn:

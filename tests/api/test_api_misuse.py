@@ -537,3 +537,20 @@ def test_two_components_of_one_name_in_compose_say_where_and_how_to_rename() -> 
         f"component name 'x' is used twice (also at {tank.position}): give each its own name "
         "(as: in a system file, names= in compose(); the automaton's name is the default)"
     )
+
+
+def test_a_vector_signal_is_read_whole_by_its_name_and_matlab_indices_are_named() -> None:
+    # run["q"] was an unknown name though run.plot("q") draws it; run["q(1)"] suggested q[1]
+    pytest.importorskip("uvms_model")
+    spec = (
+        "automaton: law\nuses: [uvms_model]\nstate: {x: {initial: 0.0}}\n"
+        "signals: {q: 'quintic(t, 0, 0, 0, 0, 1, 1)'}\nlocations: {a: {flow: {x: 1}}}\n"
+    )
+    run = hybrid.simulate(hybrid.load_text(spec), t_end=2.0)
+    assert "q" in run and run["q"].shape == (len(run), 3)
+    assert [run["q"][:, k].tolist() for k in range(3)] == [run[f"q[{k}]"].tolist() for k in range(3)]
+    assert run["q"][-1].tolist() == [1.0, 0.0, 0.0]  # held at (pf, 0, 0) after the law's end
+    with pytest.raises(hybrid.UsageError, match=re.escape(
+        "did you mean 'q[0]'? (elements count from 0: MATLAB's q(1) is q[0])"
+    )):  # fmt: skip
+        run["q(1)"]
