@@ -42,7 +42,15 @@ myst_heading_anchors = 4
 myst_enable_extensions = ["colon_fence"]
 
 # --- the API reference ------------------------------------------------------------------
-API_MODULES = ["hybrid", "hybrid.simulation", "hybrid.analysis", "hybrid.export"]
+API_MODULES = [
+    "hybrid",
+    "hybrid.simulation",
+    "hybrid.simulation.inputs",
+    "hybrid.analysis",
+    "hybrid.export",
+    "hybrid.progress",
+    "hybrid.errors",
+]
 """Modules users import; every name in their ``__all__`` gets a page (once)."""
 
 autosummary_generate = False
