@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import TextIO
 
 from hybrid.analysis import system_graph
-from hybrid.analysis.findings import Finding, Report
+from hybrid.analysis.findings import RULES, Finding, Report
 from hybrid.analysis.formats import FORMATS, write
 from hybrid.analysis.ignore import check_rule_ids
 from hybrid.cli.exits import EXIT_FINDINGS, EXIT_INVALID, EXIT_OK
@@ -95,7 +95,8 @@ def run_check(
         raise ValueError(f"unknown format '{fmt}'; choose from {', '.join(FORMATS)}")
     out = out or sys.stdout
     err = err or sys.stderr
-    config = config if config is not None else read_check_config()
+    if config is None:
+        config = read_check_config(rules=[r for r in RULES if r != "invalid-spec"])
     rules = check_rule_ids((*config.ignore, *ignore))
     strict = strict or config.strict
     reports: list[Report] = []

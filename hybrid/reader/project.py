@@ -26,10 +26,11 @@ from __future__ import annotations
 
 import re
 import tomllib
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from hybrid.errors import Position, SpecError
+from hybrid.errors import Position, SpecError, did_you_mean
 from hybrid.reader.files import read_bytes
 
 __all__ = ["CheckConfig", "find_pyproject", "read_check_config"]
@@ -62,8 +63,12 @@ def find_pyproject(start: Path) -> Path | None:
         folder = folder.parent
 
 
-def read_check_config(start: Path | None = None) -> CheckConfig:
-    """The ``[tool.hybrid.check]`` table of the nearest pyproject.toml (defaults if none)."""
+def read_check_config(start: Path | None = None, rules: Sequence[str] = ()) -> CheckConfig:
+    """The ``[tool.hybrid.check]`` table of the nearest pyproject.toml (defaults if none).
+
+    With ``rules`` (the rule ids ``hybrid check`` knows), an id in ``ignore`` that is
+    none of them is a :class:`SpecError` at its place in the file, with the closest one.
+    """
     path = find_pyproject(start or Path.cwd())
     if path is None:
         return CheckConfig()
@@ -98,6 +103,13 @@ def read_check_config(start: Path | None = None) -> CheckConfig:
         raise SpecError(
             "[tool.hybrid.check] ignore must be a list of rule ids", _line_of(text, name, "ignore")
         )
+    for rule in ignore if rules else ():
+        if rule not in rules:
+            raise SpecError(
+                f"unknown rule '{rule}' in [tool.hybrid.check] ignore"
+                f"{did_you_mean(rule, rules) or '; rules: ' + ', '.join(rules)}",
+                _line_of(text, name, f'"{rule}"'),
+            )
     strict = check.get("strict", False)
     if not isinstance(strict, bool):
         raise SpecError(

@@ -159,7 +159,9 @@ def test_pyproject_gives_the_repository_defaults(project, capsys):
         ("[tool.hybrid.check]\nignore = 3\n", ":2:1:", "ignore must be a list"),
         ("[tool.hybrid.check]\nsrict = true\n", ":2:1:", "unknown key 'srict'"),
         ("[tool.hybrid.check]\nignore = [\n", ":3:1:", "invalid TOML"),
-        ('[tool.hybrid.check]\nignore = ["dead-edges"]\n', "", "unknown rule 'dead-edges'"),
+        # had no place in the file and no suggestion
+        ('[tool.hybrid.check]\nignore = ["dead-edges"]\n', ":2:11:",
+         "unknown rule 'dead-edges' in [tool.hybrid.check] ignore; did you mean 'dead-edge'?"),
     ],
 )
 def test_bad_pyproject_is_a_clear_exit_2(project, table, where, message, capsys):
