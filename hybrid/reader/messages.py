@@ -224,6 +224,9 @@ def _plain_type_message(kind: str, loc: tuple[Any, ...], got: Any) -> str | None
             if any(c.isalpha() for c in got) and any(c.isdigit() for c in got)
             else None
         )
+    if kind == "string_type" and isinstance(got, bool):  # from: true, a location named so
+        word = str(got).lower()
+        return f"expected a name, got the boolean {word}: quote it ('{word}') for a name"
     if kind == "string_type" and loc and loc[-1] in _CONDITIONS and isinstance(got, list):
         joined = " and ".join(str(c) for c in got)
         return f"one condition, not a list: join them with 'and': {joined}"

@@ -305,6 +305,13 @@ MISTAKES = [
         34,
         ("expected a number, got the text '1_000': write 1000 (no _)",),
     ),
+    Mistake(  # said "Input should be a valid string (got True)"
+        "boolean-for-a-name",
+        ball("    to: falling\n", "    to: true\n"),
+        14,
+        9,
+        ("edges[0].to: expected a name, got the boolean true: quote it ('true') for a name",),
+    ),
     Mistake(  # said only "not a state variable"
         "reset-of-a-parameter",
         ball("reset: {velocity: -e*velocity}", "reset: {velocity: -e*velocity, e: 0.5}"),
