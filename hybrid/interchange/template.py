@@ -222,6 +222,14 @@ def analyse(
     edges = [
         _edge(comp, i, locations, rename, parsed_resets[i]) for i in range(len(comp.transitions))
     ]
+    for tr, edge in zip(comp.transitions, edges, strict=True):
+        if edge.source == edge.target and not edge.reset and tr.label is None:
+            notes.append(
+                f"component '{comp.id}': the transition {edge.source} -> {edge.target} at line "
+                f"{tr.position.line} assigns nothing: ours fire as soon as possible, so while "
+                "its guard holds it fires again at once, without time passing (hybrid check "
+                "reports the zero-time cycle; SpaceEx may also not take it)"
+            )
     read = read_names(locations, edges, signals, names)
     dropped, idle = unused(comp, inputs, constants, read, names, notes)
     inputs = [i for i in inputs if i not in dropped]

@@ -232,3 +232,22 @@ def test_a_target_invariant_on_what_a_partner_assigns_in_the_same_jump_is_refuse
     keeps = PUMP.replace("<assignment>q := 0</assignment>", "")
     _, data = _files(_model(waits, keeps, PLANT), cfg)
     assert data["tank.yaml"]["edges"][0]["guard"] == "h >= 2 and h >= 1 and q <= 0"
+
+
+def test_a_self_loop_that_assigns_nothing_is_named_in_a_note() -> None:
+    # HyST's toy_safe: imported without a word, then every run ended zeno at t = 4
+    loop = _base(
+        "k",
+        _param("x", dynamics="any"),
+        '<location id="1" name="l"><flow>x\' == 1</flow></location>'
+        '<transition source="1" target="1"><guard>x &gt;= 4</guard></transition>',
+    )
+    result = import_spaceex_text(_model(loop), "system = k", xml_file="m.xml", cfg_file="m.cfg")
+    assert (
+        "component 'k': the transition l -> l at line 2 assigns nothing: ours fire as soon as "
+        "possible, so while its guard holds it fires again at once, without time passing "
+        "(hybrid check reports the zero-time cycle; SpaceEx may also not take it)"
+    ) in result.notes
+    with_reset = loop.replace("</guard></transition>", "</guard><assignment>x := 0</assignment></transition>")
+    assert not any("assigns nothing" in n for n in import_spaceex_text(
+        _model(with_reset), "system = k", xml_file="m.xml", cfg_file="m.cfg").notes)  # fmt: skip
