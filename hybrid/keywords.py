@@ -56,6 +56,7 @@ def keywords_of(function: Callable[..., object]) -> tuple[str, ...]:
 def named_keywords(function: Callable[P, R]) -> Callable[P, R]:
     """``function``, whose refused keyword arguments are named with the ones it takes."""
     taken = keywords_of(function)
+    positional = getattr(function, "__wrapped__", function).__code__.co_argcount
 
     @functools.wraps(function)
     def call(*args: P.args, **kwargs: P.kwargs) -> R:
@@ -63,6 +64,15 @@ def named_keywords(function: Callable[P, R]) -> Callable[P, R]:
             return function(*args, **kwargs)
         except TypeError as exc:
             tb, said = exc.__traceback__, str(exc)
+            too_many = "positional argument" in said and "were given" in said
+            if tb is not None and tb.tb_next is None and too_many:
+                from hybrid.errors import UsageError
+
+                keywords = ", ".join(f"{k}=" for k in taken[positional:][:6])
+                raise UsageError(
+                    f"{said}: give the others by keyword ({keywords} ...); MATLAB's "
+                    "(f, [t0 tf], x0) is t_start=t0, t_end=tf, initial={name: value}"
+                ) from None
             if tb is None or tb.tb_next is not None or "unexpected keyword argument" not in said:
                 raise  # raised inside the function, or a refusal of another kind
             refused = [k for k in kwargs if k not in taken and f"'{k}'" in said]

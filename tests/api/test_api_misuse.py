@@ -554,3 +554,14 @@ def test_a_vector_signal_is_read_whole_by_its_name_and_matlab_indices_are_named(
         "did you mean 'q[0]'? (elements count from 0: MATLAB's q(1) is q[0])"
     )):  # fmt: skip
         run["q(1)"]
+
+
+def test_times_given_by_position_as_in_matlab_say_to_use_keywords() -> None:
+    # simulate(ball, 0, 10) raised Python's "takes from 1 to 2 positional arguments"
+    with pytest.raises(hybrid.UsageError) as caught:
+        hybrid.simulate(BALL, 0, 10)  # type: ignore[misc]
+    said = str(caught.value)
+    assert said.startswith("simulate() takes from 1 to 2 positional arguments but 3 were given: ")
+    assert "give the others by keyword (" in said and "t_start=t0, t_end=tf" in said
+    with pytest.raises(TypeError, match="missing 1 required positional argument"):
+        hybrid.simulate()  # type: ignore[call-arg]
