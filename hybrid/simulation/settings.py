@@ -272,6 +272,9 @@ class Settings:
         if not finite_number("atol", self.atol) > 0:
             raise UsageError(f"atol must be > 0, got {self.atol}")
         step = self.max_step
+        if step is None:  # as run.settings and the events file write "not limited"
+            step = math.inf
+            object.__setattr__(self, "max_step", step)
         if (
             not _plain_number(step) and (isinstance(step, bool) or not isinstance(step, numbers.Real))
         ) or not step > 0:

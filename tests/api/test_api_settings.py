@@ -267,3 +267,13 @@ def test_numpy_numbers_in_the_settings_are_written_to_the_events_file(
     write_events(run, tmp_path / "events.json")
     written = json.loads((tmp_path / "events.json").read_text())["settings"]
     assert {name: written[name] for name in given} == {k: v.item() for k, v in given.items()}
+
+
+def test_the_settings_a_run_recorded_make_the_same_run_again(ball: hybrid.Automaton) -> None:
+    # run.settings writes max_step None ("not limited"), which Settings refused
+    run = hybrid.simulate(ball, t_end=3.0, rtol=1e-9, atol=1e-11)
+    recorded = {k: v for k, v in run.settings.items() if k != "start"}
+    assert recorded["max_step"] is None
+    again = hybrid.simulate(ball, settings=hybrid.Settings(**recorded))
+    assert again.settings == run.settings and again.t.tolist() == run.t.tolist()
+    assert hybrid.Settings(t_end=1.0, max_step=None).max_step == math.inf
