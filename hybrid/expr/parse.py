@@ -138,6 +138,12 @@ def parse_expression(source: str, scope: Scope, *, want: str = "number") -> ir.E
         if found is not None:
             raise ExprError(found[0], lead + found[1]) from None
         col = (exc.offset or 1) - 1 if (exc.lineno or 1) == 1 else 0
+        if "\n" in text:  # a YAML literal block (|) keeps its line breaks
+            raise ExprError(
+                "an expression is one line: a YAML literal block (|) keeps its line breaks; "
+                "write it on one line or as a folded block (>)",
+                lead,
+            ) from None
         raise ExprError(f"syntax error: {exc.msg}", lead + col) from None
     except (MemoryError, RecursionError):
         raise ExprError(

@@ -305,6 +305,14 @@ MISTAKES = [
         34,
         ("expected a number, got the text '1_000': write 1000 (no _)",),
     ),
+    Mistake(  # said "syntax error: invalid syntax"
+        "literal-block-expression",
+        ball("    guard: height <= 0 and velocity < 0", "    guard: |\n      height <= 0 and\n      velocity < 0"),
+        15,
+        12,
+        ("an expression is one line: a YAML literal block (|) keeps its line breaks; write it "
+         "on one line or as a folded block (>)",),
+    ),
     Mistake(  # said "Input should be a valid string (got True)"
         "boolean-for-a-name",
         ball("    to: falling\n", "    to: true\n"),
