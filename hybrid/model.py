@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import copyreg
 import math
+import numbers
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
@@ -408,7 +409,7 @@ def check_overrides(overrides: object, position: Position) -> None:
 def _as_float(name: str, value: object, position: Position) -> float:
     """A parameter's new value: a finite number (NaN or infinite, every expression reading it
     would be), as the spec's own ``parameters:`` must be."""
-    if isinstance(value, bool) or not isinstance(value, int | float | str):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real | str):
         raise SpecError(f"value of '{name}' must be a number, got {value!r}", position)
     try:
         number = float(value)

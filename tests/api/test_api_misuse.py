@@ -565,3 +565,14 @@ def test_times_given_by_position_as_in_matlab_say_to_use_keywords() -> None:
     assert "give the others by keyword (" in said and "t_start=t0, t_end=tf" in said
     with pytest.raises(TypeError, match="missing 1 required positional argument"):
         hybrid.simulate()  # type: ignore[call-arg]
+
+
+def test_numpy_numbers_are_parameter_values_when_a_model_is_loaded_or_copied() -> None:
+    # with_parameters and load(parameters=) refused np.int64 and np.float32 ("must be a
+    # number"), which simulate(parameters=) took
+    values = {"g": np.float32(1.5), "e": np.int64(1)}
+    for model in (BALL.with_parameters(values), hybrid.load(SPECS / "bouncing_ball.yaml", parameters=values)):
+        assert model.parameters == {"g": 1.5, "e": 1.0}
+        assert all(type(v) is float for v in model.parameters.values())
+    with pytest.raises(hybrid.SpecError, match=re.escape("value of 'g' must be a number, got np.True_")):
+        BALL.with_parameters({"g": np.True_})
