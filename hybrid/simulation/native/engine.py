@@ -264,10 +264,11 @@ def simulate_compiled(
     inputs: Mapping[str, Callable[[float], float]] | None = None,
     handle_sigint: bool = True,
     progress: Callable[[float, int, int], None] | None = None,
+    flag: NDArray[np.int64] | None = None,
 ) -> Run:
     """One run of ``model`` (parameters and initial location already applied) with ``settings``.
 
-    ``progress(t, jumps, points)``: see :func:`run_arrays`.
+    ``progress(t, jumps, points)`` and ``flag``: see :func:`run_arrays`.
 
     What the loop is given (parameter vector, initial point and mode, settings
     arrays) is kept for the last model object (frozen) and settings run without
@@ -291,8 +292,9 @@ def simulate_compiled(
         if not initial:
             _LAST_RUN[0] = (model, settings, compiled, p, x0, m0, cfg)  # replaced at once
     arrays = run_arrays(
-        compiled, p, x0, m0, settings, handle_sigint, reuse=True, cfg=cfg, progress=progress
-    )
+        compiled, p, x0, m0, settings, handle_sigint, reuse=True, cfg=cfg, progress=progress,
+        flag=flag,
+    )  # fmt: skip
     return run_from(compiled.native, compiled.layout, model, settings, arrays)  # copies all it keeps
 
 
@@ -319,6 +321,7 @@ def run_arrays(
     reuse: bool = False,
     cfg: tuple[NDArray[np.float64], NDArray[np.int64]] | None = None,
     progress: Callable[[float, int, int], None] | None = None,
+    flag: NDArray[np.int64] | None = None,
 ) -> b.RunArrays:
     """One run's arrays, run again with four times the room until they hold it all.
 
@@ -332,7 +335,8 @@ def run_arrays(
     ``progress(t, jumps, points)`` is called in the calling thread while the
     loop runs on another (:func:`~hybrid.simulation.native.interruptible.run_in_worker`),
     with the time reached (never going back, also when a run is repeated with
-    more room).
+    more room). ``flag``: the interrupt flag the loop reads (shared with an
+    ensemble's runs; set already, the run ends at once as ``interrupted``).
     """
     cfg = config(settings) if cfg is None else cfg
     points, jumps = 256, 64
@@ -350,12 +354,13 @@ def run_arrays(
             def call(flag: NDArray[np.int64], arrays: b.RunArrays = arrays) -> None:
                 compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, flag)
 
-            run_in_worker(call, handle_sigint, tick=_ticker(arrays, reached, progress))
+            run_in_worker(call, handle_sigint, flag, tick=_ticker(arrays, reached, progress))
         elif watched:  # what run_in_worker does then, without its checks
             run_here(partial(compiled.run_one, p, x0, settings.t_start, m0, cfg, arrays),
-                     np.zeros(1, dtype=np.int64))  # fmt: skip
+                     np.zeros(1, dtype=np.int64) if flag is None else flag)  # fmt: skip
         else:  # what run_in_worker does then, without its closure and thread check
-            compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays, np.zeros(1, dtype=np.int64))
+            compiled.run_one(p, x0, settings.t_start, m0, cfg, arrays,
+                             np.zeros(1, dtype=np.int64) if flag is None else flag)  # fmt: skip
         if not arrays.oi[b.I_OVERFLOW]:
             return arrays
         points, jumps, first = points * 4, jumps * 4, False

@@ -347,10 +347,11 @@ def simulate_many(
         numba.set_num_threads(max(1, min(int(threads), most)))
     cfg = config(settings)
     m0 = compiled.initial_mode(model)
-    pilot = run_arrays(compiled, params[0], x0s[0], m0, settings, False)  # sizes the rows
+    flag = np.zeros(1, dtype=np.int64)  # after a Ctrl-C, the remaining runs end at once
+    # sizes the rows; a Ctrl-C while it runs sets the flag (every run then ends at once)
+    pilot = run_arrays(compiled, params[0], x0s[0], m0, settings, handle_sigint, flag=flag)
     points = 2 * int(pilot.oi[b.I_POINTS]) + 16
     jumps = 2 * int(pilot.oi[b.I_JUMPS]) + 4
-    flag = np.zeros(1, dtype=np.int64)  # after a Ctrl-C, the remaining runs end at once
     room: b.RunArrays | None = None  # the chunks' room, one allocation (its memory touched once)
     for lo in range(0, n, CHUNK):
         hi = min(n, lo + CHUNK)
@@ -365,7 +366,7 @@ def simulate_many(
         run_in_worker(call, handle_sigint, flag)
         overflowed = np.flatnonzero(arrays.oi[:, b.I_OVERFLOW])
         for r in overflowed.tolist():
-            one = _alone(model, ensemble, settings, lo + r, x0s[lo + r])
+            one = _alone(model, ensemble, settings, lo + r, x0s[lo + r], handle_sigint, flag)
             ensemble._alone[lo + r] = one
             one.out_of_bounds = _run_excursions(model, settings, one.state_names, one.t,
                                                 one.j, one.states)  # fmt: skip
@@ -439,9 +440,10 @@ def _chunk_excursions(ensemble: Ensemble, arrays: b.RunArrays, lo: int) -> None:
 
 
 def _alone(model: System, ensemble: Ensemble, settings: Settings, i: int,
-           x0: NDArray[np.float64]) -> Run:  # fmt: skip
-    """Run ``i`` on its own (it outgrew its row in the chunk)."""
+           x0: NDArray[np.float64], handle_sigint: bool, flag: NDArray[np.int64]) -> Run:  # fmt: skip
+    """Run ``i`` on its own (it outgrew its row in the chunk), reading the ensemble's
+    interrupt flag: after a Ctrl-C it ends at once as ``interrupted``, as every run does."""
     one = ensemble.model_of(i)
     names = ensemble.compiled.native.state_names
     start = dict(zip(names, x0.tolist(), strict=True))
-    return simulate_compiled(one, settings, initial=start, handle_sigint=False)
+    return simulate_compiled(one, settings, initial=start, handle_sigint=handle_sigint, flag=flag)

@@ -418,3 +418,37 @@ def test_the_source_is_generated_once_per_structure(monkeypatch: pytest.MonkeyPa
     restarted = thermostat.with_initial(location="on")  # another first mode: another structure
     assert source.native_source(as_system(restarted)) != first
     assert len(made) == 2 and made[1].system.initial_mode != made[0].system.initial_mode
+
+
+ENSEMBLE_CTRL_C = """
+import os, signal, threading
+import numpy as np
+import hybrid
+th = hybrid.load({thermostat!r})
+hybrid.simulate_many(th, t_end=10.0)  # compiled, warm
+# the first run alone sizes the rows: a Ctrl-C while it runs ends every run
+threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()
+one = hybrid.simulate_many(th, t_end=1e8, max_jumps=10**9)
+print(sorted(set(one.causes.tolist())), bool(one.t[0] < 1e8))
+# the first row switches 50 times, the others about 250,000 times: each outgrows the room
+# the first sized and is run again alone (about 0.7 s each); a Ctrl-C during those ends
+# the one in progress and every later one at once
+rates = np.array([0.001] + [0.2] * 49)
+threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT)).start()
+many = hybrid.simulate_many(th, t_end=5e5, max_jumps=10**9, parameters={{"a": rates}}, threads=1)
+print(len(many), len(many._alone), many.causes[0])
+print(sorted({{run.termination.cause for run in many._alone.values()}}))
+"""
+
+
+def test_ctrl_c_during_an_ensemble_ends_its_runs_including_the_first_and_the_rerun() -> None:
+    # a Ctrl-C while the first run sized the rows went unseen, and one while a row that
+    # outgrew its room ran again alone raised KeyboardInterrupt with a traceback
+    code = ENSEMBLE_CTRL_C.format(thermostat=str(REPO / "specs" / "thermostat.yaml"))
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=REPO, timeout=600)  # fmt: skip  (a hang guard: a cold compile)
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0] == "['interrupted'] True"
+    assert lines[1] == "50 49 t_end"
+    assert lines[2] in ("['interrupted']", "['interrupted', 't_end']"), lines[2]
