@@ -210,8 +210,8 @@ class Ensemble(Sequence[Run]):
         c, r = self._where(i)
         arrays = self._chunks[c].row(r)
         model = self.model
-        if int(arrays.oi[b.I_DETAIL]) in (b.D_EVAL, b.D_FLOW):
-            model = self.model_of(i)
+        if int(arrays.oi[b.I_DETAIL]) in (b.D_EVAL, b.D_FLOW, b.D_FLOW_START):
+            model = self.model_of(i)  # the message evaluates the model: with this run's values
         compiled = self.compiled
         run = run_from(compiled.native, compiled.layout, model, self.settings, arrays)
         run.out_of_bounds = self.out_of_bounds.get(i, ())

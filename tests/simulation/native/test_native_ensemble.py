@@ -56,3 +56,19 @@ def test_bad_tables_are_refused(ball: hybrid.Automaton) -> None:
         hybrid.simulate_many(ball, t_end=1.0, parameters={"e": [0.5, 0.6], "g": [9.0]})
     with pytest.raises(UsageError, match="unknown state variable 'z'"):
         hybrid.simulate_many(ball, t_end=1.0, initial={"z": [1.0]})
+
+
+def test_a_run_failing_at_its_start_is_described_with_its_own_parameters() -> None:
+    # both rows said "the flow of a gives x' = -0.8": the spec's c = 0.36, a finite value
+    model = hybrid.load_text(
+        "automaton: sq\nparameters: {c: 0.36}\nstate: {x: {initial: 1.0}}\n"
+        "locations: {a: {flow: {x: -sqrt(x - c)}}}\n"
+    )
+    runs = hybrid.simulate_many(model, t_end=2.0, parameters={"c": [2.0, 3.0]})
+    said = [run.termination.message for run in runs]
+    assert said == [
+        "the flow of a failed: sqrt(-1): math domain error (at t=0)",  # 1 - 2
+        "the flow of a failed: sqrt(-2): math domain error (at t=0)",  # 1 - 3
+    ]
+    one = hybrid.simulate(model, t_end=2.0, parameters={"c": 2.0}, backend="compiled")
+    assert one.termination.message == said[0]  # a single run's words
