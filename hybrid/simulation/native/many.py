@@ -34,7 +34,7 @@ from hybrid.simulation.bounds import (
     bound_limits,
     warn_ensemble,
 )
-from hybrid.simulation.interrupts import immediate
+from hybrid.simulation.interrupts import Interrupts, immediate, sigint_watch
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import run_from
 from hybrid.simulation.native.cache import require_numba
@@ -43,7 +43,6 @@ from hybrid.simulation.native.engine import (
     compiled_native,
     config,
     run_arrays,
-    simulate_compiled,
 )
 from hybrid.simulation.native.features import check_supported, refuse_requirements
 from hybrid.simulation.native.interruptible import run_in_worker
@@ -348,6 +347,23 @@ def simulate_many(
     cfg = config(settings)
     m0 = compiled.initial_mode(model)
     flag = np.zeros(1, dtype=np.int64)  # after a Ctrl-C, the remaining runs end at once
+    # A Ctrl-C between the compiled calls (while a chunk's rows are copied, a rerun is
+    # assembled) is counted by the watch and sets the flag at the next call: it never
+    # raises there, and every later run ends at once.
+    with sigint_watch(handle_sigint) as interrupted:
+        _run_all(ensemble, compiled, model, settings, params, x0s, m0, cfg, flag, handle_sigint,
+                 interrupted)  # fmt: skip
+    alone = {i: run.out_of_bounds for i, run in ensemble._alone.items() if run.out_of_bounds}
+    ensemble.out_of_bounds = dict(sorted({**ensemble.out_of_bounds, **alone}.items()))
+    warn_ensemble(ensemble.out_of_bounds, n)
+    return ensemble
+
+
+def _run_all(ensemble: Ensemble, compiled: CompiledNative, model: System, settings: Settings,
+             params: NDArray[np.float64], x0s: NDArray[np.float64], m0: int, cfg: Any,
+             flag: NDArray[np.int64], handle_sigint: bool, interrupted: Interrupts) -> None:  # fmt: skip
+    """Every run of :func:`simulate_many`, chunk by chunk, into ``ensemble``."""
+    n = params.shape[0]
     # sizes the rows; a Ctrl-C while it runs sets the flag (every run then ends at once)
     pilot = run_arrays(compiled, params[0], x0s[0], m0, settings, handle_sigint, flag=flag)
     points = 2 * int(pilot.oi[b.I_POINTS]) + 16
@@ -363,10 +379,14 @@ def simulate_many(
                  hi: int = hi) -> None:  # fmt: skip
             compiled.run_many(params[lo:hi], x0s[lo:hi], settings.t_start, m0, cfg, arrays, flag)
 
+        if interrupted.requested:
+            flag[0] = 1
         run_in_worker(call, handle_sigint, flag)
         overflowed = np.flatnonzero(arrays.oi[:, b.I_OVERFLOW])
         for r in overflowed.tolist():
-            one = _alone(model, ensemble, settings, lo + r, x0s[lo + r], handle_sigint, flag)
+            if interrupted.requested:
+                flag[0] = 1
+            one = _alone(ensemble, settings, lo + r, x0s[lo + r], m0, cfg, handle_sigint, flag)
             ensemble._alone[lo + r] = one
             one.out_of_bounds = _run_excursions(model, settings, one.state_names, one.t,
                                                 one.j, one.states)  # fmt: skip
@@ -376,10 +396,6 @@ def simulate_many(
             longest = max(len(ensemble._alone[lo + r]) for r in overflowed.tolist())
             most = max(len(ensemble._alone[lo + r].jumps) for r in overflowed.tolist())
             points, jumps = max(points, 2 * longest), max(jumps, 2 * most + 4)
-    alone = {i: run.out_of_bounds for i, run in ensemble._alone.items() if run.out_of_bounds}
-    ensemble.out_of_bounds = dict(sorted({**ensemble.out_of_bounds, **alone}.items()))
-    warn_ensemble(ensemble.out_of_bounds, n)
-    return ensemble
 
 
 def _first_rows(arrays: b.RunArrays, rows: int) -> b.RunArrays:
@@ -439,11 +455,12 @@ def _chunk_excursions(ensemble: Ensemble, arrays: b.RunArrays, lo: int) -> None:
             ensemble.out_of_bounds[lo + r] = found
 
 
-def _alone(model: System, ensemble: Ensemble, settings: Settings, i: int,
-           x0: NDArray[np.float64], handle_sigint: bool, flag: NDArray[np.int64]) -> Run:  # fmt: skip
-    """Run ``i`` on its own (it outgrew its row in the chunk), reading the ensemble's
-    interrupt flag: after a Ctrl-C it ends at once as ``interrupted``, as every run does."""
-    one = ensemble.model_of(i)
-    names = ensemble.compiled.native.state_names
-    start = dict(zip(names, x0.tolist(), strict=True))
-    return simulate_compiled(one, settings, initial=start, handle_sigint=handle_sigint, flag=flag)
+def _alone(ensemble: Ensemble, settings: Settings, i: int, x0: NDArray[np.float64], m0: int,
+           cfg: Any, handle_sigint: bool, flag: NDArray[np.int64]) -> Run:  # fmt: skip
+    """Run ``i`` on its own (it outgrew its row in the chunk), with the ensemble's compiled
+    model and its row's values, reading the ensemble's interrupt flag: after a Ctrl-C it
+    ends at once as ``interrupted``, as every run does (nothing is compiled again)."""
+    compiled = ensemble.compiled
+    arrays = run_arrays(compiled, ensemble.params[i], x0, m0, settings, handle_sigint, cfg=cfg,
+                        flag=flag)  # fmt: skip
+    return run_from(compiled.native, compiled.layout, ensemble.model_of(i), settings, arrays)
