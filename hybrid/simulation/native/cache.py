@@ -13,9 +13,10 @@ invalidate numba's index) and loads the machine code instead of compiling.
 
 **The cache directory** is ``$HYBRID_NATIVE_CACHE`` if set, else
 ``$XDG_CACHE_HOME/hybrid/native``, else ``~/.cache/hybrid/native``; if it
-cannot be written, a directory under the system's temporary directory. Delete
-it to reclaim the space; nothing else refers to it. Like numba's own cache,
-it is trusted: keep it private to the user (it is created ``0o700``).
+cannot be written, ``hybrid-native-<uid>`` under the system's temporary
+directory, used only if it is this user's and no one else's (a note says so).
+Delete it to reclaim the space; nothing else refers to it. Like numba's own
+cache, it is trusted: keep it private to the user (it is created ``0o700``).
 
 **A damaged cache is rebuilt, not blamed on the model.** Once a model or the
 kernel has compiled and loaded, :func:`seal` writes ``manifest.json`` beside
@@ -43,6 +44,7 @@ import json
 import os
 import platform
 import shutil
+import stat
 import sys
 import tempfile
 import threading
@@ -78,7 +80,8 @@ MANIFEST = "manifest.json"
 
 
 class CompiledCacheNote(Note):
-    """A damaged compiled-model cache was discarded and is being rebuilt."""
+    """About the compiled-model cache: a damaged one discarded and rebuilt, or one that
+    cannot be written replaced by the user's private temporary folder."""
 
 _LOADED: dict[str, ModuleType] = {}
 _SEALED: set[str] = set()
@@ -98,12 +101,87 @@ def require_numba() -> ModuleType:
 
 
 def cache_root() -> Path:
-    """The directory compiled models are kept in (see the module docstring)."""
+    """The directory compiled models are kept in (see the module docstring).
+
+    Decided once per process for each setting of the environment: the configured
+    directory if it can be written, else the user's private folder of the temporary
+    directory (a :class:`CompiledCacheNote` says so), so that what is looked up, said
+    and chosen (the first-compile notice, ``hybrid compile``, ``backend="auto"``)
+    is where the models are written.
+    """
     configured = os.environ.get(CACHE_ENV)
-    if configured:
-        return Path(configured)
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "hybrid" / "native"
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    setting = (configured, xdg, os.environ.get("HOME"))
+    found = _ROOTS.get(setting)
+    if found is None:
+        if configured:
+            wanted = Path(configured)
+        else:
+            wanted = Path(xdg or str(Path.home() / ".cache")) / "hybrid" / "native"
+        found = _ROOTS[setting] = _usable(wanted)
+    return found
+
+
+_ROOTS: dict[tuple[str | None, ...], Path] = {}
+
+
+def _usable(wanted: Path) -> Path:
+    """``wanted`` if a file can be created in it, else the private fallback (when there is one)."""
+    if _can_write(wanted):
+        return wanted
+    fallback = Path(tempfile.gettempdir()) / f"hybrid-native-{os.getuid()}"
+    if not _private_folder(fallback):
+        return wanted  # nothing to fall back on: writing fails later, naming the setting
+    warnings.warn(
+        CompiledCacheNote(
+            f"the cache folder {wanted} cannot be written: compiled models are kept in "
+            f"{fallback} (set {CACHE_ENV} to choose another)"
+        ),
+        stacklevel=users_stacklevel(),
+    )
+    return fallback
+
+
+def _can_write(folder: Path) -> bool:
+    """Whether ``folder`` could hold new files: a file can be made in it, or in its nearest
+    existing ancestor (nothing is left behind, and no folder is created)."""
+    existing = folder
+    while not existing.exists():
+        if existing.parent == existing:
+            return False
+        existing = existing.parent
+    if not existing.is_dir():
+        return False
+    probe = existing / f".hybrid-probe-{os.getpid()}"
+    try:
+        probe.touch()
+        probe.unlink()
+    except OSError:
+        return False
+    return True
+
+
+def _private_folder(folder: Path) -> bool:
+    """Whether ``folder`` is (or is now made) a directory of this user only, not a link.
+
+    The cache holds code this process runs: a folder of a predictable name in a
+    shared temporary directory that someone else created, or can write, is not used.
+    """
+    try:
+        folder.mkdir(mode=0o700)
+    except FileExistsError:
+        pass
+    except OSError:
+        return False
+    try:
+        status = os.lstat(folder)
+        if not stat.S_ISDIR(status.st_mode) or status.st_uid != os.getuid():
+            return False
+        if status.st_mode & 0o077:
+            os.chmod(folder, 0o700)  # ours, made by an older version without the mode
+    except OSError:
+        return False
+    return _can_write(folder)
 
 
 def cache_key(generated: Generated, numba_version: str) -> str:
@@ -142,17 +220,15 @@ def _library_sources(module: str) -> list[Path]:
 
 
 def _writable_directory(key: str) -> Path:
-    for root in (cache_root(), Path(tempfile.gettempdir()) / f"hybrid-native-{os.getuid()}"):
-        directory = root / key
-        try:
-            directory.mkdir(parents=True, exist_ok=True, mode=0o700)
-            probe = directory / ".probe"
-            probe.touch()
-            probe.unlink()
-        except OSError:
-            continue
-        return directory
-    raise UsageError(f"no writable cache directory for compiled models (set {CACHE_ENV})")
+    directory = cache_root() / key
+    with contextlib.suppress(OSError):
+        directory.mkdir(parents=True, exist_ok=True, mode=0o700)
+    if not (directory.is_dir() and _can_write(directory)):
+        raise UsageError(
+            f"no writable cache directory for compiled models: {directory.parent} cannot be "
+            f"written (set {CACHE_ENV})"
+        )
+    return directory
 
 
 def _write_once(path: Path, text: str) -> None:

@@ -117,6 +117,9 @@ def test_a_cache_that_cannot_be_written_keeps_no_pace(
     root = tmp_path / "root"
     root.write_text("a file where the cache directory should be")
     monkeypatch.setenv(cache.CACHE_ENV, str(root))
+    # and no private fallback in the temporary directory either (a file in its place)
+    monkeypatch.setattr(cache.tempfile, "gettempdir", lambda: str(root))
+    monkeypatch.setattr(cache, "_ROOTS", {})
     pace.record(16.0, 8.0, "model")  # no error: the run goes on
     assert pace.pace("model") is None
     assert sorted(p.name for p in tmp_path.iterdir()) == ["root"]  # nothing left beside it
