@@ -215,3 +215,47 @@ def test_a_compiled_campaign_on_local_workers_runs_in_this_process() -> None:
     import math
 
     assert abs(tables[0].rows[1]["jump_t:2"] - 10 * (math.log(10 / 8) + math.log(12 / 8))) < 1e-5
+
+
+BROKEN_NUMBA = """
+import sys, types, warnings
+import importlib.machinery
+class Broken(importlib.machinery.PathFinder):
+    @classmethod
+    def find_spec(cls, name, path=None, target=None):
+        if name != "numba":
+            return None
+        spec = importlib.machinery.ModuleSpec("numba", cls)
+        return spec
+    @staticmethod
+    def create_module(spec):
+        raise ImportError("numpy 9 is not supported")
+    @staticmethod
+    def exec_module(module):
+        pass
+sys.meta_path.insert(0, Broken)
+import hybrid
+from hybrid.simulation.native.choice import choose
+th = hybrid.load({spec!r})
+print(choose(th, 100000, run_s=lambda: 1.0))
+try:
+    hybrid.simulate(th, t_end=10.0, backend="compiled")
+except hybrid.UsageError as e:
+    print(e)
+"""
+
+
+def test_a_numba_that_is_installed_but_does_not_import_is_said_and_not_chosen() -> None:
+    # said "numba, which is not installed", and auto chose compiled: every run failed
+    import subprocess
+    import sys
+
+    code = BROKEN_NUMBA.format(spec=str(SPECS / "thermostat.yaml"))
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    chosen, said = done.stdout.splitlines()[:2]
+    assert chosen == "Choice(backend='scipy', reason='numba is installed but does not import')"
+    assert said.startswith(
+        "the compiled backend needs numba, which is installed but does not import: numpy 9 is "
+        "not supported; reinstall it ("
+    )

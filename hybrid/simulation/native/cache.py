@@ -90,10 +90,16 @@ _LOCK = threading.Lock()
 
 
 def require_numba() -> ModuleType:
-    """numba, or a :class:`~hybrid.errors.UsageError` with the install command."""
+    """numba, or a :class:`~hybrid.errors.UsageError` with the install command (or, for a
+    numba that is installed but does not import, why)."""
     try:
         import numba
-    except ImportError:
+    except ImportError as exc:
+        if importlib.util.find_spec("numba") is not None:  # installed, broken (a numpy clash)
+            raise UsageError(
+                f"the compiled backend needs numba, which is installed but does not import: "
+                f"{exc}; reinstall it ({install_hint('fast')}) or use the scipy backend"
+            ) from None
         raise UsageError(
             f"the compiled backend needs numba, which is not installed: {install_hint('fast')}"
         ) from None

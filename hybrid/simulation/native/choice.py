@@ -143,6 +143,22 @@ def _cached_source(generated: Any) -> tuple[str, str, float]:
 
 def choose(model: Any, runs: int, *, method: str = "RK45", inputs: bool = False,
            run_s: Callable[[], float] | None = None) -> Choice:  # fmt: skip
+    """The backend for ``runs`` runs of ``model`` (see the module docstring); compiled
+    only where numba imports (installed but broken, it would fail every run)."""
+    choice = _choose(model, runs, method=method, inputs=inputs, run_s=run_s)
+    if choice.backend == "compiled":
+        from hybrid.errors import UsageError
+        from hybrid.simulation.native.cache import require_numba
+
+        try:
+            require_numba()  # imported anyway by the compiled runs
+        except UsageError:
+            return Choice("scipy", "numba is installed but does not import")
+    return choice
+
+
+def _choose(model: Any, runs: int, *, method: str = "RK45", inputs: bool = False,
+            run_s: Callable[[], float] | None = None) -> Choice:  # fmt: skip
     """The backend for ``runs`` runs of ``model`` (see the module docstring).
 
     ``inputs``: whether the runs hold inputs (the compiled backend refuses
