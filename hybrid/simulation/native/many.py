@@ -68,14 +68,22 @@ def _columns(table: Table, what: str) -> dict[str, NDArray[np.float64]]:
         columns = {str(k): _column(what, str(k), v) for k, v in table.items()}
     elif isinstance(table, Sequence) and all(isinstance(row, Mapping) for row in table):
         keys = list(table[0]) if table else []
-        if any(list(row) != keys for row in table):
-            raise UsageError(f"{what}: every row must name the same columns")
+        for k, row in enumerate(table):
+            if set(row) != set(keys):  # the same names, in any order
+                raise UsageError(
+                    f"{what}: every row must name the same columns: row {k} has "
+                    f"{sorted(map(str, row))}, row 0 {sorted(map(str, keys))}"
+                )
         columns = {str(k): _column(what, str(k), [row[k] for row in table]) for k in keys}
     else:
         raise UsageError(f"{what}: give a mapping of columns, a list of rows or a data frame")
-    sizes = {len(v) for v in columns.values()}
-    if len(sizes) > 1:
-        raise UsageError(f"{what}: columns of different lengths {sorted(sizes)}")
+    if not columns:  # given, but no rows: no run to make (None means the spec's values)
+        raise UsageError(f"{what}: the table is empty (no columns, no rows); leave it out "
+                         "for one run with the spec's values")  # fmt: skip
+    lengths = {name: len(v) for name, v in columns.items()}
+    if len(set(lengths.values())) > 1:
+        shown = ", ".join(f"{name}: {size}" for name, size in lengths.items())
+        raise UsageError(f"{what}: columns of different lengths ({shown})")
     return columns
 
 
@@ -274,11 +282,12 @@ def simulate_many(
         of rows (``[{"e": 0.7}, {"e": 0.8}]``) or a data frame. Columns name
         parameters (``comp.name`` in a system) or, as ``init.x``, initial values.
     initial : table, optional
-        Initial values of state variables, one row per run (same forms).
+        Initial values of state variables, one row per run (same forms). A table
+        given empty is refused (left out, it is one run with the spec's values).
     max_jumps, rtol, atol, max_step, t_start, dt, zeno, max_jumps_per_instant
         As for :func:`hybrid.simulate`, the same for every run.
     threads : int, optional
-        Threads to use (default: numba's, all cores).
+        Threads to use for this call (default: numba's, all cores; at most those).
     handle_sigint : bool
         Turn Ctrl-C into a clean end (cause ``interrupted``) of every run.
 
@@ -317,7 +326,13 @@ def simulate_many(
     table = _columns(parameters, "parameters")
     starts = {k[5:]: v for k, v in table.items() if k.startswith("init.")}
     params_table = {k: v for k, v in table.items() if not k.startswith("init.")}
-    starts.update(_columns(initial, "initial"))
+    for name, column in _columns(initial, "initial").items():
+        if name in starts:  # the last one used to win silently
+            raise UsageError(
+                f"initial value of '{name}' is given twice: as parameters' init.{name} and "
+                "in initial; give it once"
+            )
+        starts[name] = column
     sizes = {len(v) for v in (*params_table.values(), *starts.values())}
     if len(sizes) > 1:
         raise UsageError(f"parameters and initial have different numbers of rows {sorted(sizes)}")
@@ -339,11 +354,27 @@ def simulate_many(
     if threads is not None and (isinstance(threads, bool) or not isinstance(threads, numbers.Integral)
                                 or threads < 1):  # fmt: skip
         raise UsageError(f"threads must be a whole number >= 1, got {threads!r}")
-    if threads is not None:
+    restore: int | None = None
+    if threads is not None:  # this call's, not the process's: put back after
         import numba
 
         most = int(getattr(numba.config, "NUMBA_NUM_THREADS", 1))
+        restore = numba.get_num_threads()
         numba.set_num_threads(max(1, min(int(threads), most)))
+    try:
+        return _simulate_rows(ensemble, compiled, model, settings, params, x0s, n,
+                              handle_sigint)  # fmt: skip
+    finally:
+        if restore is not None:
+            import numba
+
+            numba.set_num_threads(restore)
+
+
+def _simulate_rows(ensemble: Ensemble, compiled: CompiledNative, model: System,
+                   settings: Settings, params: NDArray[np.float64], x0s: NDArray[np.float64],
+                   n: int, handle_sigint: bool) -> Ensemble:  # fmt: skip
+    """The runs of :func:`simulate_many` and the ensemble's bounds (its threads set)."""
     cfg = config(settings)
     m0 = compiled.initial_mode(model)
     flag = np.zeros(1, dtype=np.int64)  # after a Ctrl-C, the remaining runs end at once

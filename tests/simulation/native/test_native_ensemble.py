@@ -72,3 +72,27 @@ def test_a_run_failing_at_its_start_is_described_with_its_own_parameters() -> No
     ]
     one = hybrid.simulate(model, t_end=2.0, parameters={"c": 2.0}, backend="compiled")
     assert one.termination.message == said[0]  # a single run's words
+
+
+def test_tables_a_new_user_wrote_are_read_or_refused_as_meant(ball: hybrid.Automaton) -> None:
+    pd = pytest.importorskip("pandas")
+    # an empty table made one run with the spec's values
+    for empty in ({}, [], pd.DataFrame()):
+        with pytest.raises(UsageError, match="parameters: the table is empty"):
+            hybrid.simulate_many(ball, t_end=1.0, parameters=empty)
+    # rows naming the same columns in another order were refused
+    rows = hybrid.simulate_many(ball, t_end=2.0, parameters=[{"e": 0.5, "g": 9.81}, {"g": 1.62, "e": 0.6}])
+    assert rows.parameters["g"].tolist() == [9.81, 1.62] and rows.parameters["e"].tolist() == [0.5, 0.6]
+    # the lengths are named with their columns
+    with pytest.raises(UsageError, match=r"columns of different lengths \(e: 3, g: 2\)"):
+        hybrid.simulate_many(ball, t_end=1.0, parameters={"e": [0.5, 0.6, 0.7], "g": [9.81, 1.6]})
+    # a start given twice ran with the second silently
+    with pytest.raises(UsageError, match="initial value of 'h' is given twice"):
+        hybrid.simulate_many(ball, t_end=1.0, parameters={"init.h": [1.0]}, initial={"h": [2.0]})
+
+
+def test_threads_apply_to_the_call_not_to_the_process(ball: hybrid.Automaton) -> None:
+    numba = pytest.importorskip("numba")
+    before = numba.get_num_threads()
+    hybrid.simulate_many(ball, t_end=1.0, parameters={"e": [0.5, 0.6]}, threads=1)
+    assert numba.get_num_threads() == before  # stayed at 1 for every later ensemble
