@@ -17,7 +17,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
-from hybrid.cli.exits import EXIT_OK
+from hybrid.cli.exits import EXIT_INVALID, EXIT_OK
 
 __all__ = ["add_compile_command", "compile_notes", "run_compile"]
 
@@ -49,6 +49,7 @@ def compile_notes(file: str, line: Any = None) -> Iterator[None]:
 def run_compile(files: list[str]) -> int:
     """Compile (or load from the cache) each file's model, the kernels once; say which."""
     from hybrid.compose import as_system
+    from hybrid.errors import SimulationError, SpecError, UsageError
     from hybrid.reader.loader import load
     from hybrid.simulation.interrupts import immediate
     from hybrid.simulation.native.cache import require_numba
@@ -56,17 +57,28 @@ def run_compile(files: list[str]) -> int:
     from hybrid.simulation.native.engine import compiled_native, kernel
 
     require_numba()
-    for path in files:
-        model = as_system(load(path))
-        model_state, kernel_state, _ = cached(model)
-        start = time.perf_counter()
-        with immediate("compiling the model (nothing was kept)"):
-            compiled_native(model)
-            kernel(parallel=True)  # the ensemble loop, for simulate_many and compiled sweeps
+    status = EXIT_OK
+    for path in files:  # one line each: a file that cannot be compiled does not stop the rest
+        try:
+            model = as_system(load(path))
+            model_state, kernel_state, _ = cached(model)
+            start = time.perf_counter()
+            with immediate("compiling the model (nothing was kept)"):
+                compiled_native(model)
+                kernel(parallel=True)  # the ensemble loop, for simulate_many and compiled sweeps
+        except SpecError as exc:
+            print(str(exc), file=sys.stderr)
+            status = EXIT_INVALID
+            continue
+        except (UsageError, SimulationError) as exc:
+            placed = isinstance(exc, UsageError) and exc.at is not None
+            print(str(exc) if placed else f"{path}: {exc}", file=sys.stderr)
+            status = EXIT_INVALID
+            continue
         took = time.perf_counter() - start
         if model_state == "missing" or kernel_state == "missing":
             what = "compiled" if kernel_state != "missing" else "compiled with the kernel"
         else:
             what = "found in the cache"
         print(f"{path}: {what} ({took:.1f} s)", file=sys.stderr)
-    return EXIT_OK
+    return status

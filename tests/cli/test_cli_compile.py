@@ -36,6 +36,13 @@ def test_compile_refuses_an_invalid_file_with_its_position(tmp_path: Path) -> No
     assert done.returncode == 2
     assert_no_traceback(done.stderr)
     assert done.stderr.startswith(f"{bad}:3:")
+    # the files after it are still compiled, one line each (it used to stop at the first)
+    ball = SPECS / "bouncing_ball.yaml"
+    done = run_cli("compile", bad, ball)
+    assert done.returncode == 2
+    lines = done.stderr.splitlines()
+    assert lines[0].startswith(f"{bad}:3:") and lines[1].startswith(f"{ball}: ")
+    assert len(lines) == 2
 
 
 def test_the_compile_notice_names_what_a_first_run_compiles(
