@@ -26,7 +26,7 @@ Examples
 >>> refuse_unsupported(as_system(tank))
 Traceback (most recent call last):
 ...
-hybrid.errors.UsageError: <string>:3:10: input 'u' of tank needs a value, and the compiled backend cannot take inputs given as Python functions: use backend='scipy' with inputs={'u': f}, or compose tank with an automaton that defines 'u'
+hybrid.errors.UsageError: <string>:3:10: input 'u' of tank needs a value, and the compiled backend cannot take inputs given as expressions or functions: use the scipy backend (--backend scipy; backend='scipy' in Python) with --input u=EXPR (inputs={'u': f} in Python), or compose tank with an automaton that defines 'u'
 
 A free input with a ``range`` is held at its nominal value, as the scipy
 backend holds it (a slot of the run's parameter vector,
@@ -71,12 +71,16 @@ def check_supported(settings: Settings, inputs: Mapping[str, Any] | None) -> Non
     refuse_method(settings.method)
     if inputs:
         raise UsageError(
-            "the compiled backend cannot call external inputs given as Python functions "
-            "(inputs=...); use backend='scipy'"
+            "the compiled backend cannot call inputs given as expressions or functions "
+            f"(--input, inputs=...); use {SCIPY}"
         )
 
 
-def refuse_method(method: str, instead: str = "backend='scipy'") -> None:
+SCIPY = "the scipy backend (--backend scipy; backend='scipy' in Python)"
+"""How a refusal names the backend that runs what the compiled one refuses, in both spellings."""
+
+
+def refuse_method(method: str, instead: str = SCIPY) -> None:
     """Raise :class:`UsageError` for a ``method`` other than :data:`METHOD`, pointing at
     ``instead``."""
     if method != METHOD:
@@ -90,7 +94,7 @@ def too_many_modes(name: str) -> UsageError:
     """The refusal of a model with more than :data:`MAX_MODES` modes."""
     return UsageError(
         f"the compiled backend generates code for at most {MAX_MODES} modes; "
-        f"{name} has more (use backend='scipy')"
+        f"{name} has more (use {SCIPY})"
     )
 
 
@@ -99,7 +103,7 @@ def no_compiled_form(name: str, function: str) -> UsageError:
     return UsageError(
         f"the compiled backend cannot run {name}: library function "
         f"'{function}' has no compiled form (its library registers none; see "
-        "docs/backends.md), so use backend='scipy'"
+        f"docs/backends.md), so use {SCIPY}"
     )
 
 
@@ -141,8 +145,9 @@ def refuse_unsupported(system: System) -> None:
     if unheld:
         raise UsageError(
             f"input '{unheld[0]}' of {name} needs a value, and the compiled backend cannot take "
-            f"inputs given as Python functions: use backend='scipy' with inputs={{'{unheld[0]}': f}}, "
-            f"or compose {name} with an automaton that defines '{unheld[0]}'",
+            f"inputs given as expressions or functions: use {SCIPY} with --input "
+            f"{unheld[0]}=EXPR (inputs={{'{unheld[0]}': f}} in Python), or compose {name} with an "
+            f"automaton that defines '{unheld[0]}'",
             at=system.input_position(unheld[0]),
         )
 
@@ -153,6 +158,6 @@ def refuse_requirements(system: System) -> None:
     if requirements:
         raise UsageError(
             f"the compiled ensemble cannot run {system.name}: it does not monitor requirements "
-            f"({', '.join(requirements)}); use backend='scipy', or hybrid.simulate(..., "
-            "backend='compiled') per run, which does"
+            f"({', '.join(requirements)}); run hybrid.simulate(..., backend='compiled') per "
+            "row, which does, or hybrid.sweep"
         )
