@@ -405,14 +405,21 @@ def _run_all(ensemble: Ensemble, compiled: CompiledNative, model: System, settin
         if room is None or room.pts.shape[1] != points or room.jps.shape[1] != jumps:
             room = compiled.buffers(points, jumps, 1, runs=min(n, CHUNK))
         arrays = _first_rows(room, hi - lo)
+        done = 0  # rows of this chunk already run
+        if lo == 0:  # row 0 is the sizing run: its arrays are copied, it is not run again
+            _put_first_row(arrays, pilot)
+            done = 1
+        rest = _rows_from(arrays, done)
 
-        def call(flag: NDArray[np.int64], arrays: b.RunArrays = arrays, lo: int = lo,
+        def call(flag: NDArray[np.int64], rest: b.RunArrays = rest, start: int = lo + done,
                  hi: int = hi) -> None:  # fmt: skip
-            compiled.run_many(params[lo:hi], x0s[lo:hi], settings.t_start, m0, cfg, arrays, flag)
+            compiled.run_many(params[start:hi], x0s[start:hi], settings.t_start, m0, cfg, rest,
+                              flag)  # fmt: skip
 
         if interrupted.requested:
             flag[0] = 1
-        run_in_worker(call, handle_sigint, flag)
+        if hi - lo > done:
+            run_in_worker(call, handle_sigint, flag)
         overflowed = np.flatnonzero(arrays.oi[:, b.I_OVERFLOW])
         for r in overflowed.tolist():
             if interrupted.requested:
@@ -427,6 +434,24 @@ def _run_all(ensemble: Ensemble, compiled: CompiledNative, model: System, settin
             longest = max(len(ensemble._alone[lo + r]) for r in overflowed.tolist())
             most = max(len(ensemble._alone[lo + r].jumps) for r in overflowed.tolist())
             points, jumps = max(points, 2 * longest), max(jumps, 2 * most + 4)
+
+
+def _put_first_row(arrays: b.RunArrays, run: b.RunArrays) -> None:
+    """Row 0 of a chunk's ``arrays`` made what the single ``run`` recorded (it fits: the
+    rows were sized from it)."""
+    p, j, k = (int(run.oi[slot]) for slot in (b.I_POINTS, b.I_JUMPS, b.I_STORED_STEPS))
+    arrays.pts[0, :p] = run.pts[:p]
+    arrays.jps[0, :j] = run.jps[:j]
+    arrays.sts[0, :k] = run.sts[:k]
+    for name in ("oi", "of", "wf", "wi"):
+        getattr(arrays, name)[0] = getattr(run, name)
+
+
+def _rows_from(arrays: b.RunArrays, first: int) -> b.RunArrays:
+    """The rows of a chunk's arrays from ``first`` on (views)."""
+    return b.RunArrays(arrays.pts[first:], arrays.jps[first:], arrays.sts[first:],
+                       arrays.oi[first:], arrays.of[first:], arrays.wf[first:],
+                       arrays.wi[first:])  # fmt: skip
 
 
 def _first_rows(arrays: b.RunArrays, rows: int) -> b.RunArrays:

@@ -96,3 +96,30 @@ def test_threads_apply_to_the_call_not_to_the_process(ball: hybrid.Automaton) ->
     before = numba.get_num_threads()
     hybrid.simulate_many(ball, t_end=1.0, parameters={"e": [0.5, 0.6]}, threads=1)
     assert numba.get_num_threads() == before  # stayed at 1 for every later ensemble
+
+
+def test_the_sizing_run_is_row_0_and_is_not_run_again(
+    thermostat: hybrid.Automaton, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # the first row was run once alone to size the rows, then again with the others
+    from hybrid.simulation.native.engine import CompiledNative
+
+    given: list[list[float]] = []
+    real = CompiledNative.run_many
+
+    def recorded(self: CompiledNative, ps: np.ndarray, *args: object) -> None:
+        given.append(ps[:, 0].tolist())
+        real(self, ps, *args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(CompiledNative, "run_many", recorded)
+    rates = [0.05, 0.1, 0.2]
+    runs = hybrid.simulate_many(thermostat, t_end=50.0, parameters={"a": rates})
+    assert given == [rates[1:]]  # the kernel ran rows 1 and 2 only
+    for k, rate in enumerate(rates):  # row 0 is the sizing run, bit for bit a single run
+        one = hybrid.simulate(thermostat, t_end=50.0, parameters={"a": rate}, backend="compiled")
+        assert runs[k].t.tolist() == one.t.tolist() and runs[k].states.tolist() == one.states.tolist()
+        assert runs[k].jump_times.tolist() == one.jump_times.tolist()
+    assert runs.n_jumps.tolist() == [len(r.jumps) for r in runs] and set(runs.causes) == {"t_end"}
+    single = hybrid.simulate_many(thermostat, t_end=50.0, parameters={"a": [0.05]})
+    assert len(single) == 1 and given == [rates[1:]]  # one row: no kernel call at all
+    assert single[0].t.tolist() == runs[0].t.tolist()
