@@ -264,11 +264,10 @@ def simulate_compiled(
     inputs: Mapping[str, Callable[[float], float]] | None = None,
     handle_sigint: bool = True,
     progress: Callable[[float, int, int], None] | None = None,
-    flag: NDArray[np.int64] | None = None,
 ) -> Run:
     """One run of ``model`` (parameters and initial location already applied) with ``settings``.
 
-    ``progress(t, jumps, points)`` and ``flag``: see :func:`run_arrays`.
+    ``progress(t, jumps, points)``: see :func:`run_arrays`.
 
     What the loop is given (parameter vector, initial point and mode, settings
     arrays) is kept for the last model object (frozen) and settings run without
@@ -292,9 +291,8 @@ def simulate_compiled(
         if not initial:
             _LAST_RUN[0] = (model, settings, compiled, p, x0, m0, cfg)  # replaced at once
     arrays = run_arrays(
-        compiled, p, x0, m0, settings, handle_sigint, reuse=True, cfg=cfg, progress=progress,
-        flag=flag,
-    )  # fmt: skip
+        compiled, p, x0, m0, settings, handle_sigint, reuse=True, cfg=cfg, progress=progress
+    )
     return run_from(compiled.native, compiled.layout, model, settings, arrays)  # copies all it keeps
 
 

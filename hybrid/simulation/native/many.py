@@ -34,7 +34,7 @@ from hybrid.simulation.bounds import (
     bound_limits,
     warn_ensemble,
 )
-from hybrid.simulation.interrupts import Interrupts, immediate, sigint_watch
+from hybrid.simulation.interrupts import immediate, sigint_watch
 from hybrid.simulation.native import buffers as b
 from hybrid.simulation.native.assemble import run_from
 from hybrid.simulation.native.cache import require_numba
@@ -381,9 +381,8 @@ def _simulate_rows(ensemble: Ensemble, compiled: CompiledNative, model: System,
     # A Ctrl-C between the compiled calls (while a chunk's rows are copied, a rerun is
     # assembled) is counted by the watch and sets the flag at the next call: it never
     # raises there, and every later run ends at once.
-    with sigint_watch(handle_sigint) as interrupted:
-        _run_all(ensemble, compiled, model, settings, params, x0s, m0, cfg, flag, handle_sigint,
-                 interrupted)  # fmt: skip
+    with sigint_watch(handle_sigint):  # run_here sees its requests at each call
+        _run_all(ensemble, compiled, model, settings, params, x0s, m0, cfg, flag, handle_sigint)
     alone = {i: run.out_of_bounds for i, run in ensemble._alone.items() if run.out_of_bounds}
     ensemble.out_of_bounds = dict(sorted({**ensemble.out_of_bounds, **alone}.items()))
     warn_ensemble(ensemble.out_of_bounds, n)
@@ -392,7 +391,7 @@ def _simulate_rows(ensemble: Ensemble, compiled: CompiledNative, model: System,
 
 def _run_all(ensemble: Ensemble, compiled: CompiledNative, model: System, settings: Settings,
              params: NDArray[np.float64], x0s: NDArray[np.float64], m0: int, cfg: Any,
-             flag: NDArray[np.int64], handle_sigint: bool, interrupted: Interrupts) -> None:  # fmt: skip
+             flag: NDArray[np.int64], handle_sigint: bool) -> None:  # fmt: skip
     """Every run of :func:`simulate_many`, chunk by chunk, into ``ensemble``."""
     n = params.shape[0]
     # sizes the rows; a Ctrl-C while it runs sets the flag (every run then ends at once)
@@ -404,26 +403,22 @@ def _run_all(ensemble: Ensemble, compiled: CompiledNative, model: System, settin
         hi = min(n, lo + CHUNK)
         if room is None or room.pts.shape[1] != points or room.jps.shape[1] != jumps:
             room = compiled.buffers(points, jumps, 1, runs=min(n, CHUNK))
-        arrays = _first_rows(room, hi - lo)
+        arrays = _rows(room, slice(hi - lo))
         done = 0  # rows of this chunk already run
         if lo == 0:  # row 0 is the sizing run: its arrays are copied, it is not run again
             _put_first_row(arrays, pilot)
             done = 1
-        rest = _rows_from(arrays, done)
+        rest = _rows(arrays, slice(done, None))
 
         def call(flag: NDArray[np.int64], rest: b.RunArrays = rest, start: int = lo + done,
                  hi: int = hi) -> None:  # fmt: skip
             compiled.run_many(params[start:hi], x0s[start:hi], settings.t_start, m0, cfg, rest,
                               flag)  # fmt: skip
 
-        if interrupted.requested:
-            flag[0] = 1
         if hi - lo > done:
             run_in_worker(call, handle_sigint, flag)
         overflowed = np.flatnonzero(arrays.oi[:, b.I_OVERFLOW])
         for r in overflowed.tolist():
-            if interrupted.requested:
-                flag[0] = 1
             one = _alone(ensemble, settings, lo + r, x0s[lo + r], m0, cfg, handle_sigint, flag)
             ensemble._alone[lo + r] = one
             one.out_of_bounds = _run_excursions(model, settings, one.state_names, one.t,
@@ -447,18 +442,10 @@ def _put_first_row(arrays: b.RunArrays, run: b.RunArrays) -> None:
         getattr(arrays, name)[0] = getattr(run, name)
 
 
-def _rows_from(arrays: b.RunArrays, first: int) -> b.RunArrays:
-    """The rows of a chunk's arrays from ``first`` on (views)."""
-    return b.RunArrays(arrays.pts[first:], arrays.jps[first:], arrays.sts[first:],
-                       arrays.oi[first:], arrays.of[first:], arrays.wf[first:],
-                       arrays.wi[first:])  # fmt: skip
-
-
-def _first_rows(arrays: b.RunArrays, rows: int) -> b.RunArrays:
-    """The first ``rows`` runs' rows of a chunk's arrays (views)."""
-    return b.RunArrays(arrays.pts[:rows], arrays.jps[:rows], arrays.sts[:rows],
-                       arrays.oi[:rows], arrays.of[:rows], arrays.wf[:rows],
-                       arrays.wi[:rows])  # fmt: skip
+def _rows(arrays: b.RunArrays, part: slice) -> b.RunArrays:
+    """The rows ``part`` of a chunk's arrays (views)."""
+    return b.RunArrays(arrays.pts[part], arrays.jps[part], arrays.sts[part], arrays.oi[part],
+                       arrays.of[part], arrays.wf[part], arrays.wi[part])  # fmt: skip
 
 
 def _kept(arrays: b.RunArrays) -> b.RunArrays:
