@@ -17,7 +17,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
-from hybrid.cli.exits import EXIT_INVALID, EXIT_OK
+from hybrid.cli.exits import EXIT_INVALID, EXIT_OK, error_line
 
 __all__ = ["add_compile_command", "compile_notes", "run_compile"]
 
@@ -66,13 +66,8 @@ def run_compile(files: list[str]) -> int:
             with immediate("compiling the model (nothing was kept)"):
                 compiled_native(model)
                 kernel(parallel=True)  # the ensemble loop, for simulate_many and compiled sweeps
-        except SpecError as exc:
-            print(str(exc), file=sys.stderr)
-            status = EXIT_INVALID
-            continue
-        except (UsageError, SimulationError) as exc:
-            placed = isinstance(exc, UsageError) and exc.at is not None
-            print(str(exc) if placed else f"{path}: {exc}", file=sys.stderr)
+        except (SpecError, UsageError, SimulationError) as exc:
+            print(error_line(exc, path), file=sys.stderr)
             status = EXIT_INVALID
             continue
         took = time.perf_counter() - start

@@ -17,7 +17,7 @@ import warnings
 from collections.abc import Iterator, Sequence
 from typing import Any, TextIO
 
-from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_INVALID, EXIT_OK
+from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_INVALID, EXIT_OK, error_line
 from hybrid.errors import Note, SimulationError, SpecError, UsageError
 from hybrid.interrupted import caused_by_interrupt
 from hybrid.version import __version__
@@ -462,12 +462,8 @@ def _run(args: argparse.Namespace) -> int:
             from hybrid.cli.interchange import run_export, run_import
 
             return run_import(args) if args.command == "import" else run_export(args)
-    except SpecError as exc:
-        print(str(exc), file=sys.stderr)
-        return EXIT_INVALID
-    except (UsageError, SimulationError) as exc:
-        placed = isinstance(exc, UsageError) and exc.at is not None  # file:line:column first
-        print(str(exc) if placed else f"{getattr(args, 'file', 'hybrid')}: {exc}", file=sys.stderr)
+    except (SpecError, UsageError, SimulationError) as exc:
+        print(error_line(exc, getattr(args, "file", "hybrid")), file=sys.stderr)
         return EXIT_INVALID
     except MemoryError as exc:  # the machine's fault: one line, as for a full disk
         detail = f": {exc}" if str(exc) else ""
