@@ -40,7 +40,7 @@ from hybrid.interchange.selfcheck import check_loads
 from hybrid.interchange.starts import exact_comment, location_name, start_of
 from hybrid.interchange.sxmodel import SpaceExModel, read_model
 from hybrid.interchange.template import Template, analyse
-from hybrid.interchange.translate import reset_nodes
+from hybrid.interchange.translate import changed_by, reset_nodes
 from hybrid.interchange.yamltext import dump
 
 __all__ = ["SEMANTICS", "ImportResult", "import_spaceex", "import_spaceex_text"]
@@ -334,10 +334,9 @@ def _refuse_partner_assignments(flat: Flat, templates: dict[str, Template]) -> N
             if tr.label is None:
                 continue
             label = leaf.labels.get(tr.label, tr.label)
-            for var, value in reset_nodes(sx.parse(tr.assignment)).items():
-                if not (isinstance(value, sx.Name) and value.name == var and not value.primed):
-                    outer = leaf.variables.get(var, var)
-                    assigned.setdefault(label, {}).setdefault(outer, (leaf, tr.position))
+            for var in changed_by(reset_nodes(sx.parse(tr.assignment))):
+                outer = leaf.variables.get(var, var)
+                assigned.setdefault(label, {}).setdefault(outer, (leaf, tr.position))
     for leaf in flat.leaves:
         t = templates[leaf.component.id]
         for tr, edge in zip(leaf.component.transitions, t.edges, strict=True):

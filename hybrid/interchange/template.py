@@ -36,6 +36,7 @@ from hybrid.interchange.safexml import SourceText
 from hybrid.interchange.sxmodel import Component
 from hybrid.interchange.translate import (
     Rename,
+    changed_by,
     condition_ir,
     constant_value,
     flows,
@@ -312,7 +313,7 @@ def _edge(
     guard_node = sx.parse(tr.guard)
     guard_items = sx.conjuncts(guard_node)
     values = reset_nodes(sx.parse(tr.assignment))
-    changed = {k for k, v in values.items() if not (isinstance(v, sx.Name) and v.name == k)}
+    changed = changed_by(values)
 
     def text(node: sx.Node) -> str:
         return expression_text(condition_ir(node, rename))

@@ -27,7 +27,7 @@ Examples
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 from hybrid.errors import Position, SpecError
 from hybrid.expr import ir
@@ -38,6 +38,7 @@ from hybrid.interchange.sxvalues import constant_value, substitute
 
 __all__ = [
     "FUNCTIONS",
+    "changed_by",
     "condition_ir",
     "condition_text",
     "constant_value",
@@ -367,3 +368,8 @@ def reset_nodes(node: sx.Node) -> dict[str, sx.Node]:
             if pair is not None:
                 found[pair[0].name] = pair[1]
     return found
+
+
+def changed_by(values: Mapping[str, sx.Node]) -> set[str]:
+    """The variables :func:`reset_nodes`'s ``{x: e}`` changes: every ``x`` but ``x := x``."""
+    return {k for k, v in values.items() if not (isinstance(v, sx.Name) and v.name == k)}
