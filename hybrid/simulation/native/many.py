@@ -366,9 +366,7 @@ def simulate_many(
                               handle_sigint)  # fmt: skip
     finally:
         if restore is not None:
-            import numba
-
-            numba.set_num_threads(restore)
+            numba.set_num_threads(restore)  # imported above, where restore was set
 
 
 def _simulate_rows(ensemble: Ensemble, compiled: CompiledNative, model: System,
