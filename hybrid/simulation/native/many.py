@@ -42,6 +42,7 @@ from hybrid.simulation.native.engine import (
     CompiledNative,
     compiled_native,
     config,
+    idle_threads_sleep_soon,
     run_arrays,
 )
 from hybrid.simulation.native.features import check_supported, refuse_requirements
@@ -358,6 +359,7 @@ def simulate_many(
     if threads is not None:  # this call's, not the process's: put back after
         import numba
 
+        idle_threads_sleep_soon()  # numba starts its threads when asked their number
         most = int(getattr(numba.config, "NUMBA_NUM_THREADS", 1))
         restore = numba.get_num_threads()
         numba.set_num_threads(max(1, min(int(threads), most)))

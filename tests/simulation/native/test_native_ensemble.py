@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
+from support import REPO, SPECS
 
 import hybrid
 from hybrid.errors import HybridError, UsageError
@@ -123,3 +128,40 @@ def test_the_sizing_run_is_row_0_and_is_not_run_again(
     single = hybrid.simulate_many(thermostat, t_end=50.0, parameters={"a": [0.05]})
     assert len(single) == 1 and given == [rates[1:]]  # one row: no kernel call at all
     assert single[0].t.tolist() == runs[0].t.tolist()
+
+
+IDLE_WAITS = """
+import os, sys
+import numba.np.ufunc.parallel as parallel
+import hybrid
+seen = []
+launch = parallel._launch_threads
+def launching():
+    if not parallel._is_initialized:  # libgomp reads its settings now, once
+        seen.append((os.environ.get("GOMP_SPINCOUNT"), os.environ.get("OMP_WAIT_POLICY")))
+    launch()
+parallel._launch_threads = launching
+ball = hybrid.load(sys.argv[1])
+hybrid.simulate_many(ball, t_end=1.0, parameters={{"e": [0.5, 0.6]}}, {threads})
+print(seen[0])
+"""
+
+
+@pytest.mark.parametrize("threads", ["threads=1", "handle_sigint=False"])
+@pytest.mark.parametrize(("given", "seen"), [
+    ({}, "('10000', None)"),
+    ({"OMP_WAIT_POLICY": "active"}, "(None, 'active')"),
+    ({"GOMP_SPINCOUNT": "5"}, "('5', None)"),
+])  # fmt: skip
+def test_idle_threads_sleep_soon_unless_the_process_chose(threads: str, given: dict[str, str],
+                                                          seen: str) -> None:  # fmt: skip
+    """numba's OpenMP threads are started with a short spin (libgomp's default spins for
+    milliseconds after every chunk); a wait the user's environment chose is kept. Both ways
+    in: asking numba for its thread count (``threads=``) and loading the ensemble loop."""
+    env = {k: v for k, v in os.environ.items() if k not in ("GOMP_SPINCOUNT", "OMP_WAIT_POLICY")}
+    code = IDLE_WAITS.format(threads=threads)
+    done = subprocess.run([sys.executable, "-c", code, str(SPECS / "bouncing_ball.yaml")],
+                          capture_output=True, text=True, cwd=REPO, env={**env, **given},
+                          timeout=600)  # fmt: skip  (a hang guard: a cold compile)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == seen
