@@ -26,14 +26,17 @@ from hybrid.analysis.property_checks import (
     incomplete_analysis,
     property_violations,
 )
-from hybrid.analysis.static import AutomatonFacts
+from hybrid.analysis.solve import contract
+from hybrid.analysis.static import AutomatonFacts, initial_box
 from hybrid.analysis.zerotime import system_components
 from hybrid.errors import Position
 from hybrid.expr import ir
+from hybrid.expr.rho import guard_to_rho
 from hybrid.model import Automaton, Edge
 
 __all__ = [
     "CHECKS",
+    "blocked_starts",
     "dead_edges",
     "incomplete_analysis",
     "nondeterminism",
@@ -134,6 +137,61 @@ def sink_locations(analysis: Analysis) -> list[Finding]:
                     f"location '{qualified}' is a sink: the flow can leave its invariant "
                     f"'{loc.invariant_source}' but none of its edges can ever fire; a run that "
                     f"gets there ends blocked ({assumptions(facts)})",
+                    where=qualified,
+                )
+            )
+    return found
+
+
+BAND = 1e-10
+"""The simulator's boundary band, relative: ``BAND * (1 + max |x|)`` (``boundary.band``)."""
+
+
+def blocked_starts(analysis: Analysis) -> list[Finding]:
+    """Initial locations no run gets out of, nor flows in: every run ends at ``t = 0``.
+
+    The invariant is broken at every initial state, beyond the band within
+    which the simulator counts it as on its boundary, and no edge out of the
+    location can be enabled there (a jump at once would leave it). A lone
+    automaton's run ends ``blocked``; in a system the other components may
+    still jump at that instant (a zero-time cycle ends it ``zeno``).
+
+    Examples
+    --------
+    >>> import hybrid
+    >>> from hybrid.analysis.context import analyse
+    >>> tank = hybrid.load("specs/thermostat.yaml", parameters={"T_low": 21.0})
+    >>> blocked_starts(analyse(tank)) == []  # T = 20 < T_low: turn_on fires at t = 0
+    True
+    """
+    found: list[Finding] = []
+    ending = ("a run ends blocked at t = 0" if analysis.system.single else
+              "a run ends at t = 0: blocked, or as the other components' jumps there end it")  # fmt: skip
+    for i, (comp, facts) in enumerate(zip(analysis.system.components, analysis.facts, strict=True)):
+        automaton = comp.automaton
+        box = {**initial_box(automaton), **facts.inputs}
+        states = [box[name] for name in automaton.state_names if name in box]
+        width = BAND * (1.0 + max((max(abs(v.lo), abs(v.hi)) for v in states), default=0.0))
+        for name in automaton.initial_locations:
+            lf = facts.locations[name]
+            rho = lf.env.evaluator(box).number(guard_to_rho(lf.invariant))
+            if not rho.lo > width:  # holds, or may, somewhere in the initial set
+                continue
+            if any(contract(ef.entry_enabled, lf.env, box) is not None
+                   for ef in facts.outgoing(name)):  # fmt: skip
+                continue
+            loc = automaton.locations[name]
+            qualified = analysis.qualified(i, name)
+            start = ", ".join(f"{k} in [{v.lo:g}, {v.hi:g}]" if v.lo != v.hi else f"{k} = {v.lo:g}"
+                              for k, v in zip(automaton.state_names, states, strict=False))  # fmt: skip
+            found.append(
+                Finding.at(
+                    "blocked-start",
+                    loc.invariant_position,
+                    f"no run gets past its start: the initial state ({start}) breaks the "
+                    f"invariant '{loc.invariant_source}' of initial location '{qualified}' and "
+                    f"no edge out of it can fire there ({ending}); fix the initial values or "
+                    "the invariant",
                     where=qualified,
                 )
             )
@@ -323,6 +381,7 @@ def _expressions(a: Automaton) -> list[ir.Expr]:
 
 CHECKS: tuple[Callable[[Analysis], list[Finding]], ...] = (
     unreachable_locations,
+    blocked_starts,
     sink_locations,
     dead_edges,
     nondeterminism,

@@ -10,6 +10,7 @@ rule                              severity  reason
 ``property-unproved``             warning   a property not proved and not refuted either
 ``property-proved``               note      ``hybrid reach`` proved a forbidden entry
 ``sink-location``                 error     a run that gets there ends ``blocked``
+``blocked-start``                 error     every run ends at ``t = 0``, ``blocked``
 ``invalid-spec``                  error     the file cannot be checked at all
 ``unreachable-location``          warning   dead model text, often a typo in a guard
 ``dead-edge``                     warning   the same, for an edge
@@ -77,6 +78,13 @@ RULES: dict[str, Rule] = {
             "Location with no way out",
             "The invariant of this location can be left by the flow, but no edge out of it can "
             "ever fire: a run that gets here ends blocked.",
+        ),
+        Rule(
+            "blocked-start",
+            "error",
+            "Every run blocked at its start",
+            "Every initial state breaks the invariant of its initial location and no edge out "
+            "of it can fire there: no run gets past its start (a lone automaton's ends blocked).",
         ),
         Rule(
             "dead-edge",

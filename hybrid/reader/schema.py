@@ -299,6 +299,7 @@ class RequirementSpec(_Strict):
 RuleId = Literal[
     "unreachable-location",
     "sink-location",
+    "blocked-start",
     "dead-edge",
     "nondeterminism",
     "zero-time-cycle",

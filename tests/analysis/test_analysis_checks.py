@@ -16,6 +16,7 @@ import hybrid
 from hybrid.analysis import analyse, check
 from hybrid.analysis.checks import (
     CHECKS,
+    blocked_starts,
     dead_edges,
     incomplete_analysis,
     nondeterminism,
@@ -30,6 +31,7 @@ from hybrid.analysis.findings import RULES
 
 RULE_OF = {
     unreachable_locations: ("unreachable-location",),
+    blocked_starts: ("blocked-start",),
     sink_locations: ("sink-location",),
     dead_edges: ("dead-edge",),
     nondeterminism: ("nondeterminism",),
@@ -50,7 +52,59 @@ class Case:
     must_not: set[tuple[str, str]] = field(default_factory=set)
 
 
+BLOCKED_STARTS = [
+    Case(
+        "start_outside_invariant",
+        """
+automaton: tank
+state: {x: {initial: 7}}
+locations: {fill: {flow: {x: -1}, invariant: x <= 5}}
+""",
+        must={("blocked-start", "fill")},
+    ),
+    Case(
+        "start_set_outside_invariant",
+        """
+automaton: tank
+state: {x: {initial: [6, 8], nominal: 7.5}}
+locations: {fill: {flow: {x: -x}, invariant: x <= 5 and x >= -9}}
+""",
+        must={("blocked-start", "fill")},
+    ),
+    Case(
+        "start_set_partly_inside",
+        """
+automaton: tank
+state: {x: {initial: [4, 8], nominal: 4.5}}
+locations: {fill: {flow: {x: -1}, invariant: x <= 5}}
+""",
+        must_not={("blocked-start", "fill")},
+    ),
+    Case(
+        "start_outside_left_at_once",
+        """
+automaton: tank
+state: {x: {initial: 7}}
+locations: {fill: {flow: {x: 1}, invariant: x <= 5}, drain: {flow: {x: -1}}}
+edges: [{name: spill, from: fill, to: drain, guard: x >= 5}]
+""",
+        must_not={("blocked-start", "fill")},
+    ),
+    Case(
+        "start_within_the_band",
+        """
+automaton: tank
+state: {x: {initial: 5.000000000001}}
+locations: {fill: {flow: {x: -1}, invariant: x <= 5}}
+""",
+        must_not={("blocked-start", "fill")},
+    ),
+]
+"""Starts the simulator blocks at t = 0, and starts it does not (a run of each point of
+the initial set checks every ``blocked-start`` below)."""
+
 CASES = [
+    *BLOCKED_STARTS,
     Case(
         "clean_thermostat",
         """
@@ -70,6 +124,7 @@ properties: {reachable: [off, on], deadlock_free: true, deterministic: true}
             ("unreachable-location", "on"),
             ("sink-location", "off"),
             ("sink-location", "on"),
+            ("blocked-start", "off"),
             ("dead-edge", "turn_on"),
             ("zero-time-cycle", "turn_on"),
             ("unused-declaration", "lo"),
@@ -404,3 +459,21 @@ def test_exploration_limit_gives_a_note_and_no_reachability_claims(tmp_path_fact
     assert "unreachable-location" not in rules
     note = next(f for f in findings if f.rule == "analysis-incomplete")
     assert note.severity == "note"
+
+
+@pytest.mark.parametrize("case", BLOCKED_STARTS, ids=lambda c: c.name)
+def test_a_blocked_start_is_a_run_blocked_at_its_start(case, analyses, tmp_path_factory):
+    """Each initial point of a ``blocked-start`` case (the set's ends and its nominal value)
+    ends ``blocked`` at t = 0 in the simulator; a start reported as not blocked is run too."""
+    model = _load(case, tmp_path_factory)
+    reported = bool(blocked_starts(analyses[case.name]))
+    state = model.states[0]
+    ends = (state.initial, state.initial) if state.initial_range is None else (
+        state.initial_range.lo, state.initial_range.hi)  # fmt: skip
+    for x in sorted({*ends, state.initial}):
+        run = hybrid.simulate(model, t_end=1.0, initial={state.name: x}, handle_sigint=False)
+        at_start = run.termination.cause == "blocked" and run.termination.t == 0.0
+        if reported:
+            assert at_start, (case.name, x, run.termination)
+        elif case.name == "start_outside_left_at_once":
+            assert run.jumps and run.jumps[0].t == 0.0  # left at once, not blocked

@@ -219,6 +219,7 @@ def assert_check_agrees_with_run(
     report = hybrid.check(m)
     dead = {f.where for f in report.findings if f.rule == "dead-edge"}
     unreachable = {f.where for f in report.findings if f.rule == "unreachable-location"}
+    blocked = {f.where for f in report.findings if f.rule == "blocked-start"}
     reported = {f.where for f in report.findings if f.where.startswith("forbidden: ")}
     proved = [e for e in m.properties.forbidden if f"forbidden: {e.text()}" not in reported]
     ranges = as_system(m).input_ranges()
@@ -245,6 +246,13 @@ def assert_check_agrees_with_run(
             for part in str(loc).split("|")
         }
         assert not (fired & dead), f"fired but called dead: {fired & dead}"
+        started = set(str(run.location.tolist()[0]).split("|")) & blocked
+        term = run.termination
+        assert not started or (term.t == 0.0 and term.cause != "t_end"), (
+            f"started in {started}, called blocked at its start, and ended {term.cause} "
+            f"at t={term.t}"
+        )
+        assert not started or not isinstance(m, hybrid.Automaton) or term.cause == "blocked"
         assert not (entered & unreachable), (
             f"entered but called unreachable: {entered & unreachable}"
         )
