@@ -92,7 +92,8 @@ def figure_of(
     against : {"t", "j", "both"}
         Values against time, against the jump count, or both side by side.
     signals : bool
-        Draw the signals panel.
+        Draw the signals panel (``False`` with a signal among ``names``: a
+        :class:`~hybrid.errors.UsageError`).
 
     Returns
     -------
@@ -190,6 +191,12 @@ def _figure(
     if against not in AGAINST:
         raise UsageError(f"against must be one of {', '.join(AGAINST)}, got '{against}'")
     selected = views(run, names, component)
+    named = [s for view in selected for s in view.signals] if names and not signals else []
+    if named:  # asked for by name, then left out: said, not dropped
+        raise UsageError(
+            f"'{named[0]}' is a signal, and signals=False leaves the signals panel out: "
+            "name only states with signals=False, or drop signals=False"
+        )
     new_figure = _figure_class(managed)
     heights = [_height(view, signals) for view in selected]
     width = _WIDTH * (2 if against == "both" else 1)

@@ -279,3 +279,14 @@ def test_import_hybrid_loads_neither_matplotlib_nor_pandas() -> None:
     )
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "[]"
+
+
+def test_a_signal_named_with_signals_off_is_refused_not_dropped() -> None:
+    """``run.plot("heating_power", signals=False)`` drew a figure without the one curve
+    asked for; states named with ``signals=False`` still draw as before."""
+    run = hybrid.simulate(hybrid.load(ROOT / "specs" / "thermostat.yaml"), t_end=30.0)
+    with pytest.raises(hybrid.UsageError, match="'heating_power' is a signal, and signals=False"):
+        run.plot("T", "heating_power", signals=False)
+    fig = figure_of(run, "T", signals=False)
+    assert [ax.get_ylabel() for ax in fig.axes] == ["location", "T [degC]"]
+    plt.close("all")
