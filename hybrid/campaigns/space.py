@@ -102,6 +102,9 @@ class Axis:
                 count = int(parts[2])
             except ValueError:
                 raise UsageError(f"'{text}': N must be a whole number{_colon_hint(name, parts)}") from None
+            if low > high or (count == 1 and low != high):  # MATLAB's 1:0.1:2, 0:0.1:1
+                said = "the range is empty (LO > HI)" if low > high else "N = 1 takes LO alone"
+                raise UsageError(f"'{text}': {said}{_colon_hint(name, parts)}")
         return cls.of(name, low, high, count)
 
     @classmethod
@@ -130,6 +133,11 @@ class Axis:
             raise UsageError(f"{name}: the range [{low}, {high}] is empty (LO > HI)")
         if count is not None and count < 1:
             raise UsageError(f"{name}: N must be >= 1, got {count}")
+        if count == 1 and low != high:  # a grid of one value across a range: which one?
+            raise UsageError(
+                f"{name}: one grid value across [{low:g}, {high:g}] would be LO alone: give "
+                "N >= 2 for values from LO to HI, or list the one value"
+            )
         return cls(name, float(low), float(high), count)
 
     def values(self) -> list[float]:

@@ -313,6 +313,33 @@ def test_a_grid_written_start_step_stop_names_the_grid_meant(tmp_path: Path) -> 
 
 
 
+@pytest.mark.parametrize(("grid", "said"), [
+    ("e=0:0.1:1", "N = 1 takes LO alone (LO:HI:N: N values from LO to HI; MATLAB's "
+                  "start:step:stop 0:0.1:1 is e=0:1:11)"),
+    ("e=1:0.1:2", "the range is empty (LO > HI) (LO:HI:N: N values from LO to HI; MATLAB's "
+                  "start:step:stop 1:0.1:2 is e=1:2:11)"),
+    ("e=0.5:0.9:1", "N = 1 takes LO alone (LO:HI:N: N values from LO to HI; MATLAB's "
+                    "start:step:stop 0.5:0.9:1 is e=0.5:0.5:1)"),
+])  # fmt: skip
+def test_a_start_step_stop_grid_of_whole_stop_is_refused(grid: str, said: str,
+                                                         tmp_path: Path) -> None:  # fmt: skip
+    """MATLAB's 0:0.1:1 read as LO:HI:N was one run at e = 0 (0 to 0.1, one value), exit 0;
+    1:0.1:2 said only that the range was empty. A grid of one value across a range is
+    refused from Python too (``{"init.h": 1}`` over a declared set was its low end)."""
+    out = tmp_path / "runs.csv"
+    spec = REPO / "specs" / "bouncing_ball.yaml"
+    done = run_cli("sweep", spec, "--grid", grid, "--t-end", "5", "--out", out)
+    assert done.returncode == 2 and not out.exists()
+    assert_no_traceback(done.stderr)
+    assert done.stderr.strip() == f"{spec}: '{grid}': {said}"
+    from hybrid.campaigns.space import Axis
+    from hybrid.errors import UsageError
+
+    with pytest.raises(UsageError, match=r"one grid value across \[0, 0.1\] would be LO"):
+        Axis.of("e", 0.0, 0.1, 1)
+    assert Axis.of("e", 0.5, 0.5, 1).values() == [0.5]  # one value, given as such
+
+
 def test_an_unknown_name_in_a_campaign_is_placed_as_simulate_places_it(tmp_path: Path) -> None:
     """Before: sweep and falsify said "FILE: f: unknown parameter 'f' ..." without the place
     that simulate gives for the same name."""
