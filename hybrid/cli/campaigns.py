@@ -101,7 +101,18 @@ def _common(p: argparse.ArgumentParser, types: Mapping[str, Callable[[str], Any]
     p.add_argument("--input", type=types["assignment"], action="append", default=[],
                    metavar="NAME=EXPR", help="drive a free input with an expression of t")  # fmt: skip
     add_settings_flags(p, types["positive"], types["count"], each_run=True)
-    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress and no note of the backend auto chose on stderr")  # fmt: skip
+
+
+def _quiet_backend_note(quiet: bool) -> None:
+    """With ``--quiet``, no ``note: backend auto: ...`` line (the command's warnings stay)."""
+    if quiet:
+        import warnings
+
+        from hybrid.campaigns.choosing import BackendNote
+
+        warnings.simplefilter("ignore", BackendNote)  # within the command's catch_warnings
 
 
 def _notifier(line: TerminalLine | None) -> Callable[[str], None]:
@@ -132,6 +143,7 @@ def run_sweep(args: argparse.Namespace) -> int:
 
     writable_file(args.out, "--out")
     line = terminal_reporter(args.quiet)
+    _quiet_backend_note(args.quiet)
     interrupts = Interrupts(notify=_notifier(line))
     with interrupts.installed():
         model = load(args.file)
@@ -213,6 +225,7 @@ def run_falsify(args: argparse.Namespace) -> int:
     from hybrid.reader.loader import load
 
     line = terminal_reporter(args.quiet)
+    _quiet_backend_note(args.quiet)
     interrupts = Interrupts(notify=_notifier(line))
     with interrupts.installed():
         model = load(args.file)

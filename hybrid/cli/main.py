@@ -250,8 +250,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--events", help="events JSON file")
     p.add_argument("--plot", help="figure file (needs the 'plot' extra)")
     p.add_argument(
-        "--quiet", action="store_true", help="no progress on stderr (shown only on a terminal)"
-    )
+        "--quiet", action="store_true",
+        help="no progress (shown only on a terminal) and no note of the backend auto chose",
+    )  # fmt: skip
 
     p = sub.add_parser("graph", help="print the location graph")
     p.add_argument("file", metavar="FILE", help="spec or system file")

@@ -67,8 +67,9 @@ def run_simulate(args: argparse.Namespace) -> int:
             from hybrid.simulation.native.choice import choose
 
             chosen = choose(model, 1, method=args.method, inputs=bool(inputs))
-            print(f"{args.file}: note: backend auto: {chosen.backend} ({chosen.reason})",
-                  file=sys.stderr)  # fmt: skip
+            if not args.quiet:
+                print(f"{args.file}: note: backend auto: {chosen.backend} ({chosen.reason})",
+                      file=sys.stderr)  # fmt: skip
             backend = chosen.backend
         with compile_notes(args.file, line):  # a first compiled run: what, and how long
             run = simulate(

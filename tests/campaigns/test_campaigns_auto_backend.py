@@ -168,6 +168,18 @@ def test_the_command_line_takes_auto_and_prints_its_choice(tmp_path: Path) -> No
     assert len(rows) == 2
 
 
+def test_quiet_leaves_out_the_note_of_the_choice(tmp_path: Path) -> None:
+    """``--quiet`` printed no progress but still the backend note, on every sweep."""
+    swept = run_cli("sweep", SPECS / "thermostat.yaml", "--t-end", "20", "--grid",
+                    "T_high=21:22:2", "--backend", "auto", "--method", "LSODA", "--quiet",
+                    "--out", tmp_path / "sweep.csv")  # fmt: skip
+    one = run_cli("simulate", SPECS / "thermostat.yaml", "--t-end", "20", "--backend", "auto",
+                  "--quiet")  # fmt: skip
+    for done in (swept, one):
+        assert done.returncode == 0, done.stderr
+        assert "backend auto" not in done.stderr and "note" not in done.stderr, done.stderr
+
+
 def test_the_timed_run_does_not_count_loading_the_scipy_engine(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
