@@ -148,6 +148,7 @@ def _text(result: ReachResult, file: str) -> str:
         f"{file}: {said}: {len(result.sets)} sets, t <= {result.t_end:g}, "
         f"{result.max_jumps} jumps, step {result.step:g}, {result.seconds:.3g} s"
         + ("" if result.complete else " (search stopped early: nothing is proved)")
+        + _bound_left_out(result)
     )
     return "\n".join(lines)
 
@@ -199,3 +200,10 @@ def _plot(result: ReachResult, axes: str, out: str) -> None:
     ax = result.plot(x, y)
     ax.figure.savefig(out)
     plt.close(ax.figure)
+
+
+def _bound_left_out(result: Any) -> str:
+    """`` (jump J+1 may come from t = T on: not covered)`` when the jump bound cut a run short."""
+    if result.jump_bound_from is None:
+        return ""
+    return f" (jump {result.max_jumps + 1} may come from t = {result.jump_bound_from:.4g} on: not covered)"

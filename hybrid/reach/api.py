@@ -160,11 +160,11 @@ def reach(
     if refute_first and witness:
         early = [_quick(model, forms, entry, t_end, max_jumps, step, None) for entry, _ in entries]
     sets: list[ReachSet] = []
-    complete = False
+    complete, cut = False, None
     if not (early and all(e is not None for e in early)):
         pipes = None if progress is None else _Flowpipes(progress)
-        sets, complete = explore(system, t_end=t_end, max_jumps=max_jumps, step=step, forms=forms,
-                                 progress=pipes)  # fmt: skip
+        sets, complete, cut = explore(system, t_end=t_end, max_jumps=max_jumps, step=step,
+                                      forms=forms, progress=pipes)  # fmt: skip
         if pipes is not None:
             pipes.finish(len(sets), complete)
     grouped: dict[tuple[str, ...], list[ReachSet]] = {}
@@ -173,7 +173,8 @@ def reach(
     results = [
         found
         or _decide(
-            model, forms, entry, cond, sets, grouped, complete, t_end, max_jumps, step, witness
+            model, forms, entry, cond, sets, grouped, complete, t_end, max_jumps, step, witness,
+            cut,
         )
         for found, (entry, cond) in zip(early, entries, strict=True)
     ]
@@ -186,6 +187,7 @@ def reach(
         max_jumps=max_jumps,
         step=float(step),
         complete=complete,
+        jump_bound_from=cut,
         seconds=time.process_time() - started,
         file=model.file,
         source=model,
@@ -246,6 +248,20 @@ def _within(cond: Condition, forms: Forms, t_end: float) -> Condition:
     return tuple(c.conjoin(cut) for c in cond)
 
 
+def bound_note(cut: float | None, max_jumps: int) -> str:
+    """What a bounded proof leaves out: runs past the jump bound, from when they may be.
+
+    >>> bound_note(33.57, 10)
+    ' (a run may take jump 11 from t = 33.57 on; what it does then is not covered: raise max_jumps)'
+    >>> bound_note(None, 10)
+    ''
+    """
+    if cut is None:
+        return ""
+    return (f" (a run may take jump {max_jumps + 1} from t = {cut:.4g} on; what it does then is "
+            "not covered: raise max_jumps)")  # fmt: skip
+
+
 def _decide(
     model: Automaton | System,
     forms: Forms,
@@ -258,6 +274,7 @@ def _decide(
     max_jumps: int,
     step: float,
     witness: bool,
+    bound_from: float | None = None,
 ) -> PropertyResult:
     by_mode = {mode: chosen for mode, chosen in grouped.items() if _matches(forms, entry, mode)}
     hits: set[int] = set()
@@ -272,7 +289,7 @@ def _decide(
     name = entry.text()
     horizon = f"within t <= {t_end:g} and {max_jumps} jumps"
     if not contacts and complete:
-        message = f"forbidden state '{name}' is never reached {horizon}"
+        message = f"forbidden state '{name}' is never reached {horizon}{bound_note(bound_from, max_jumps)}"
         return PropertyResult(entry, "proved", message, condition=cond)
     # a set's time span is widened by rounding below 0, where no run is
     first = max(0.0, min(s.t[0] for s in contacts)) if contacts else None

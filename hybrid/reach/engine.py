@@ -27,9 +27,9 @@ Examples
 ... locations: {l: {flow: {x: -x}}}
 ... ''')
 >>> from hybrid.compose import as_system
->>> sets, complete = explore(as_system(m), t_end=1.0, max_jumps=0, step=0.01)
->>> complete, len(sets), sets[-1].t[1] >= 1.0
-(True, 101, True)
+>>> sets, complete, cut = explore(as_system(m), t_end=1.0, max_jumps=0, step=0.01)
+>>> complete, len(sets), sets[-1].t[1] >= 1.0, cut
+(True, 101, True, None)
 """
 
 from __future__ import annotations
@@ -257,8 +257,10 @@ def explore(
     step: float,
     forms: Forms | None = None,
     progress: Callable[[int, int, int], None] | None = None,
-) -> tuple[list[ReachSet], bool]:
-    """Every set reached within ``[0, t_end]`` and ``max_jumps`` jumps, and whether the search finished.
+) -> tuple[list[ReachSet], bool, float | None]:
+    """Every set reached within ``[0, t_end]`` and ``max_jumps`` jumps, whether the search
+    finished, and the earliest time a run may take a jump past ``max_jumps`` (``None``:
+    none can within the horizon): what such a run does after it is in no set.
 
     ``progress(flowpipes, sets, waiting)`` is called as each flowpipe begins: the
     flowpipes begun, the sets computed, and the entry boxes still waiting.
@@ -287,13 +289,14 @@ def explore(
     waiting = [(modes.get(m), lo, hi, 0) for m, lo, hi in initial_boxes(forms)]
     sets: list[ReachSet] = []
     pipes = 0
+    cut: float | None = None  # the earliest jump past the bound
     while waiting:
         mode, lo, hi, jumps = waiting.pop(0)
         pipes += 1
         if progress is not None:
             progress(pipes, len(sets), len(waiting))
         if pipes > MAX_FLOWPIPES:
-            return sets, False
+            return sets, False, cut
         if lo[t_index] > t_end:
             continue
         # the entry box itself, unclipped: a run may enter outside the invariant (it
@@ -314,13 +317,15 @@ def explore(
                     jumps,
                 )
             )
-        if jumps >= max_jumps:
-            continue
         for tr in mode.transitions:
             for box in _clusters(segments, tr.guard, t_index, entry):
+                if jumps >= max_jumps:  # a jump the bound leaves out: when it may come
+                    at = max(0.0, float(box[0][t_index]))
+                    cut = at if cut is None else min(cut, at)
+                    continue
                 image = affine_image(*box, tr.rmat, tr.smat, tr.rvec, forms.u_lo, forms.u_hi)
                 waiting.append((modes.get(tr.target), image[0], image[1], jumps + 1))
-    return sets, True
+    return sets, True, cut
 
 
 def _segments(

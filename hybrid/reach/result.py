@@ -98,6 +98,9 @@ class ReachResult:
 
     ``complete`` is ``False`` when the search stopped before exhausting the
     horizon and jump bound (too many flowpipes): nothing is then proved.
+    ``jump_bound_from`` is the earliest time a run may take a jump past
+    ``max_jumps`` (``None``: none can before ``t_end``): the sets, and what is
+    proved, leave out what such a run does after it.
     """
 
     model: str
@@ -108,6 +111,7 @@ class ReachResult:
     max_jumps: int
     step: float
     complete: bool = True
+    jump_bound_from: float | None = None
     seconds: float = 0.0
     file: str = "<spec>"
     source: Automaton | System | None = field(default=None, repr=False, compare=False)
@@ -141,6 +145,7 @@ class ReachResult:
             "complete": self.complete,
             "t_end": self.t_end,
             "max_jumps": self.max_jumps,
+            "jump_bound_from": self.jump_bound_from,
             "step": self.step,
             "sets": len(self.sets),
             "seconds": round(self.seconds, 6),

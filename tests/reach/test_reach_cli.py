@@ -77,6 +77,26 @@ def test_a_model_with_no_forbidden_entry_is_not_said_proved(tmp_path: Path) -> N
     assert "proved" not in line and "t <= 6," in line
 
 
+def test_a_proof_the_jump_bound_cut_short_says_so_in_reach_and_check(tmp_path: Path) -> None:
+    """'proved ... within t <= 60 and 10 jumps' and check's 'ok' read as proved to t = 60;
+    jump 11 may come from t = 32.5 (closed form in test_reach_closed_forms)."""
+    from test_reach_closed_forms import THERMO_CYCLES
+
+    spec = _spec(tmp_path, THERMO_CYCLES, "cycles.yaml")
+    done = run_cli("reach", spec, "--t-end", "60")
+    assert done.returncode == 0, done.stderr
+    verdict, summary = done.stdout.splitlines()
+    assert "(a run may take jump 11 from t = 32." in verdict
+    assert summary.endswith("(jump 11 may come from t = 32.44 on: not covered)"), summary
+    checked = run_cli("check", spec, "--reach-t-end", "60")
+    assert checked.returncode == 0, checked.stderr
+    assert "within t <= 60 and 10 jumps; jump 11 may come from t = 32.44 on, not covered" in (
+        checked.stdout
+    )
+    covered = run_cli("reach", spec, "--t-end", "60", "--max-jumps", "20")
+    assert "not covered" not in covered.stdout
+
+
 def test_a_model_that_is_not_affine_is_refused_at_its_place(tmp_path: Path) -> None:
     done = run_cli("reach", _spec(tmp_path, NONLINEAR), "--t-end", "1")
     assert done.returncode == 2

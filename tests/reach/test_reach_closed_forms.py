@@ -165,3 +165,34 @@ def _heater_text_with_forbidden() -> str:
         .replace("{uhi}", "1.5")
         + "properties:\n  forbidden:\n    - {when: x > 4.3}\n    - {when: x > 4.0}\n"
     )
+
+
+THERMO_CYCLES = """
+automaton: thermo
+state: {x: {initial: [19, 20]}}
+locations:
+  on:  {flow: {x: -0.1 * (x - 30)}, invariant: x <= 22}
+  off: {flow: {x: -0.1 * x}, invariant: x >= 18}
+edges:
+  - {from: on, to: off, guard: x >= 22}
+  - {from: off, to: on, guard: x <= 18}
+properties:
+  forbidden:
+    - {when: "t >= 50"}
+"""
+
+
+def test_a_proof_cut_by_the_jump_bound_says_from_when() -> None:
+    """Ten jumps are over by t = 32.5 for the earliest start: 'proved within t <= 60 and 10
+    jumps' said nothing of the runs after (a new user read it as proved to t = 60). The
+    earliest 11th jump, closed form: from x0 = 20 on, 10 ln(10/8) to the first switch, then
+    five off stays 10 ln(22/18) and five on stays 10 ln(12/8)."""
+    model = hybrid.load_text(THERMO_CYCLES)
+    first = 10 * math.log(10 / 8) + 5 * 10 * (math.log(22 / 18) + math.log(12 / 8))
+    result = hybrid.reach(model, 60.0, max_jumps=10)
+    assert result.verdict == "proved" and result.jump_bound_from is not None
+    assert first - 0.5 <= result.jump_bound_from <= first  # never later than a run's
+    assert "may take jump 11 from t = " in result.properties[0].message
+    assert result.as_dict()["jump_bound_from"] == result.jump_bound_from
+    # jump 21 comes after t = 60 for every start: nothing is left out
+    assert hybrid.reach(model, 60.0, max_jumps=20).jump_bound_from is None
