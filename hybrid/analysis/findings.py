@@ -264,6 +264,9 @@ class Report:
     bounded: str = ""
     """What a proof by reach held for (``"forbidden states: within t <= 4 and 10 jumps"``),
     shown beside ``ok``: those proofs say nothing of a run past the horizon."""
+    ran: tuple[str, ...] = ()
+    """The rules the command decided, when not every rule of ``check`` (``hybrid reach``
+    decides its verdicts' three): a JUnit suite passes only those it ran."""
 
     @property
     def ok(self) -> bool:

@@ -64,14 +64,12 @@ def relative(file: str) -> str:
 def _placed(reports: Sequence[Report]) -> list[Report]:
     """The reports with every file relative to the current directory when under it."""
     return [
-        Report(
-            tuple(replace(f, file=relative(f.file)) for f in r.findings),
-            r.name,
-            relative(r.file),
-            r.repeated,
+        replace(
+            r, findings=tuple(replace(f, file=relative(f.file)) for f in r.findings),
+            file=relative(r.file),
         )
         for r in reports
-    ]
+    ]  # fmt: skip
 
 
 def text(reports: Sequence[Report], strict: bool = False) -> str:
@@ -88,9 +86,11 @@ def text(reports: Sequence[Report], strict: bool = False) -> str:
 
 
 def json_report(reports: Sequence[Report], strict: bool = False) -> str:
-    """``{"ok": bool, "findings": [...]}``; ``ok`` is false if any finding is an error."""
+    """``{"ok": bool, "findings": [...]}``; ``ok`` is false if any finding is an error (with
+    ``strict``, a warning too: what the exit code says)."""
     findings = _all(reports)
-    ok = not any(f.severity == "error" for f in findings)
+    failing = ("error", "warning") if strict else ("error",)
+    ok = not any(f.severity in failing for f in findings)
     return json.dumps({"ok": ok, "findings": [f.to_dict() for f in findings]}, indent=2)
 
 
@@ -120,7 +120,8 @@ def junit(reports: Sequence[Report], strict: bool = False) -> str:
     Errors are ``<failure>`` (warnings too with ``strict``), an invalid spec is an
     ``<error>``; other findings pass with the message in ``<system-out>``.
     """
-    root = ET.Element("testsuites", name="hybrid check")
+    command = "hybrid reach" if reports and all(r.ran for r in reports) else "hybrid check"
+    root = ET.Element("testsuites", name=command)
     total = failed = errored = 0
     for report in _placed(reports):
         suite = ET.SubElement(root, "testsuite", name=report.file)
@@ -146,7 +147,7 @@ def junit(reports: Sequence[Report], strict: bool = False) -> str:
         if not any(f.rule == "invalid-spec" for f in report.findings):
             hit = {f.rule for f in report.findings}
             campaign = any(f.rule in CAMPAIGN_RULES for f in report.findings)
-            for rule in RULES:
+            for rule in report.ran or RULES:
                 if rule not in hit and rule not in ("invalid-spec", "analysis-incomplete"):
                     if campaign or rule in CAMPAIGN_RULES:  # a sweep's or a check's rules only
                         continue

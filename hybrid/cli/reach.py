@@ -80,6 +80,10 @@ def _check_args(args: argparse.Namespace) -> None:
         writable_file(args.out, "--out")
 
 
+REACH_RULES = ("property-proved", "property-violated", "property-unproved")
+"""The rules of ``reach``'s findings: one per verdict."""
+
+
 def findings_of(result: ReachResult) -> list[Finding]:
     """One finding per forbidden entry: proved (note), refuted (error), unknown (warning)."""
     rule = {
@@ -131,8 +135,9 @@ def run_reach(args: argparse.Namespace) -> int:
     findings = tuple(findings_of(result))
     if args.format == "text":
         print(_text(result, args.file))
-    else:
-        print(write(args.format, [Report(findings, result.model, args.file)]))
+    else:  # strict: an unknown fails here (exit 3), as a warning does with check --strict
+        report = Report(findings, result.model, args.file, ran=REACH_RULES)
+        print(write(args.format, [report], strict=True))
     if result.verdict == "refuted":
         return EXIT_FINDINGS
     if result.verdict == "unknown":

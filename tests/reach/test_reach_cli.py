@@ -204,6 +204,24 @@ def test_report_formats_are_those_of_check(tmp_path: Path) -> None:
     assert "::error file=" in done.stdout and "title=property-violated" in done.stdout
 
 
+def test_structured_reports_fail_where_the_exit_code_does(tmp_path: Path) -> None:
+    """An unknown exits 3, and the JSON said "ok": true, JUnit failures="0"; JUnit also
+    passed eight graph rules reach never ran, in a suite named "hybrid check"."""
+    import xml.etree.ElementTree as ET
+
+    spec = _spec(tmp_path, UNKNOWN, "u.yaml")
+    done = run_cli("reach", spec, "--t-end", "3", "--format", "json")
+    assert done.returncode == 3 and json.loads(done.stdout)["ok"] is False
+    done = run_cli("reach", spec, "--t-end", "3", "--format", "junit")
+    assert done.returncode == 3
+    root = ET.fromstring(done.stdout.split("?>", 1)[1])
+    assert root.get("name") == "hybrid reach" and root.get("failures") == "1"
+    names = {case.get("name", "").split(":")[0] for case in root.iter("testcase")}
+    assert names == {"property-unproved", "property-proved", "property-violated"}
+    proved = run_cli("reach", _spec(tmp_path, HEATER, "p.yaml"), "--t-end", "6", "--format", "json")
+    assert proved.returncode == 0 and json.loads(proved.stdout)["ok"] is True
+
+
 def test_plot_draws_the_sets(tmp_path: Path) -> None:
     pytest.importorskip("matplotlib")
     spec = _spec(tmp_path, REFUTED)
