@@ -109,11 +109,22 @@ class Falsification:
         }
 
     def __repr__(self) -> str:
+        """What was found, and what the search could not judge.
+
+        Examples
+        --------
+        >>> Falsification("cool", False, {"a": 0.05}, float("inf"), 8, 40, 0,
+        ...               history=[{"failed": True}] * 8, complete=False)
+        <Falsification of cool: no violation; lowest robustness inf at a=0.05 (8 of 40 runs; 8 failed, not judged; stopped early)>
+        """
         what = "counterexample" if self.found else "no violation; lowest robustness"
         shown = ", ".join(f"{k}={v:.6g}" for k, v in self.values.items())
+        failed = len(self.failed)
+        notes = (f"; {failed} failed, not judged" if failed else "") + (
+            "" if self.complete else "; stopped early")  # fmt: skip
         return (
             f"<Falsification of {self.requirement}: {what} {self.robustness:.6g} at {shown} "
-            f"({self.evaluations} of {self.budget} runs)>"
+            f"({self.evaluations} of {self.budget} runs{notes})>"
         )
 
 

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import csv
 import io
+import warnings
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -30,7 +31,12 @@ from hybrid.campaigns.resumable import write_whole
 from hybrid.errors import UnknownName, UsageError, did_you_mean
 from hybrid.version import install_hint
 
-__all__ = ["FAILED", "SweepTable", "column_type"]
+__all__ = ["FAILED", "IncompleteWarning", "SweepTable", "column_type"]
+
+
+class IncompleteWarning(UserWarning):
+    """A campaign's table written with some of its runs only (it was stopped early)."""
+
 
 FAILED = ("error", "timeout")
 """Causes of a run that did not run to an end of its own."""
@@ -163,8 +169,17 @@ class SweepTable:
         return pd.DataFrame(data, columns=self.columns)
 
     def write(self, path: str | Path) -> Path:
-        """Write the table to ``path`` (``.csv`` or ``.parquet``), whole or not at all."""
+        """Write the table to ``path`` (``.csv`` or ``.parquet``), whole or not at all.
+
+        A table of a campaign stopped early (``complete`` False: Ctrl-C, runs lost) is
+        written with the rows it has, and an :class:`IncompleteWarning` says so.
+        """
         target = Path(path)
+        if not self.complete:
+            warnings.warn(IncompleteWarning(
+                f"{target.name} gets {len(self.rows) - self.lost} of the campaign's {self.total} runs: it "
+                "stopped early (interrupted, or runs lost); table.complete is False"),
+                stacklevel=2)  # fmt: skip
         suffix = target.suffix.lower()
         if suffix == ".csv":
             write_whole(target, self.csv_text().encode("utf-8"))

@@ -24,6 +24,7 @@ import hybrid
 from hybrid.campaigns.executors import Failed, InProcess, OnResult, Stop
 from hybrid.campaigns.resumable import LOST, ChunkStore
 from hybrid.campaigns.sweep import sweep
+from hybrid.campaigns.table import IncompleteWarning
 
 WAVE = """
 automaton: wave
@@ -118,6 +119,11 @@ def test_runs_lost_twice_are_not_done_and_resume_runs_them(
     table, _ = _losing_sweep(monkeypatch, [5, 5], out=out)
     assert not table.complete and table.lost == 1
     assert not out.exists() and (tmp_path / "results.csv.parts").is_dir()
+    # written by hand, the rows it has, and a warning that they are not all (a script
+    # that went on after a Ctrl-C wrote 7 of 20 rows without a word)
+    with pytest.warns(IncompleteWarning, match=f"gets {len(W) - 1} of the campaign's {len(W)}"):
+        table.write(tmp_path / "by_hand.csv")
+    assert (tmp_path / "by_hand.csv").read_text() == table.csv_text()
     assert sorted(ChunkStore(out, _fingerprint(tmp_path), resume=True).done) == [
         k for k in range(len(W)) if k != 5
     ]
