@@ -107,8 +107,13 @@ def campaign_backend(backend: str | None, chosen: Settings) -> tuple[str, bool]:
     >>> s = Settings(t_end=1.0)
     >>> campaign_backend(None, s), campaign_backend("auto", s)
     (('auto', False), ('auto', True))
+    >>> campaign_backend("numba", s)
+    Traceback (most recent call last):
+    hybrid.errors.UsageError: unknown backend 'numba'; choose one of scipy, compiled, auto
     """
     asked = backend or chosen.backend
+    if asked is not None:  # checked here, not by every run: a campaign of failed rows
+        Settings(t_end=1.0, backend=asked)  # its checks: the same message as simulate's
     return asked or "auto", asked is not None
 
 

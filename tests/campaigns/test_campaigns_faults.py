@@ -32,6 +32,17 @@ def test_a_grid_times_samples_over_the_limit_is_refused_before_any_point_is_made
         hybrid.sweep(BALL, t_end=1.0, grid=grid, vary={"init.h": (1.0, 2.0)}, samples=10_000, workers=0)
 
 
+@pytest.mark.parametrize("campaign", ["sweep", "falsify"])
+def test_an_unknown_backend_is_refused_before_any_run(campaign: str) -> None:
+    """backend="numba" was a campaign of failed rows (sweep), or a whole budget of failed
+    runs reported as "no violation" (falsify); simulate refused it at once."""
+    with pytest.raises(hybrid.UsageError, match="unknown backend 'numba'; choose one of"):
+        if campaign == "sweep":
+            hybrid.sweep(BALL, 3.0, grid={"e": [0.5, 0.6]}, backend="numba", workers=0)
+        else:
+            hybrid.falsify(BALL, "r", {"e": (0.5, 0.9)}, t_end=3.0, backend="numba", budget=4)
+
+
 def test_a_different_run_timeout_is_another_campaign() -> None:
     """Resuming with another timeout mixed rows run with and without it into one table."""
     points = [{"e": 0.5}, {"e": 0.9}]
