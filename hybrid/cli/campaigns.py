@@ -286,6 +286,11 @@ def _write_result(result: Any, out: Path) -> None:
     if result.run is not None:
         write_csv(result.run, out / "trajectory.csv")
         write_events(result.run, out / "events.json")
+        return
+    for stale in ("trajectory.csv", "events.json"):  # an earlier search's run: not this one's
+        path = out / stale
+        if path.is_file() and not path.is_symlink():
+            path.unlink()
 
 
 def _finite(value: Any) -> Any:

@@ -100,6 +100,16 @@ def test_the_command_writes_the_counterexample(
     assert events["requirements"]["warm"]["holds"] is False
     header = (out / "trajectory.csv").read_text().splitlines()[0]
     assert header == "t,j,location,x"
+    # the same folder again, every run failing: no run to show, and none of the last
+    # search's left beside a result that says nothing was found
+    code = main_in_process(
+        "falsify", spec, "--t-end", "5", "--requirement", "warm", "--vary", "k=0:1",
+        "--budget", "3", "--workers", "0", "--out", out, "--quiet", "--max-step", "1e-6",
+        "--run-timeout", "0.05", "--backend", "scipy",
+    )  # fmt: skip
+    assert code == 1 and "3 of them failed" in capsys.readouterr().out
+    assert sorted(p.name for p in out.iterdir()) == ["falsification.json"]
+    assert not json.loads((out / "falsification.json").read_text())["found"]
     code = main_in_process(
         "falsify", spec, "--t-end", "5", "--requirement", "positive", "--vary", "k=0:1",
         "--budget", "5", "--workers", "0", "--quiet",
