@@ -1,9 +1,11 @@
 """The SpaceEx ``.cfg`` file: ``key = value`` lines, values quoted or bare.
 
 Only what a model needs is read: ``system`` (the component to analyse),
-``initially`` (the initial set) and ``forbidden`` (the bad states); the other
-keys are analysis options of SpaceEx (sampling time, directions...) and are
-kept as they are, for the notes. ``#`` starts a comment outside quotes.
+``initially`` (the initial set) and ``forbidden`` (the bad states), and the
+horizon and jump bound of its analysis (``time-horizon``, ``iter-max``: the
+spec's ``checks: {reach: ...}``, :func:`reach_checks`); the other keys are
+analysis options of SpaceEx (sampling time, directions...) and are kept as
+they are, for the notes. ``#`` starts a comment outside quotes.
 
 Examples
 --------
@@ -14,13 +16,14 @@ Examples
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from hybrid.errors import Position, SpecError
 from hybrid.interchange.safexml import SourceText
 
-__all__ = ["MAX_CFG_BYTES", "SpaceExConfig", "parse_cfg", "read_cfg"]
+__all__ = ["MAX_CFG_BYTES", "SpaceExConfig", "parse_cfg", "reach_checks", "read_cfg"]
 
 MAX_CFG_BYTES = 4 * 1024 * 1024
 """Largest ``.cfg`` file accepted."""
@@ -98,6 +101,57 @@ def parse_cfg(text: str, file: str = "<cfg>") -> SpaceExConfig:
             file, value, [(0, number, column + 1)], Position(file, number, column + 1)
         )
     return config
+
+
+def reach_checks(config: SpaceExConfig, notes: list[str]) -> dict[str, float | int] | None:
+    """The spec's ``checks.reach`` from the ``.cfg``'s ``time-horizon`` and ``iter-max``.
+
+    ``None`` without a horizon (``t_end`` is what ``checks.reach`` needs). What is
+    not taken is said in ``notes``: a value that is not a number, ``iter-max = -1``
+    (no bound: reach's default bound applies), a ``sampling-time`` (reach's step
+    is its own, ``t_end / 4000`` by default).
+
+    Examples
+    --------
+    >>> notes = []
+    >>> reach_checks(parse_cfg("time-horizon = 20.1\\niter-max = 1\\n"), notes), notes
+    ({'t_end': 20.1, 'max_jumps': 1}, [])
+    >>> reach_checks(parse_cfg("time-horizon = 5\\niter-max = -1\\n"), notes)
+    {'t_end': 5.0}
+    >>> notes[0]
+    'iter-max = -1 of the .cfg (no bound) is not a jump bound here: reach bounds jumps at 10 unless checks.reach.max_jumps says otherwise'
+    """
+    horizon = config.get("time-horizon")
+    if horizon is None:
+        return None
+    try:
+        t_end = float(horizon.text)
+    except ValueError:
+        t_end = math.nan
+    if not (math.isfinite(t_end) and t_end > 0):
+        notes.append(f"time-horizon = {horizon.text} of the .cfg is not a horizon (a number > 0): "
+                     "no checks.reach written")  # fmt: skip
+        return None
+    found: dict[str, float | int] = {"t_end": t_end}
+    bound = config.get("iter-max")
+    if bound is not None:
+        try:
+            jumps = int(bound.text)
+        except ValueError:
+            jumps = -2
+        if jumps >= 0:
+            found["max_jumps"] = jumps
+        elif jumps == -1:
+            notes.append("iter-max = -1 of the .cfg (no bound) is not a jump bound here: reach "
+                         "bounds jumps at 10 unless checks.reach.max_jumps says otherwise")  # fmt: skip
+        else:
+            notes.append(f"iter-max = {bound.text} of the .cfg is not a jump bound (a whole "
+                         "number): reach bounds jumps at 10")  # fmt: skip
+    sampling = config.get("sampling-time")
+    if sampling is not None:
+        notes.append(f"sampling-time = {sampling.text} of the .cfg is not reach's step: its "
+                     "default is t_end / 4000 (checks.reach.step sets it)")  # fmt: skip
+    return found
 
 
 def read_cfg(path: str | Path) -> SpaceExConfig:

@@ -36,6 +36,9 @@ def _state_entry(value: Any) -> dict[str, Any]:
     return {"initial": value}
 
 
+CHECKS_COMMENT = "time-horizon and iter-max of the .cfg: the horizon and jump bound of reach"
+
+
 def automaton_text(
     t: Template,
     leaf: Leaf,
@@ -44,8 +47,10 @@ def automaton_text(
     source: str,
     *,
     top: bool,
+    checks: dict[str, Any] | None = None,
 ) -> str:
-    """YAML of ``t``; ``start`` (the initial set) and ``forbidden`` for a top-level automaton."""
+    """YAML of ``t``; ``start`` (the initial set), ``forbidden`` and ``checks`` (the spec's
+    ``checks:``) for a top-level automaton."""
     comp = t.component
     data: dict[str, Any] = {"automaton": t.name}
     data["description"] = comp.note or f"SpaceEx base component '{comp.id}'"
@@ -142,6 +147,9 @@ def automaton_text(
         data["properties"] = {"forbidden": forbidden}
         if start and start.get("forbidden_comment"):
             comments[("properties",)] = start["forbidden_comment"]
+    if checks:
+        data["checks"] = checks
+        comments[("checks",)] = CHECKS_COMMENT
     header = (
         f"Imported by `hybrid import spaceex`. {source}, base component '{comp.id}'.\n"
         + "".join(f"{note}\n" for note in t.notes)

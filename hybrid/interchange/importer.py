@@ -30,8 +30,8 @@ from typing import Any
 from hybrid.errors import Position, SpecError
 from hybrid.frames import in_frame_room
 from hybrid.interchange import sxexpr as sx
-from hybrid.interchange.cfg import SpaceExConfig, parse_cfg, read_cfg
-from hybrid.interchange.emit import SEMANTICS, automaton_text
+from hybrid.interchange.cfg import SpaceExConfig, parse_cfg, reach_checks, read_cfg
+from hybrid.interchange.emit import CHECKS_COMMENT, SEMANTICS, automaton_text
 from hybrid.interchange.flatten import Flat, Leaf, flatten
 from hybrid.interchange.initial import InitialSet, Resolver, forbidden_set, initial_set
 from hybrid.interchange.naming import component_name, system_names
@@ -141,6 +141,8 @@ def _translate(
         notes.extend(t.notes)
     names = system_names(flat.variable_ids)
     forbidden = _forbidden(flat, templates, resolver, names, config)
+    reach = None if config is None else reach_checks(config, notes)
+    checks = None if reach is None else {"reach": reach}
     source = f"From {Path(model.file).name}" + (
         f" and {Path(config.file).name}" if config is not None else ""
     )
@@ -153,11 +155,13 @@ def _translate(
             start["exact_comment"] = exact_comment(start["exact"])
         if forbidden and config is not None and config.forbidden is not None:
             start["forbidden_comment"] = f"forbidden set of the .cfg: {config.forbidden.text}"
-        files = {t.file: automaton_text(t, leaf, start, forbidden, source, top=True)}
+        files = {t.file: automaton_text(t, leaf, start, forbidden, source, top=True,
+                                        checks=checks)}  # fmt: skip
         origins = {**t.origins, **_cfg_origins(config, ("initial",), ("properties",))}
         check_loads(files, t.file, {t.file: origins})
         return ImportResult(files, t.file, notes)
-    files, top = _system_files(flat, templates, names, init, config, forbidden, source, notes)
+    files, top = _system_files(flat, templates, names, init, config, forbidden, source, notes,
+                               checks)  # fmt: skip
     provenance = {t.file: t.origins for t in templates.values()}
     system_origins: dict[tuple[str | int, ...], Position] = {(): flat.system.position}
     for i, leaf in enumerate(flat.leaves):
@@ -218,6 +222,7 @@ def _system_files(
     forbidden: list[dict[str, Any]],
     source: str,
     notes: list[str],
+    checks: dict[str, Any] | None = None,
 ) -> tuple[dict[str, str], str]:
     """The automaton files of the base components and the system file (its name last)."""
     files: dict[str, str] = {}
@@ -259,6 +264,9 @@ def _system_files(
     if forbidden and config is not None and config.forbidden is not None:
         data["properties"] = {"forbidden": forbidden}
         comments[("properties",)] = f"forbidden set of the .cfg: {config.forbidden.text}"
+    if checks:
+        data["checks"] = checks
+        comments[("checks",)] = CHECKS_COMMENT
     top = f"{name}.yaml" if f"{name}.yaml" not in files else f"{name}_system.yaml"
     header = (
         f"Imported by `hybrid import spaceex`. {source}, network component "
