@@ -141,22 +141,26 @@ def refute(
     if mode.urgent or not (math.isfinite(t_end) and t_end > 0.0 and step > 0.0):
         return None
     t_index = forms.index[TIME]
-    total = math.floor(t_end / step + 1e-9)
-    if total < 1:
-        return None
-    phi, phi1 = _transition_matrices(mode.a, step)
-    if not (np.all(np.isfinite(phi)) and np.all(np.isfinite(phi1))):
-        return None
     # coordinates every run has at the same value at a given time: clocks from a point
     fixed = np.all(mode.a == 0.0, axis=1) & np.all(mode.b == 0.0, axis=1) & (x_lo == x_hi)
     fixed[t_index] = True
+    matrices: dict[float, tuple[Array, Array]] = {}
     for case in cond:
         split = _split(case, fixed)
         if split is None:
             continue
         row, limit, side = split
         clocks = _Clocks(side, x_lo, mode.c)
-        found = _walk(forms, mode, phi, phi1, x_lo, x_hi, row, limit, clocks, total, step)
+        h = clocks.landing_step(step, t_end)
+        total = math.floor(t_end / h + 1e-9)
+        if total < 1:
+            continue
+        if h not in matrices:
+            matrices[h] = _transition_matrices(mode.a, h)
+        phi, phi1 = matrices[h]
+        if not (np.all(np.isfinite(phi)) and np.all(np.isfinite(phi1))):
+            continue
+        found = _walk(forms, mode, phi, phi1, x_lo, x_hi, row, limit, clocks, total, h)
         if found is not None:
             return found
     return None
@@ -180,6 +184,38 @@ class _Clocks:
     rows: Rows
     x0: Array
     rate: Array
+
+    def window(self) -> tuple[float, float]:
+        """The times ``[a, b]`` the rows allow (their closure; ``a > b``: none)."""
+        slope = self.rows.mat @ self.rate
+        room = self.rows.vec - self.rows.mat @ self.x0
+        a, b = 0.0, math.inf
+        for s, r in zip(slope.tolist(), room.tolist(), strict=True):
+            if s > 0.0:
+                b = min(b, r / s)
+            elif s < 0.0:
+                a = max(a, r / s)
+            elif r < 0.0:
+                return math.inf, -math.inf
+        return a, b
+
+    def landing_step(self, step: float, t_end: float) -> float:
+        """``step``, or a little less when the rows allow a window of time shorter than a
+        step: then a step point falls on its end (``t == 20`` is met by no point of
+        the steps of ``20.1 / 4000``; it is by those of ``20 / 3981``).
+
+        >>> from hybrid.reach.affine import Rows
+        >>> at_20 = _Clocks(Rows(np.array([[1.0], [-1.0]]), np.array([20.0, -20.0])),
+        ...                 np.array([0.0]), np.array([1.0]))
+        >>> h = at_20.landing_step(20.1 / 4000, 20.1)
+        >>> round(20.0 / h, 9), h <= 20.1 / 4000
+        (3981.0, True)
+        """
+        a, b = self.window()
+        b = min(b, t_end)
+        if not (a <= b and b > 0.0 and b - a < step):
+            return step
+        return b / math.ceil(b / step - 1e-9)
 
     def hold(self, t: Array) -> NDArray[np.bool_]:
         """Which times ``t`` satisfy the rows as written (a strict row strictly: ``c > 1``

@@ -163,6 +163,26 @@ def test_building_bdu02_is_refuted_at_the_end_of_the_horizon() -> None:
     assert replay.t[-1] == 20.0 and _x25(replay)[-1] < -0.00078
 
 
+def test_bdu02_as_imported_is_refuted_by_check_at_the_cfgs_own_horizon() -> None:
+    """The import dropped the .cfg's time-horizon (20.1) and iter-max (1), so a plain
+    `hybrid check` of the file decided nothing; given them, BDU02 was 'unknown': no step
+    point of 20.1 / 4000 falls on the entry's 't == 20'. The spec now carries them, and
+    the exact refutation steps so that one does (20 / 3981); its run replays in."""
+    model, spec = _imported("BDU02")
+    assert (model.properties.reach_t_end, model.properties.reach_max_jumps) == (20.1, 1)
+    done = run_cli("check", spec)
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert "property-violated: forbidden state 'x25 < -0.00078 and t_ == 20' is reached at t = 20" in (
+        done.stdout
+    )
+    (entry,) = hybrid.reach(model, 20.1, max_jumps=1).properties
+    assert entry.verdict == "refuted" and entry.witness_time == pytest.approx(20.0, abs=1e-9)
+    replay = hybrid.simulate(model, 20.0, initial=entry.witness_initial,
+                             inputs=entry.witness_inputs, rtol=1e-9, atol=1e-12,
+                             handle_sigint=False)  # fmt: skip
+    assert replay.t[-1] == 20.0 and _x25(replay)[-1] < -0.00078
+
+
 def test_check_is_green_on_bds01_and_red_with_a_witness_on_bdu01() -> None:
     safe = run_cli("check", _imported("BDS01")[1], "--reach-t-end", "20", "--reach-max-jumps", "1")
     assert safe.returncode == 0, safe.stdout + safe.stderr
