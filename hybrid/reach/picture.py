@@ -20,7 +20,10 @@ if TYPE_CHECKING:
     from hybrid.reach.result import ReachResult
     from hybrid.simulation.result import Run
 
-__all__ = ["axis_index", "clip_polygon", "draw"]
+__all__ = ["DRAWN_POINTS", "axis_index", "clip_polygon", "draw"]
+
+DRAWN_POINTS = 2000
+"""Points of the nominal run drawn over the sets, evenly spaced to the horizon (and its jumps)."""
 
 Point = tuple[float, float]
 HalfPlane = tuple[tuple[float, float], float]
@@ -85,9 +88,10 @@ def draw(result: ReachResult, x: str, y: str, *, ax: Any = None, runs: Sequence[
     if not runs and result.source is not None:
         from hybrid.simulation.engine import simulate
 
-        nominal = simulate(
-            result.source, result.t_end, max_jumps=result.max_jumps, handle_sigint=False
-        )
+        # on a fine grid: drawn through its step points only, a run's straight chords
+        # left the sets (the bouncing ball's 9 points), as if the sets missed it
+        nominal = simulate(result.source, result.t_end, max_jumps=result.max_jumps,
+                           dt=result.t_end / DRAWN_POINTS, handle_sigint=False)  # fmt: skip
         runs = [nominal]
     for run in runs:
         xs = run.t if ix < 0 else run.states[:, ix]
@@ -119,5 +123,6 @@ def draw(result: ReachResult, x: str, y: str, *, ax: Any = None, runs: Sequence[
     ax.set_ylim(y_lim)
     ax.set_xlabel(x)
     ax.set_ylabel(y)
-    ax.set_title(f"{result.model}: {len(result.sets)} sets, {result.verdict}")
+    verdict = result.verdict if result.properties else "no forbidden state to decide"
+    ax.set_title(f"{result.model}: {len(result.sets)} sets, {verdict}")
     return ax

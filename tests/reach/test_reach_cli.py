@@ -346,3 +346,27 @@ def test_a_jump_bound_without_a_horizon_is_a_note_not_silence(tmp_path: Path) ->
     )
     with_horizon = run_cli("check", spec, "--reach-max-jumps", "3", "--reach-t-end", "1")
     assert "is not used" not in with_horizon.stderr
+
+
+def test_the_nominal_run_drawn_over_the_sets_stays_in_them() -> None:
+    """The ball's nominal run has a handful of step points (a parabola is exact for the
+    integrator); drawn through them, its chords left the sets, as if the sets missed the
+    run. Every drawn vertex, and the middle of every drawn segment, is in a set."""
+    pytest.importorskip("matplotlib")
+    import matplotlib.pyplot as plt
+
+    ball = hybrid.load(REPO / "specs" / "bouncing_ball.yaml")
+    result = hybrid.reach(ball, 3.0, max_jumps=2)
+    ax = result.plot("t", "h")
+    (line,) = [ln for ln in ax.get_lines() if ln.get_color() == "black"]
+    t, h = (np.asarray(v, dtype=float) for v in line.get_data())
+    t = np.concatenate([t, (t[1:] + t[:-1]) / 2])
+    h = np.concatenate([h, (h[1:] + h[:-1]) / 2])
+    k = list(result.variables).index("h")
+    inside = np.zeros(t.size, dtype=bool)
+    for s in result.sets:
+        inside |= (s.t[0] - 1e-9 <= t) & (t <= s.t[1] + 1e-9) & (s.lo[k] - 1e-6 <= h) & (
+            h <= s.hi[k] + 1e-6)  # fmt: skip
+    assert inside.all(), (t[~inside][:3], h[~inside][:3])
+    assert ax.get_title().endswith("no forbidden state to decide")
+    plt.close("all")
