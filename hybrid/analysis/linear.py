@@ -203,6 +203,8 @@ class Linearizer:
             value = _power(left.const, right.const)
             if value is not None:
                 return Affine({}, value)
+        elif node.op == "**" and right.is_constant and right.const in (0.0, 1.0):
+            return left if right.const == 1.0 else Affine({}, 1.0)  # x ** 1, x ** 0 (0 ** 0 is 1)
         return self._opaque(node)
 
     def _call(self, node: ir.Call) -> Affine:

@@ -43,7 +43,7 @@ from hybrid.analysis.linear import Affine, Linearizer, structural_key
 from hybrid.compose import System
 from hybrid.errors import Position, SpecError
 from hybrid.expr import ir
-from hybrid.expr.printer import to_source
+from hybrid.expr.printer import expression_text
 from hybrid.expr.ranges import IntervalEvaluator
 from hybrid.expr.transform import bind_parameters
 
@@ -92,12 +92,8 @@ ModeKey = tuple[str, ...]
 
 
 def _name_of(node: ir.Expr) -> str:
-    return to_source(node, _Names())
-
-
-class _Names(dict[str, str]):
-    def __missing__(self, key: str) -> str:
-        return key
+    """The expression as its user wrote it (``sin(t)``, not generated code's ``_sin(t)``)."""
+    return expression_text(node)
 
 
 class Forms:

@@ -10,6 +10,7 @@ so ``x > 4.3`` is proved and ``x > 4`` refuted (from t = 2.97).
 from __future__ import annotations
 
 import importlib
+import math
 import json
 import re
 import sys
@@ -103,6 +104,25 @@ def test_a_model_that_is_not_affine_is_refused_at_its_place(tmp_path: Path) -> N
     assert_no_traceback(done.stderr)
     assert "m.yaml:3:27: the flow of x in location 'l' is not affine" in done.stderr
     assert "'x * x'" in done.stderr
+
+
+@pytest.mark.parametrize(("flow", "named"), [
+    ("sin(t) + x", "'sin(t)'"), ("abs(x)", "'abs(x)'"), ("x ** 2", "'x ** 2'"),
+])  # fmt: skip
+def test_what_is_not_affine_is_named_as_written(flow: str, named: str) -> None:
+    """The message quoted generated code: '_sin(t)', '_abs(x)', '_pow(x, 2.0)'."""
+    text = f"automaton: m\nstate: {{x: {{initial: [0, 1]}}}}\nlocations: {{l: {{flow: {{x: {flow}}}}}}}\n"
+    with pytest.raises(hybrid.SpecError, match="not affine") as raised:
+        hybrid.reach(hybrid.load_text(text), 1.0)
+    assert f"not affine in the state and inputs: {named};" in str(raised.value)
+
+
+def test_a_power_of_one_or_zero_is_affine() -> None:
+    """x ** 1 was refused as not affine. x' = x ** 1 + 0 * x ** 0 from [0, 1]: the sets'
+    hull at t = 1 reaches e (closed form x0 e^t)."""
+    text = "automaton: m\nstate: {x: {initial: [0, 1]}}\nlocations: {l: {flow: {x: x ** 1 + 0 * x ** 0}}}\n"
+    lo, hi = hybrid.reach(hybrid.load_text(text), 1.0).hull()
+    assert lo[0] <= 0.0 and math.e <= hi[0] <= math.e * (1 + 1e-6)
 
 
 def test_a_horizon_is_needed_and_read_from_the_spec(tmp_path: Path) -> None:
