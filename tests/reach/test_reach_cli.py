@@ -10,8 +10,8 @@ so ``x > 4.3`` is proved and ``x > 4`` refuted (from t = 2.97).
 from __future__ import annotations
 
 import importlib
-import math
 import json
+import math
 import re
 import sys
 from pathlib import Path
