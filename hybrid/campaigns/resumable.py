@@ -43,10 +43,11 @@ import json
 import os
 import shutil
 import time
+import warnings
 from pathlib import Path
 from typing import Any, BinaryIO
 
-from hybrid.errors import CannotWrite, UsageError
+from hybrid.errors import CannotWrite, Note, UsageError
 from hybrid.files import atomic_write
 
 try:
@@ -76,13 +77,29 @@ def parts_dir(out: Path) -> Path:
     return out.with_name(out.name + ".parts")
 
 
+_PART_WORDS = {
+    "model": "the model",
+    "t_end": "t_end",
+    "solver": "the solver's settings",
+    "inputs": "the inputs",
+    "backend": "the backend",
+    "timeout": "the run timeout",
+    "columns": "the columns (summaries, requirements)",
+    "points": "the points",
+}
+"""How a refused resume names each part of the campaign that differs."""
+
+
 class ChunkStore:
     """The finished rows of one campaign, on disk (see the module docstring)."""
 
-    def __init__(self, out: str | Path, fingerprint: str, *, resume: bool) -> None:
+    def __init__(self, out: str | Path, fingerprint: str, *, resume: bool,
+                 parts: dict[str, str] | None = None) -> None:  # fmt: skip
         self.out = Path(out)
         self.folder = parts_dir(self.out)
         self.fingerprint = fingerprint
+        self.parts = parts or {}
+        """A digest of each part of the campaign (model, settings, points...), by name."""
         self.done: dict[int, dict[str, Any]] = {}
         self.waiting: list[dict[str, Any]] = []
         self.oldest = 0.0
@@ -98,8 +115,12 @@ class ChunkStore:
         self._lock = _hold(self.folder)
         try:
             if created:
-                manifest = {"fingerprint": fingerprint, "created": time.time()}
+                manifest = {"fingerprint": fingerprint, "created": time.time(),
+                            "parts": self.parts}  # fmt: skip
                 write_whole(self.folder / "campaign.json", json.dumps(manifest).encode())
+                if resume:  # a typo in --out, or a campaign that finished: say what runs
+                    warnings.warn(Note(f"nothing to resume in {self.folder}: every run is run"),
+                                  stacklevel=2)  # fmt: skip
             elif not resume:
                 raise UsageError(
                     f"{self.folder} holds the results of an unfinished campaign: add --resume "
@@ -117,9 +138,14 @@ class ChunkStore:
         except (OSError, ValueError) as exc:
             raise UsageError(f"{self.folder}: cannot read campaign.json ({exc})") from None
         if manifest.get("fingerprint") != self.fingerprint:
+            theirs = manifest.get("parts")
+            differ = sorted(k for k, v in self.parts.items()
+                            if isinstance(theirs, dict) and theirs.get(k) != v)  # fmt: skip
+            what = (f"it differs in {', '.join(_PART_WORDS.get(k, k) for k in differ)}" if differ
+                    else "a different model, settings or points")  # fmt: skip
             raise UsageError(
-                f"{self.folder} holds the results of another campaign (a different model, "
-                "settings or points): remove it, or write the results elsewhere"
+                f"{self.folder} holds the results of another campaign ({what}): remove it, "
+                "or write the results elsewhere"
             )
         for chunk in sorted(self.folder.glob("chunk-*.jsonl")):
             try:

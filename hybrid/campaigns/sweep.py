@@ -280,6 +280,9 @@ def _finish(
     announce: bool = True,
 ) -> SweepTable:
     """Check the run settings, then run the campaign of ``points``."""
+    if isinstance(summaries, str | bytes):  # "max:v" would be read letter by letter
+        raise UsageError(f"summaries is a list of KIND:NAME, got the string {summaries!r}: "
+                         f"write [{summaries!r}]")  # fmt: skip
     wanted = [Summary.parse(s) for s in summaries]
     for s in wanted:
         s.check(model)
@@ -333,8 +336,8 @@ def run_campaign(
     _check_out(out)
     store = None
     if out is not None:
-        fingerprint = _fingerprint(payload.digest, plan, columns, points)
-        store = ChunkStore(out, fingerprint, resume=resume)
+        fingerprint, parts = _fingerprint(payload.digest, plan, columns, points)
+        store = ChunkStore(out, fingerprint, resume=resume, parts=parts)
     try:  # the results folder stays locked until the table is written
         rows: dict[int, dict[str, Any]] = dict(store.done) if store is not None else {}
         resumed = len(rows)
@@ -472,17 +475,19 @@ def _count(row: dict[str, Any], requirements: Sequence[str], counts: dict[str, i
 
 def _fingerprint(
     digest: str, plan: RunPlan, columns: Sequence[str], points: Sequence[Point]
-) -> str:
-    text = json.dumps(
-        {
-            "model": digest,
-            "t_end": plan.t_end,
-            "solver": sorted((k, repr(v)) for k, v in plan.solver.items()),
-            "inputs": plan.inputs,
-            "backend": plan.requested or plan.backend,
-            "timeout": plan.timeout,  # a row ends 'timeout' or not by it
-            "columns": list(columns),
-            "points": [[(k, repr(v)) for k, v in p.items()] for p in points],
-        }
-    )
-    return hashlib.sha256(text.encode()).hexdigest()
+) -> tuple[str, dict[str, str]]:
+    """The campaign's fingerprint, and a digest of each of its parts (to say which differs
+    when a resume is refused; the fingerprint is that of the campaigns before them)."""
+    fields: dict[str, Any] = {
+        "model": digest,
+        "t_end": plan.t_end,
+        "solver": sorted((k, repr(v)) for k, v in plan.solver.items()),
+        "inputs": plan.inputs,
+        "backend": plan.requested or plan.backend,
+        "timeout": plan.timeout,  # a row ends 'timeout' or not by it
+        "columns": list(columns),
+        "points": [[(k, repr(v)) for k, v in p.items()] for p in points],
+    }
+    text = json.dumps(fields)
+    parts = {k: hashlib.sha256(json.dumps(v).encode()).hexdigest()[:16] for k, v in fields.items()}
+    return hashlib.sha256(text.encode()).hexdigest(), parts

@@ -43,12 +43,47 @@ def test_an_unknown_backend_is_refused_before_any_run(campaign: str) -> None:
             hybrid.falsify(BALL, "r", {"e": (0.5, 0.9)}, t_end=3.0, backend="numba", budget=4)
 
 
+def test_summaries_given_as_one_string_are_refused_as_such() -> None:
+    """summaries="max:v" was read letter by letter: "summary 'm': expected KIND:NAME"."""
+    with pytest.raises(hybrid.UsageError, match=r"summaries is a list of KIND:NAME, got the "
+                       r"string 'max:v': write \['max:v'\]"):  # fmt: skip
+        hybrid.sweep(BALL, 3.0, grid={"e": [0.5]}, summaries="max:v", workers=0)
+
+
 def test_a_different_run_timeout_is_another_campaign() -> None:
     """Resuming with another timeout mixed rows run with and without it into one table."""
     points = [{"e": 0.5}, {"e": 0.9}]
-    base = _fingerprint("m", RunPlan(t_end=1.0), ["run", "e"], points)
-    assert _fingerprint("m", RunPlan(t_end=1.0), ["run", "e"], points) == base
-    assert _fingerprint("m", RunPlan(t_end=1.0, timeout=0.5), ["run", "e"], points) != base
+    base, parts = _fingerprint("m", RunPlan(t_end=1.0), ["run", "e"], points)
+    assert _fingerprint("m", RunPlan(t_end=1.0), ["run", "e"], points) == (base, parts)
+    other, changed = _fingerprint("m", RunPlan(t_end=1.0, timeout=0.5), ["run", "e"], points)
+    assert other != base
+    assert [k for k in parts if parts[k] != changed[k]] == ["timeout"]
+
+
+def test_a_refused_resume_names_what_differs(tmp_path: Path) -> None:
+    """Every refusal said "(a different model, settings or points)", also when only a run
+    timeout was added, as one does after finding hung runs."""
+    out = tmp_path / "r.csv"
+    from hybrid.campaigns.resumable import ChunkStore
+
+    _, parts = _fingerprint("m", RunPlan(t_end=1.0), ["run", "e"], [{"e": 0.5}])
+    ChunkStore(out, "earlier", resume=False, parts=parts).close()
+    later = {**parts, "timeout": "x", "backend": "y"}
+    with pytest.raises(hybrid.UsageError, match=r"another campaign \(it differs in the "
+                       r"backend, the run timeout\): remove it"):  # fmt: skip
+        ChunkStore(out, "later", resume=True, parts=later)
+
+
+def test_a_resume_with_nothing_to_resume_says_so(tmp_path: Path) -> None:
+    """--resume with no .parts folder (a typo, or a campaign that finished) ran every run
+    and replaced the results without a word."""
+    from hybrid.errors import Note
+
+    out = tmp_path / "r.csv"
+    with pytest.warns(Note, match=r"nothing to resume in .*r\.csv\.parts: every run is run"):
+        table = hybrid.sweep(BALL, 1.0, grid={"e": [0.5, 0.6]}, out=out, resume=True,
+                             workers=0, backend="scipy")  # fmt: skip
+    assert table.complete and len(table) == 2 and out.exists()
 
 
 def test_a_damaged_chunk_is_named_not_a_traceback(tmp_path: Path) -> None:

@@ -99,6 +99,9 @@ def test_invalid_usage_is_exit_2_with_one_line(
         (("--grid", "k=0:1:2", "--out", "r.csv", "--summary", "top:x"), "KIND:NAME"),
         (("--vary", "k=0:1", "--sample", "3", "--seed", "-1", "--out", "r.csv"),
          "the seed must be a whole number >= 0, got -1"),
+        # -1 said ">= 0", then 0 said "from 1 to 10000000"
+        (("--vary", "k=0:1", "--sample", "-1", "--out", "r.csv"), "--sample: must be >= 1, got -1"),
+        (("--vary", "k=0:1", "--sample", "0", "--out", "r.csv"), "--sample: must be >= 1, got 0"),
         # the last value used to win silently
         (("--grid", "k=0:1:2", "--param", "k=1", "--param", "k=2", "--out", "r.csv"),
          "--param k is given twice (1.0 and 2.0): give it once"),
