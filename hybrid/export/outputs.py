@@ -50,6 +50,8 @@ def writable_file(path: str | Path, flag: str) -> Path:
     (it is not created: a typo in it would otherwise scatter folders), ``path``
     must not be a folder, and a temporary file must be creatable beside it.
     """
+    if not str(path).strip():  # Path("") is '.', a directory: said as what it is
+        raise UsageError(f"{flag}: the file name is empty")
     target = Path(path)
     if target.is_dir():
         raise UsageError(f"{flag}: '{path}' is a directory: give a file name inside it")

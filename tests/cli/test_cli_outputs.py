@@ -216,3 +216,14 @@ def test_graph_takes_its_format_from_the_out_name_and_refuses_a_contradiction(
         f"{thermostat}: --out {out}: the name says svg, --format says png; leave out "
         "--format (the name decides), or name the file .png"
     )
+
+
+@pytest.mark.parametrize("words", [
+    ["simulate", THERMOSTAT, "--t-end", "1", "--out"],
+    ["sweep", THERMOSTAT, "--t-end", "1", "--grid", "init.T=18:20:2", "--quiet", "--out"],
+])  # fmt: skip
+def test_an_empty_output_name_is_said_to_be_empty(words: list[str]) -> None:
+    """--out "" said "'' is a directory" (an empty path is the current directory)."""
+    done = run_cli(*words, "")
+    assert done.returncode == 2 and done.stderr.strip().endswith("--out: the file name is empty")
+    assert_no_traceback(done.stderr)
