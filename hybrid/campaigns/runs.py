@@ -124,13 +124,11 @@ class Summary:
             if self.name not in edges and self.name not in {c.name for c in system.components}:
                 raise UsageError(f"summary '{self.column}': no edge or component '{self.name}'")
 
-    def of(self, run: Run) -> float:
-        """The summary's value on ``run``."""
+    def of(self, run: Run) -> float | int:
+        """The summary's value on ``run`` (a count for ``jumps:E``, a number otherwise)."""
         if self.kind == "jumps":
             prefix = f"{self.name}."
-            return float(
-                sum(1 for j in run.jumps if j.edge == self.name or j.edge.startswith(prefix))
-            )
+            return sum(1 for j in run.jumps if j.edge == self.name or j.edge.startswith(prefix))
         if self.kind == "jump_t":
             k = int(self.name)
             return float(run.jumps[k - 1].t) if len(run.jumps) >= k else math.nan

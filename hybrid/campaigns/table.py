@@ -44,7 +44,7 @@ FAILED = ("error", "timeout")
 
 def column_type(name: str, varied: Sequence[str]) -> str:
     """``int``, ``float``, ``bool`` or ``str``: what a column holds."""
-    if name in ("run", "j", "jumps"):
+    if name in ("run", "j", "jumps") or name.startswith("jumps:"):  # counts
         return "int"
     if name in ("cause", "message"):
         return "str"

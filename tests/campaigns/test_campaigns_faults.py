@@ -272,3 +272,14 @@ def test_the_table_says_which_backend_ran(tmp_path: Path) -> None:
     out = tmp_path / "table.parquet"
     hybrid.sweep(drift, backend="scipy", out=out, **asked)  # type: ignore[arg-type]
     assert pq.read_schema(out).metadata == {b"hybrid.backend": b"scipy"}
+
+
+def test_a_jump_count_summary_is_a_whole_number() -> None:
+    """jumps:EDGE was written 13.0: a count. The ball with e = 0.5 from h = 10 bounces
+    4 times by t = 4 (impacts at 1.428, 2.856, 3.570, 3.927 s: the first flight
+    sqrt(2 h / g), then 2 e sqrt(2 h / g), each half the last)."""
+    table = hybrid.sweep(BALL, 4.0, grid={"e": [0.5]}, summaries=["jumps:bounce"], workers=0,
+                         backend="scipy")  # fmt: skip
+    (row,) = table.rows
+    assert row["jumps:bounce"] == 4 and isinstance(row["jumps:bounce"], int)
+    assert table.csv_text().splitlines()[1].split(",")[-1] == "4"
