@@ -82,6 +82,9 @@ def text(reports: Sequence[Report], strict: bool = False) -> str:
             lines.append(f"{report.file}: {report.repeated} finding(s), shown above")
         elif not report.findings:
             lines.append(f"{report.file}: ok" + (f" ({report.bounded})" if report.bounded else ""))
+        elif report.bounded and not any(f.where.startswith("forbidden: ") for f in shown):
+            # every forbidden entry proved, beside other findings: what the proofs hold for
+            lines.append(f"{report.file}: {report.bounded.replace(': ', ' proved ', 1)}")
     return "\n".join(lines)
 
 

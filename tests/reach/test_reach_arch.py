@@ -183,6 +183,15 @@ def test_bdu02_as_imported_is_refuted_by_check_at_the_cfgs_own_horizon() -> None
     assert replay.t[-1] == 20.0 and _x25(replay)[-1] < -0.00078
 
 
+def test_check_of_bds01_as_imported_says_what_its_proof_holds_for() -> None:
+    """With a note beside it (the sink at the horizon), the proof's bound was not printed
+    at all: the bounded wording came only with 'ok'. The horizon is the .cfg's."""
+    done = run_cli("check", _imported("BDS01")[1])
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "note sink-location" in done.stdout
+    assert done.stdout.strip().endswith(": forbidden states proved within t <= 20 and 1 jumps")
+
+
 def test_check_is_green_on_bds01_and_red_with_a_witness_on_bdu01() -> None:
     safe = run_cli("check", _imported("BDS01")[1], "--reach-t-end", "20", "--reach-max-jumps", "1")
     assert safe.returncode == 0, safe.stdout + safe.stderr
