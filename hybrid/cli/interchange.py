@@ -28,6 +28,8 @@ def add_interchange_commands(sub: argparse._SubParsersAction) -> None:  # type: 
     q.add_argument("--cfg", metavar="MODEL.cfg", help="default: MODEL.cfg beside MODEL.xml, if any")
     q.add_argument("--system", metavar="NAME", help="the component to translate")
     q.add_argument("--out", metavar="DIR", required=True, help="directory for the YAML specs")
+    q.add_argument("--force", action="store_true",
+                   help="replace specs in DIR that differ from this import's (edits to them are lost)")  # fmt: skip
     p = sub.add_parser("export", help="write a spec in another tool's format")
     formats = p.add_subparsers(dest="format", required=True, parser_class=type(p))
     q = formats.add_parser("spaceex", help="SpaceEx model (.xml) and configuration (.cfg)")
@@ -41,6 +43,27 @@ def _write(path: Path, text: str) -> None:
             handle.write(text.encode("utf-8"))
     except OSError as exc:
         raise UsageError(f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+def _refuse_replacing(out: Path, files: dict[str, str]) -> None:
+    """A :class:`UsageError`, before anything is written, if a spec of this import would
+    replace a file in ``out`` that differs from it: imported specs are starting points
+    their users edit, and an import into the same folder again replaced the edits."""
+    differ = []
+    for name, text in files.items():
+        path = out / name
+        try:
+            if path.is_file() and path.read_bytes() != text.encode("utf-8"):
+                differ.append(name)
+        except OSError:  # unreadable: the write says what is wrong with it
+            continue
+    if differ:
+        shown = ", ".join(differ[:3]) + (f" and {len(differ) - 3} more" if len(differ) > 3 else "")
+        raise UsageError(
+            f"--out: {out} holds {shown}, different from what this import writes (edited, or "
+            "another model's): give another folder, or --force to replace them (nothing was "
+            "written)"
+        )
 
 
 def run_import(args: argparse.Namespace) -> int:
@@ -66,6 +89,8 @@ def run_import(args: argparse.Namespace) -> int:
         cfg = xml.with_suffix(".cfg")
         print(f"{xml}: note: using the configuration {cfg}", file=sys.stderr)
     result = import_spaceex(xml, cfg, args.system)
+    if not args.force:
+        _refuse_replacing(Path(args.out), result.files)
     out = make_directory(Path(args.out), "--out")
     for name, text in result.files.items():
         _write(out / name, text)

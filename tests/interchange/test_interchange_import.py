@@ -256,6 +256,23 @@ def test_the_command_writes_the_specs_and_prints_the_top_level_file(tmp_path: Pa
     assert "note: using the configuration" in done.stderr  # bball.cfg beside it
 
 
+def test_an_edited_spec_is_not_replaced_without_force(tmp_path: Path) -> None:
+    """Importing into the same folder again replaced a user's edits to the specs."""
+    xml, out = DATA / "bball" / "bball.xml", tmp_path / "out"
+    assert run_cli("import", "spaceex", xml, "--out", out).returncode == 0
+    assert run_cli("import", "spaceex", xml, "--out", out).returncode == 0  # unchanged: fine
+    edited = (out / "system.yaml").read_text() + "# tuned by hand\n"
+    (out / "system.yaml").write_text(edited)
+    before = {p.name: p.read_text() for p in out.iterdir()}
+    done = run_cli("import", "spaceex", xml, "--out", out)
+    assert done.returncode == 2 and done.stdout == ""
+    assert "holds system.yaml, different from what this import writes" in done.stderr
+    assert "--force to replace them (nothing was written)" in done.stderr
+    assert {p.name: p.read_text() for p in out.iterdir()} == before
+    forced = run_cli("import", "spaceex", xml, "--out", out, "--force")
+    assert forced.returncode == 0 and "tuned by hand" not in (out / "system.yaml").read_text()
+
+
 def test_the_command_refuses_with_the_place_and_exit_2(tmp_path: Path) -> None:
     xml = DATA / "filtered_oscillator" / "filtered_oscillator.xml"
     cfg = xml.with_name("filtered_oscillator.16th_order.cfg")
