@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -323,8 +324,39 @@ def _decide(
         message = (
             f"forbidden state '{name}' may be reached {horizon}: the over-approximation "
             f"meets it from t = {first:.9g}, and no simulated run was found that reaches it"
+            + step_hint([mode_of(forms, s.mode) for s in contacts], step)
         )
     return PropertyResult(entry, "unknown", message, first_contact=first, condition=cond)
+
+
+LONG_STEP = 0.2
+"""``|A| h`` above which an unknown verdict suggests a smaller step (the sets of a step
+grow by about that factor of the state's size)."""
+
+
+def step_hint(modes: list[Any], step: float) -> str:
+    """A hint to shorten the step when it is long against the dynamics of ``modes``.
+
+    ``|A|`` is the largest row sum of the flow matrix: a step of ``h`` lets a box
+    grow by about ``|A| h`` of itself (a stiff mode's ``x' = -1000 x`` at
+    ``h = 0.0025`` by 2.5, where the flow itself shrinks it).
+
+    >>> class M:  # a mode's flow matrix and name
+    ...     a, name = np.array([[-1000.0, 1.0], [0.0, -0.1]]), "l"
+    >>> step_hint([M()], 0.0025)
+    '; the step is long against the dynamics (|A| h = 2.5 in l): a smaller step (--step, step=) tightens the sets'
+    >>> step_hint([M()], 1e-5)
+    ''
+    """
+    worst, where = 0.0, ""
+    for mode in modes:
+        size = float(np.abs(mode.a).sum(axis=1).max()) if mode.a.size else 0.0
+        if size * step > worst:
+            worst, where = size * step, mode.name
+    if worst <= LONG_STEP:
+        return ""
+    return (f"; the step is long against the dynamics (|A| h = {worst:.2g} in {where}): a "
+            "smaller step (--step, step=) tightens the sets")  # fmt: skip
 
 
 def _quick(
