@@ -310,7 +310,9 @@ def test_a_ctrl_c_python_drops_in_a_callback_is_delivered_again(
 
 
 _DROPPED = """
-import importlib, sys, time
+import importlib, signal, sys, time
+signal.signal(signal.SIGINT, signal.default_int_handler)  # Python's own, also when started
+# by a shell that ignores SIGINT in its background jobs (then inherited ignored)
 cli_main = importlib.import_module("hybrid.cli.main")
 sys.unraisablehook = cli_main._quiet_after_interrupt  # as the command installs it
 

@@ -353,6 +353,9 @@ def test_a_run_in_the_main_thread_is_stopped_by_ctrl_c_through_the_watcher() -> 
     theirs_read, theirs_write = os.pipe()
     os.set_blocking(theirs_write, False)
     old = signal.set_wakeup_fd(theirs_write)
+    # Python's own handler, also in a process started ignoring SIGINT (a shell's background
+    # job without job control), whose handler would be SIG_IGN before and after
+    inherited = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT)).start()
         assert run_in_worker(loop, True) is True
@@ -370,6 +373,7 @@ def test_a_run_in_the_main_thread_is_stopped_by_ctrl_c_through_the_watcher() -> 
         assert signal.SIGINT in passed_on
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
     finally:
+        signal.signal(signal.SIGINT, inherited)
         signal.set_wakeup_fd(old)
         os.close(theirs_read)
         os.close(theirs_write)
