@@ -52,7 +52,7 @@ def add_campaign_commands(
     p.add_argument("--vary", action="append", default=[], metavar="NAME=LO:HI",
                    help="a range to draw --sample points from (a bare init.x or input.u: its "
                         "declared range; none: every declared range); repeatable")  # fmt: skip
-    p.add_argument("--sample", type=_samples, default=None, metavar="N",
+    p.add_argument("--sample", type=types["some"], default=None, metavar="N",
                    help="N seeded samples of the --vary ranges (N >= 1)")  # fmt: skip
     p.add_argument("--seed", type=int, default=0, help="seed of the samples, a whole number >= 0 (default 0)")
     p.add_argument("--sampler", choices=SAMPLERS, default="lhs", help="how samples are drawn")
@@ -103,17 +103,6 @@ def _common(p: argparse.ArgumentParser, types: Mapping[str, Callable[[str], Any]
     add_settings_flags(p, types["positive"], types["count"], each_run=True)
     p.add_argument("--quiet", action="store_true",
                    help="no progress and no note of the backend auto chose on stderr")  # fmt: skip
-
-
-def _samples(text: str) -> int:
-    """``--sample N``: a whole number >= 1 (0 samples is no campaign: said here, not later)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {text}")
-    return value
 
 
 def _quiet_backend_note(quiet: bool) -> None:

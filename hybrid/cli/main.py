@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import math
 import re
 import select
 import sys
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any, TextIO
 
 from hybrid.cli.exits import EXIT_ABANDONED, EXIT_FINDINGS, EXIT_INVALID, EXIT_OK, error_line
@@ -152,13 +153,14 @@ def _assignment(text: str) -> tuple[str, str]:
     return name.strip(), expression.strip()
 
 
-def _count(text: str) -> int:
+def _count(text: str, least: int = 0) -> int:
+    """A whole number ``>= least`` given on the command line."""
     try:
         value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+    if value < least:
+        raise argparse.ArgumentTypeError(f"must be >= {least}, got {text}")
     return value
 
 
@@ -273,7 +275,10 @@ def build_parser() -> argparse.ArgumentParser:
     add_interchange_commands(sub)
     from hybrid.cli.campaigns import add_campaign_commands
 
-    types = {"positive": _positive, "count": _count, "param": _param, "assignment": _assignment}
+    types: dict[str, Callable[[str], Any]] = {
+        "positive": _positive, "count": _count, "param": _param, "assignment": _assignment,
+        "some": functools.partial(_count, least=1),
+    }  # fmt: skip
     add_campaign_commands(sub, types)
     from hybrid.cli.reach import add_reach_command
 
