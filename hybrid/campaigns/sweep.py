@@ -488,6 +488,7 @@ def _fingerprint(
         "columns": list(columns),
         "points": [[(k, repr(v)) for k, v in p.items()] for p in points],
     }
-    text = json.dumps(fields)
-    parts = {k: hashlib.sha256(json.dumps(v).encode()).hexdigest()[:16] for k, v in fields.items()}
+    texts = {k: json.dumps(v) for k, v in fields.items()}  # each dumped once (the points!)
+    text = "{" + ", ".join(f"{json.dumps(k)}: {v}" for k, v in texts.items()) + "}"  # json.dumps(fields)
+    parts = {k: hashlib.sha256(v.encode()).hexdigest()[:16] for k, v in texts.items()}
     return hashlib.sha256(text.encode()).hexdigest(), parts

@@ -6,6 +6,7 @@ silent exit 0 (found by trying campaigns as a user would).
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
@@ -58,6 +59,13 @@ def test_a_different_run_timeout_is_another_campaign() -> None:
     other, changed = _fingerprint("m", RunPlan(t_end=1.0, timeout=0.5), ["run", "e"], points)
     assert other != base
     assert [k for k in parts if parts[k] != changed[k]] == ["timeout"]
+    # the fingerprint of the campaigns before the parts were kept: their folders resume
+    before = {"model": "m", "t_end": 1.0, "solver": [], "inputs": [], "backend": "scipy",
+              "timeout": None, "columns": ["run", "e"],
+              "points": [[("e", "0.5")], [("e", "0.9")]]}  # fmt: skip
+    plan = RunPlan(t_end=1.0, backend="scipy")
+    assert _fingerprint("m", plan, ["run", "e"], points)[0] == hashlib.sha256(
+        json.dumps(before).encode()).hexdigest()  # fmt: skip
 
 
 def test_a_refused_resume_names_what_differs(tmp_path: Path) -> None:
