@@ -42,6 +42,7 @@ True
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import replace
 from typing import Any
@@ -144,7 +145,7 @@ class CompiledModel:
         Every declared input needs one; a :class:`UsageError` (the slots unchanged)
         if one is missing or a name is not a declared input.
         """
-        given = {name: _numeric(fn) for name, fn in (inputs or {}).items()}
+        given = {name: _numeric(fn, name) for name, fn in (inputs or {}).items()}
         external = self._external_inputs()
         missing = [n for n in external if n not in given]
         if missing:
@@ -456,12 +457,13 @@ def _identifier(name: str) -> str:
     return "".join(ch if ch.isalnum() else "_" for ch in name)
 
 
-def _numeric(fn: Callable[[float], float]) -> Callable[[float], float]:
+def _numeric(fn: Callable[[float], float], name: str = "") -> Callable[[float], float]:
     """``fn`` if it gives floats (an expression or a time series of the command line, inputs
     held piecewise constant by reach), else
     ``fn`` with each value made a float: text, None, a complex number or an array of several
     values is then an evaluation error where the input is read (the run ends ``nonfinite``,
-    naming the expression and the value), not an error inside numpy or the solver."""
+    naming the expression and the value), not an error inside numpy or the solver; so is
+    a NaN or an infinity, which a guard or an invariant would read as false without a word."""
     from hybrid.simulation.inputs import ExpressionInput, PiecewiseConstant, TimeSeries
 
     if isinstance(fn, ExpressionInput | TimeSeries | PiecewiseConstant):
@@ -471,6 +473,9 @@ def _numeric(fn: Callable[[float], float]) -> Callable[[float], float]:
         value = fn(t)
         if isinstance(value, str | bytes):
             raise TypeError(f"an input gave {value!r}, not a number")
-        return float(value)
+        result = float(value)
+        if not math.isfinite(result):
+            raise ValueError(f"input '{name}' gave {result} at t={t:.9g}, not a finite number")
+        return result
 
     return number

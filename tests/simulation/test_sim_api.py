@@ -86,6 +86,30 @@ def test_missing_or_unknown_input_is_a_simulation_error() -> None:
         hybrid.simulate(model, t_end=1.0, inputs={"u": math.cos, "w": math.sin})
 
 
+GUARDED_BY_INPUT = """
+automaton: gate
+inputs: [u]
+state: {x: {initial: 1}}
+locations:
+  a: {flow: {x: 0}, invariant: u >= 0}
+  b: {flow: {x: 0}}
+edges:
+  - {from: a, to: b, guard: u <= -1}
+"""
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_an_input_function_giving_nan_ends_the_run_naming_it(bad: float) -> None:
+    """u read only by a guard and an invariant: a NaN made both false, and the run
+    reported t_end; a flow reading it said "x' = nan" without naming the input."""
+    model = hybrid.load_text(GUARDED_BY_INPUT)
+    run = hybrid.simulate(model, t_end=3.0, inputs={"u": lambda t: 1.0 if t < 1 else bad},
+                          handle_sigint=False)  # fmt: skip
+    term = run.termination
+    assert term.cause == "nonfinite" and 1.0 <= term.t < 1.01, term
+    assert f"input 'u' gave {bad} at t=" in term.message
+
+
 def test_dense_output_and_max_jumps(ball: hybrid.Automaton) -> None:
     run = hybrid.simulate(ball, t_end=10.0, max_jumps=3, dense=True, **TOL)
     assert run.termination.cause == "max_jumps" and len(run.jumps) == 3
