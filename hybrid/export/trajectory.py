@@ -13,12 +13,15 @@ from __future__ import annotations
 
 import json
 import math
+import re
+import warnings
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from hybrid.errors import UsageError
+from hybrid.errors import Note, UsageError
 from hybrid.files import atomic_write, writable_target
 from hybrid.progress import Reporter, Tracker
 from hybrid.simulation.result import Run
@@ -92,6 +95,33 @@ def write_npz(run: Run, path: str | Path, progress: Reporter | None = None) -> N
     tracker.finish(len(run))
 
 
+MATLAB_KEYWORDS = frozenset(["break", "case", "catch", "classdef", "continue", "else", "elseif", "end", "for", "function", "global", "if", "otherwise", "parfor", "persistent", "return", "spmd", "switch", "try", "while"])
+MATLAB_NAME_LENGTH = 63
+
+
+def matlab_name(name: str, taken: Mapping[str, object] | set[str]) -> str:
+    """``name`` as a MATLAB variable name not in ``taken``: itself when it can be.
+
+    A letter first, then letters, digits and ``_``; no keyword; at most 63 characters.
+
+    >>> matlab_name("h", {}), matlab_name("states", {"states": 0}), matlab_name("_u", {})
+    ('h', 'states_', 'x_u')
+    >>> matlab_name("end", {}), matlab_name("plant.x", {}), len(matlab_name("v" * 100, {}))
+    ('end_', 'plant_x', 63)
+    """
+    base = re.sub(r"[^A-Za-z0-9_]", "_", name)
+    base = base if base[:1].isalpha() else f"x{base}"
+    base = (base + "_" if base in MATLAB_KEYWORDS else base)[:MATLAB_NAME_LENGTH]
+    if base not in taken:
+        return base
+    found, k = (base + "_")[:MATLAB_NAME_LENGTH], 1
+    while found in taken:
+        k += 1
+        tail = f"_{k}"
+        found = base[: MATLAB_NAME_LENGTH - len(tail)] + tail
+    return found
+
+
 def write_mat(run: Run, path: str | Path, progress: Reporter | None = None) -> None:
     """Write the trajectory as a MATLAB ``.mat`` file (version 5, atomically).
 
@@ -99,7 +129,10 @@ def write_mat(run: Run, path: str | Path, progress: Reporter | None = None) -> N
     columns (as ``ode45`` returns ``t``), ``states`` and ``signals`` one row per
     point, ``location``, ``state_names`` and ``signal_names`` character matrices
     (``cellstr(location)`` in MATLAB); and each state variable and signal under
-    its own name, a column, unless the name is one of those arrays'.
+    its own name, a column. A name MATLAB cannot take as it is (one of those
+    arrays' names, a keyword, one starting with ``_`` or longer than 63
+    characters) is written under a name it can (:func:`matlab_name`), and a
+    :class:`~hybrid.errors.Note` says which.
 
     Examples
     --------
@@ -124,9 +157,15 @@ def write_mat(run: Run, path: str | Path, progress: Reporter | None = None) -> N
         "states": run.states,
         "signals": run.signals,
     }
+    renamed = []
     for name in (*run.state_names, *run.signal_names):
-        if name not in arrays and not name.startswith("_"):  # MATLAB names start with a letter
-            arrays[name] = run[name]
+        written = matlab_name(name, arrays)
+        arrays[written] = run[name]
+        if written != name:
+            renamed.append(f"'{name}' is {written}")
+    if renamed:  # savemat would drop or overwrite them without a word
+        warnings.warn(Note(f"{Path(path).name}: {', '.join(renamed)} (MATLAB cannot take "
+                           "the name as it is)"), stacklevel=2)  # fmt: skip
     tracker = Tracker(f"writing {Path(path).name}", total=len(run), unit="rows", report=progress)
     with atomic_write(path) as handle:
         savemat(handle, arrays, oned_as="column", do_compression=True)
