@@ -11,6 +11,7 @@ reported through :mod:`hybrid.progress`; the bounds are checked on the result.
 
 from __future__ import annotations
 
+import math
 import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import replace
@@ -154,7 +155,7 @@ def simulate(
         settings = replace(settings, backend=_one_run_backend(model, settings, inputs))
     initial = _numbers("initial", "initial value of", initial, model)
     if inputs is not None:
-        _check_inputs(inputs, t_start)
+        _check_inputs(inputs, t_start, t_end)
     model = model.with_parameters(parameters) if parameters else model
     if isinstance(model, System) and initial_location:
         raise UsageError("initial_location applies to an automaton; set it per component")
@@ -297,8 +298,12 @@ def _numbers(keyword: str, item: str, values: Any, model: Automaton | System) ->
     return {str(k): finite_number(f"{item} '{k}'", v) for k, v in values.items()} or None
 
 
-def _check_inputs(inputs: Mapping[str, Callable[[float], float]] | None, t_start: float) -> None:
+def _check_inputs(inputs: Mapping[str, Callable[[float], float]] | None, t_start: float,
+                  t_end: float = math.inf) -> None:  # fmt: skip
     """Each input a function of ``t`` that gives a number at ``t_start``, else a :class:`UsageError`.
+
+    A :class:`~hybrid.simulation.inputs.TimeSeries` must span the run, as the command
+    line's ``--input-csv`` must (past its samples it would be held without a word).
 
     A function that cannot be called as ``f(t)``, or gives something other than a
     number (a list, an array of one value), used to end the run at once as
@@ -316,6 +321,9 @@ def _check_inputs(inputs: Mapping[str, Callable[[float], float]] | None, t_start
             raise UsageError(
                 f"input '{name}' must be a function of t (e.g. lambda t: 0.5), got {fn!r}"
             )
+        covers = getattr(fn, "check_covers", None)  # a TimeSeries
+        if callable(covers) and math.isfinite(t_end):
+            covers(t_start, t_end)
         try:
             value = fn(t_start)
         except TypeError as exc:  # called wrongly (f(t, x)); a failing value is the run's

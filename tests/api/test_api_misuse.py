@@ -433,6 +433,28 @@ def test_a_time_series_is_checked_as_a_file_of_samples_is(
     assert str(caught.value) == message
 
 
+def test_a_time_series_that_does_not_span_the_run_is_refused_as_the_cli_refuses_it() -> None:
+    """Past its last sample a TimeSeries was held without a word from Python, while
+    --input-csv refuses the same samples; a series that spans the run is taken."""
+    from hybrid.simulation.inputs import TimeSeries
+
+    model = hybrid.load_text(DRIVEN_BY_U)
+    short = TimeSeries("u", times=[0, 1], values=[0, 1])
+    with pytest.raises(hybrid.UsageError, match=r"input u from <series> covers t in \[0, 1\] but "
+                       r"the run goes from t=0 to t=5: add samples or shorten the run"):  # fmt: skip
+        hybrid.simulate(model, t_end=5.0, inputs={"u": short})
+    run = hybrid.simulate(model, t_end=1.0, inputs={"u": short}, rtol=1e-10, atol=1e-12)
+    assert run["x"][-1] == pytest.approx(0.5, abs=1e-9)  # x' = u = t from 0: t^2 / 2
+
+
+DRIVEN_BY_U = """
+automaton: driven
+inputs: [u]
+state: {x: {initial: 0}}
+locations: {a: {flow: {x: u}}}
+"""
+
+
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
