@@ -295,10 +295,11 @@ def _resolve_parameter(system: System, key: str) -> tuple[str, str]:
             )
         if pname not in system.component(comp).automaton.parameters:
             params = list(system.component(comp).automaton.parameters)
-            raise SpecError(
-                f"component '{comp}' has no parameter '{pname}'{did_you_mean(pname, params, 0.5)}",
-                system.position,
-            )
+            others = [f"{c.name}.{pname}" for c in system.components
+                      if c.name != comp and pname in c.automaton.parameters]  # fmt: skip
+            hint = (f"; did you mean '{others[0]}'?" if others
+                    else did_you_mean(pname, params, 0.5) or f" (its parameters: {', '.join(params) or 'none'})")  # fmt: skip
+            raise SpecError(f"component '{comp}' has no parameter '{pname}'{hint}", system.position)
         return comp, pname
     owners = [c.name for c in system.components if key in c.automaton.parameters]
     if len(owners) == 1:

@@ -218,9 +218,13 @@ def state_slot(state_names: Sequence[str], name: str) -> int:
     >>> state_slot(("h", "v"), "hh")
     Traceback (most recent call last):
     hybrid.errors.UsageError: initial value for unknown state variable 'hh'; did you mean 'h'?
+    >>> state_slot(("x", "n"), "ctrl.n")
+    Traceback (most recent call last):
+    hybrid.errors.UsageError: initial value for unknown state variable 'ctrl.n'; a system's state variables are named without their component: 'n'
     """
     if name not in state_names:
-        raise UsageError(
-            f"initial value for unknown state variable '{name}'{did_you_mean(name, state_names)}"
-        )
+        _, dot, plain = name.rpartition(".")
+        hint = (f"; a system's state variables are named without their component: '{plain}'"
+                if dot and plain in state_names else did_you_mean(name, state_names))  # fmt: skip
+        raise UsageError(f"initial value for unknown state variable '{name}'{hint}")
     return list(state_names).index(name)

@@ -69,6 +69,11 @@ def test_initial_location_and_init_start_the_thermostat_heating(tmp_path: Path) 
         (BALL, ["--param", "k=1"], "unknown parameter 'k' for automaton 'bouncing_ball' (parameters: g, e)"),
         (MISSION, ["--init", "phii=1"],
          "initial value for unknown state variable 'phii'; did you mean 'phi'?"),
+        # a component's name before a state or a parameter of another component
+        (MISSION, ["--init", "uvms.phi=1"], "initial value for unknown state variable "
+         "'uvms.phi'; a system's state variables are named without their component: 'phi'"),
+        (MISSION, ["--param", "uvms.gamma_max=1"],
+         "component 'uvms' has no parameter 'gamma_max'; did you mean 'polarization.gamma_max'?"),
         (MISSION, ["--initial-location", "q0"],
          "--initial-location applies to an automaton; in a system each component"),
     ],
