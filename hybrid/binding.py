@@ -47,7 +47,7 @@ from difflib import get_close_matches
 from types import MappingProxyType
 from typing import TypeVar
 
-from hybrid.errors import Position
+from hybrid.errors import Position, did_you_mean
 from hybrid.expr import ir
 from hybrid.expr.dependencies import find_dependency_cycle
 from hybrid.expr.functions import BUILTINS
@@ -221,12 +221,16 @@ def input_problems(components: Sequence[tuple[str, Automaton]]) -> list[tuple[Po
             elif providers:
                 continue
             elif u not in a.ranges:
+                offered = [n for other, b in components if b is not a
+                           for n in (*b.signal_names, *b.state_names)]  # fmt: skip
+                close = did_you_mean(u, offered, 0.5).removeprefix("; ")
+                close = f" ({close})" if close else ""
                 problems.append(
                     (
                         pos,
                         f"input '{u}' of component '{name}' is not a signal or state variable of "
-                        f"any other component; bind it (rename: {{{u}: other}}), or give it a "
-                        f"range to leave it free (inputs: {{{u}: {{range: [low, high]}}}})",
+                        f"any other component{close}; bind it (rename: {{{u}: other}}), or give "
+                        f"it a range to leave it free (inputs: {{{u}: {{range: [low, high]}}}})",
                     )
                 )
             else:

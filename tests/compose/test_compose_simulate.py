@@ -136,6 +136,18 @@ def test_unbound_input_is_an_error(tmp_path: Path) -> None:
         hybrid.compose(c, b)
 
 
+def test_an_input_a_letter_off_a_signal_is_told_the_name() -> None:
+    """An input typo in a system ('commnd' for the controller's 'command') got no
+    suggestion, where the same typo in rename: did."""
+    b = hybrid.load_text(HEATER.replace("command", "commnd"), file="heater.yaml")
+    c = hybrid.load_text(CONTROLLER, file="c.yaml")
+    assert isinstance(b, hybrid.Automaton) and isinstance(c, hybrid.Automaton)
+    with pytest.raises(hybrid.SpecError, match=r"input 'commnd' of component 'heater' is not "
+                       r"a signal or state variable of any other component \(did you mean "
+                       r"'command'\?\); bind it"):  # fmt: skip
+        hybrid.compose(c, b)
+
+
 def test_qualified_parameter_override(system: hybrid.System) -> None:
     faster = system.with_parameters({"controller.P": 2.0, "a": 0.3})
     run = hybrid.simulate(faster, t_end=7.0)
