@@ -306,6 +306,7 @@ def signal_cycle_problems(
         return [(where[cycle[0]], _cycle_message(cycle, ""))]
     if math.prod(len(m) for _, m in variants) > COMBINATIONS_CHECKED:
         return [(where[cycle[0]], _cycle_message(cycle, " (in some location of each)"))]
+    automata = dict(components)
     for combination in itertools.product(*(m for _, m in variants)):
         deps = dict(common)
         for _, local in combination:
@@ -315,29 +316,36 @@ def signal_cycle_problems(
             chosen = [
                 f"{cname} is in {lname}"
                 for (cname, _), (lname, _) in zip(variants, combination, strict=True)
-                if lname
             ]
             context = f" when {' and '.join(chosen)}" if chosen else ""
-            return [(where[cycle[0]], _cycle_message(cycle, context))]
+            # placed at a location's own definition in the cycle, if one is: the line
+            # that makes the loop (the file's own one may not be in it at all)
+            place = where[cycle[0]]
+            for (cname, _), (lname, local) in zip(variants, combination, strict=True):
+                if any(name in local for name in cycle):
+                    place = automata[cname].locations[lname].position
+                    break
+            return [(place, _cycle_message(cycle, context))]
     return []
 
 
 def _location_variants(a: Automaton) -> list[tuple[str, dict[str, set[str]]]]:
     """The distinct sets of location-specific signal dependencies of ``a``, each with
-    the first location that has it (``""`` for the file's own definitions)."""
+    the first location that has it (for the file's own definitions alone: the first
+    location that overrides none)."""
     seen: set[tuple[tuple[str, tuple[str, ...]], ...]] = set()
     mine: list[tuple[str, dict[str, set[str]]]] = []
-    plain = False
+    plain = ""
     for lname, loc in a.locations.items():
         local = {n: ir.names_in(e) for n, e in loc.signals.items() if n in a.signal_names}
         key = tuple(sorted((n, tuple(sorted(d))) for n, d in local.items()))
         if not local:
-            plain = True
+            plain = plain or lname
         elif key not in seen:
             seen.add(key)
             mine.append((lname, local))
     if mine and plain:
-        mine.append(("", {}))
+        mine.append((plain, {}))
     return mine
 
 

@@ -79,3 +79,45 @@ def test_too_many_combinations_fall_back_to_the_union() -> None:
     assert count**2 > COMBINATIONS_CHECKED
     with pytest.raises(hybrid.SpecError, match=r"in some location of each\): p -> q -> p"):
         compose(automaton("left", "p", "q"), automaton("right", "q", "p"), name="many")
+
+
+PLANT = """
+automaton: plant
+state: {x: {initial: 20}}
+inputs: [cmd]
+parameters: {P: 2}
+signals: {power: cmd * P}
+locations:
+  cooling: {flow: {x: -x + power}}
+  heating: {flow: {x: -x + power}, signals: {power: P}}
+"""
+
+CONTROLLER = """
+automaton: ctrl
+state: {c: {initial: 0}}
+inputs: [power]
+signals:
+  cmd: 0
+locations:
+  idle: {flow: {c: 1}}
+  on:
+    flow: {c: 1}
+    signals: {cmd: power}
+"""
+
+
+def test_a_cycle_names_every_component_s_location_and_is_placed_in_it() -> None:
+    """The loop cmd -> power -> cmd needs plant in cooling (no power of its own there) and
+    ctrl in on: the message named ctrl alone, and was placed at ctrl's file-level 'cmd: 0',
+    which is not in the loop."""
+    plant = hybrid.load_text(PLANT, file="plant.yaml")
+    ctrl = hybrid.load_text(CONTROLLER, file="ctrl.yaml")
+    assert isinstance(plant, hybrid.Automaton) and isinstance(ctrl, hybrid.Automaton)
+    with pytest.raises(hybrid.SpecError) as err:
+        compose(plant, ctrl, name="loop")
+    assert err.value.message.endswith(
+        "form a circular definition when plant is in cooling and ctrl is in on: "
+        "cmd -> power -> cmd"
+    )
+    on = ctrl.locations["on"].position
+    assert (err.value.position.file, err.value.position.line) == ("ctrl.yaml", on.line)
