@@ -153,7 +153,7 @@ def _text(result: ReachResult, file: str) -> str:
         f"{file}: {said}: {len(result.sets)} sets, t <= {result.t_end:g}, "
         f"{result.max_jumps} jumps, step {result.step:g}, {result.seconds:.3g} s"
         + ("" if result.complete else " (search stopped early: nothing is proved)")
-        + _bound_left_out(result)
+        + (f" ({result.jump_past_bound}: not covered)" if result.jump_past_bound else "")
     )
     return "\n".join(lines)
 
@@ -206,9 +206,3 @@ def _plot(result: ReachResult, axes: str, out: str) -> None:
     ax.figure.savefig(out)
     plt.close(ax.figure)
 
-
-def _bound_left_out(result: Any) -> str:
-    """`` (jump J+1 may come from t = T on: not covered)`` when the jump bound cut a run short."""
-    if result.jump_bound_from is None:
-        return ""
-    return f" (jump {result.max_jumps + 1} may come from t = {result.jump_bound_from:.4g} on: not covered)"

@@ -154,8 +154,8 @@ def check(
         return replace(report, findings=tuple(notes.get(id(f), f) for f in report.findings))
     verdicts = {f"forbidden: {p.entry.text()}": p for p in result.properties}
     bounded = f"forbidden states: within t <= {t_end:g} and {jumps} jumps"
-    if result.jump_bound_from is not None:
-        bounded += f"; jump {jumps + 1} may come from t = {result.jump_bound_from:.4g} on, not covered"
+    if result.jump_past_bound:
+        bounded += f"; {result.jump_past_bound}, not covered"
     silenced = set(ignore) | set(props.ignore)
     kept: list[Finding] = []
     reported = {f.where for f in report.findings}

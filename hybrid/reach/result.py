@@ -125,6 +125,15 @@ class ReachResult:
             worst = max(worst, VERDICTS.index(p.verdict))
         return VERDICTS[worst]
 
+    @property
+    def jump_past_bound(self) -> str:
+        """``"jump 11 may come from t = 32.44 on"`` when a run may jump past ``max_jumps``
+        before ``t_end`` (what the sets leave out), else ``""``: what the command line's
+        summary and check's bounded ``ok`` say of it."""
+        if self.jump_bound_from is None:
+            return ""
+        return f"jump {self.max_jumps + 1} may come from t = {self.jump_bound_from:.4g} on"
+
     def hull(self, location: str | None = None) -> tuple[Array, Array]:
         """``(lo, hi)`` over all sets (of ``location`` only, if given)."""
         chosen = [s for s in self.sets if location is None or s.location == location]
