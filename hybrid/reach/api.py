@@ -324,7 +324,7 @@ def _decide(
         message = (
             f"forbidden state '{name}' may be reached {horizon}: the over-approximation "
             f"meets it from t = {first:.9g}, and no simulated run was found that reaches it"
-            + step_hint([mode_of(forms, s.mode) for s in contacts], step)
+            + step_hint([mode_of(forms, key) for key in {s.mode: None for s in contacts}], step)
         )
     return PropertyResult(entry, "unknown", message, first_contact=first, condition=cond)
 
