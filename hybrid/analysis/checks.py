@@ -31,7 +31,7 @@ from hybrid.analysis.static import AutomatonFacts, initial_box
 from hybrid.analysis.zerotime import system_components
 from hybrid.errors import Position
 from hybrid.expr import ir
-from hybrid.expr.rho import guard_to_rho
+from hybrid.expr.rho import BAND, guard_to_rho
 from hybrid.model import Automaton, Edge
 
 __all__ = [
@@ -141,10 +141,6 @@ def sink_locations(analysis: Analysis) -> list[Finding]:
                 )
             )
     return found
-
-
-BAND = 1e-10
-"""The simulator's boundary band, relative: ``BAND * (1 + max |x|)`` (``boundary.band``)."""
 
 
 def blocked_starts(analysis: Analysis) -> list[Finding]:

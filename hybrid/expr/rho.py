@@ -53,6 +53,7 @@ from collections.abc import Callable, Sequence
 from hybrid.expr import ir
 
 __all__ = [
+    "BAND",
     "guard_to_rho",
     "is_strict",
     "level_key",
@@ -62,6 +63,11 @@ __all__ = [
     "structural_key",
     "within_band",
 ]
+
+BAND = 1e-10
+"""The simulator's band per unit of the state's largest magnitude: a rho within
+``BAND * (1 + max |x|)`` of 0 counts as on its boundary (docs/semantics.md); the
+analysis and reach allow for it where they speak of what a run does."""
 
 
 def guard_to_rho(node: ir.Expr) -> ir.Expr:

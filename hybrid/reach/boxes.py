@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from hybrid.expr.rho import BAND
 from hybrid.reach.affine import Condition, Rows
 
 __all__ = [
@@ -48,8 +49,6 @@ __all__ = [
 Array = NDArray[np.float64]
 SLACK = 1e-7
 """Relative widening of a condition's right-hand side (see the module docstring)."""
-BAND = 1e-10
-"""The simulator's boundary band per unit of the state's largest magnitude (docs/semantics.md)."""
 
 
 def band(lo: Array, hi: Array, columns: int) -> Array:
