@@ -198,8 +198,7 @@ def _inputs(
         add(name, ExpressionInput(name, source), f"--input {name}")
     for file in args.input_csv:
         for name, series in read_series(file).items():
-            series.check_covers(0.0, args.t_end)
-            add(name, series, file)
+            add(name, series, file)  # that it spans the run: simulate checks, as from Python
     missing = [name for name in declared if name not in given and name not in ranged]
     if missing:
         raise UsageError(
