@@ -95,8 +95,14 @@ def write_npz(run: Run, path: str | Path, progress: Reporter | None = None) -> N
     tracker.finish(len(run))
 
 
-MATLAB_KEYWORDS = frozenset(["break", "case", "catch", "classdef", "continue", "else", "elseif", "end", "for", "function", "global", "if", "otherwise", "parfor", "persistent", "return", "spmd", "switch", "try", "while"])
+MATLAB_KEYWORDS = frozenset([
+    "break", "case", "catch", "classdef", "continue", "else", "elseif", "end", "for",
+    "function", "global", "if", "otherwise", "parfor", "persistent", "return", "spmd",
+    "switch", "try", "while",
+])  # fmt: skip
+"""MATLAB's keywords (``iskeyword``): no variable may be named one."""
 MATLAB_NAME_LENGTH = 63
+"""The longest variable name MATLAB takes (``namelengthmax``)."""
 
 
 def matlab_name(name: str, taken: Mapping[str, object] | set[str]) -> str:
